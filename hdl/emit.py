@@ -1,0 +1,63 @@
+"""Emit Verilog for the project's top modules, one file per parameter set.
+
+Amaranth emits no Verilog parameters, so every parameter set is its own
+module: the file and module names carry the parameters
+(``harmonic_cluster_depth1024_pmax1022.v``).
+
+    python -m hdl.emit [OUT_DIR]     # every top at its listed parameter sets
+"""
+
+import os
+import sys
+from pathlib import Path
+
+os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
+
+from amaranth.back import verilog  # noqa: E402
+
+from .harmonic.cluster import Cluster  # noqa: E402
+from .harmonic.node import Node  # noqa: E402
+
+__all__ = ["TOPS", "DEFAULT_SETS", "top_name", "emit"]
+
+# Component factory of every top module, by the name its Verilog carries.
+TOPS = {
+    "harmonic_node": Node,
+    "harmonic_cluster": Cluster,
+}
+
+# Parameter sets `make verilog` emits (the tests emit their own on demand).
+DEFAULT_SETS = [
+    ("harmonic_node", {}),
+    ("harmonic_cluster", {"depth": 1024}),
+    ("harmonic_cluster", {"depth": 1024, "p_max": 255}),
+]
+
+_SHORT = {"p_max": "pmax"}
+
+
+def top_name(name, params):
+    """Module (and file) name of ``name`` at ``params``."""
+    tail = "".join(f"_{_SHORT.get(k, k)}{v}" for k, v in sorted(params.items()))
+    return name + tail
+
+
+def emit(name, params, out_dir):
+    """Write ``out_dir/<top_name>.v`` (only if its text changed); returns its path."""
+    module = top_name(name, params)
+    text = verilog.convert(TOPS[name](**params), name=module, emit_src=False)
+    path = Path(out_dir) / f"{module}.v"
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+    return path
+
+
+def main(argv):
+    out_dir = argv[1] if len(argv) > 1 else "build/verilog"
+    for name, params in DEFAULT_SETS:
+        print(emit(name, params, out_dir))
+
+
+if __name__ == "__main__":
+    main(sys.argv)

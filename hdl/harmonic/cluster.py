@@ -1,0 +1,238 @@
+"""3x6 cluster of nodes sharing one dual-port RAM (paper 000, sections 5.1, 5.2, 5.4)."""
+
+from amaranth.hdl import Cat, Module, Signal, unsigned
+from amaranth.lib import wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from .counters import Counters
+from .node import Node
+
+__all__ = ["Cluster", "ROWS", "COLS"]
+
+ROWS, COLS = 3, 6
+NODES = ROWS * COLS
+
+
+class Cluster(wiring.Component):
+    """18 node modules (3 rows x 6 columns), one 18-bit RAM, one Counters unit.
+
+    RAM word ``a`` holds bit ``a`` of the stored words of all 18 nodes, node
+    (row r, column c) in bit ``6*r + c``; a node's word is p+2 bits, flag first
+    then value bits p..0 (:func:`models.harmonic.ram_image`).  Port A reads it
+    LSB first for the Update; port B writes the results two bit positions
+    behind in update iterations and reads MSB first for the Maximum in check
+    iterations, never both in the same cycle, so A and B map onto the two
+    ports of one true dual-port block RAM.  One iteration takes p+2 cycles.
+
+    Operation: load the words through the host port while idle, raise ``run``
+    with a precision ``p``.  After a one-cycle lead-in the cluster iterates;
+    at every ``take`` cycle (cycle 1 of an iteration) it samples ``run``,
+    ``enable``, ``Sel`` and ``Sat`` for the iteration whose write window
+    starts next cycle, and at every ``done`` cycle (two cycles later) it shows
+    the ``stable`` / ``local_max`` flags of the iteration that just ended.
+    ``run`` low at a ``take`` stops the cluster after that iteration's writes
+    (the flags of that last iteration still come with ``done``).
+
+    Parameters
+    ----------
+    depth : int
+        RAM depth in words (default 1024, the 1Kx18 block RAM of the paper).
+    p_max : int
+        Largest precision (default ``depth - 2``); needs ``p_max + 2 <= depth``
+        and ``p_max >= 2``.
+
+    Ports
+    -----
+    run : In(1)
+        Start (while idle) / keep iterating (sampled at ``take``).
+    p : In(bits of p_max)
+        Precision, sampled when the cluster starts.  A value outside
+        ``2 .. p_max`` does not start it and raises ``p_err``.
+    enable : In(1)
+        Update iteration (1) or check iteration (0, nothing written,
+        ``local_max`` computed).  Sampled at ``take``.
+    Sel : In(18), Sat : In(1)
+        Saturation orders (paper's Sel/Sat), one Sel bit per node, honoured in
+        update iterations.  Sampled at ``take``.
+    h_N_in, h_S_in : In(6); h_E_in, h_W_in : In(3)
+        Neighbours' words outside the cluster, LSB first (same timing as
+        ``h``: bit of address ``cntR`` one cycle later).
+    m_N_in, m_S_in : In(6); m_E_in, m_W_in : In(3)
+        The same neighbours MSB first (bit of address ``r_cnt`` one cycle
+        later).
+    h, hm : Out(18)
+        RAM port A / port B read data: every node's serial streams, for the
+        neighbouring clusters and the decision module.
+    cntR, r_cnt : Out(address width)
+        Port A / port B read addresses, for border nodes.
+    take, done, checked : Out(1)
+        Command sampling strobe; flags-valid strobe; ``done`` after a check
+        iteration (``local_max`` meaningful).
+    stable, local_max : Out(18); all_stable, any_max : Out(1)
+        Per-node flags and their AND (Early) / OR (Cvg), valid with ``done``.
+    busy : Out(1)
+        Iterating (the host port is ignored).
+    p_err : Out(1)
+        The last start request had an unsupported precision.
+    host_addr : In(range(depth)); host_wdata : In(18); host_we : In(1)
+    host_rdata : Out(18)
+        RAM access while idle (read data one cycle after the address).
+    """
+
+    def __init__(self, depth=1024, p_max=None):
+        if not isinstance(depth, int) or depth < 4:
+            raise ValueError(f"RAM depth must be an integer >= 4, not {depth!r}")
+        if p_max is None:
+            p_max = depth - 2
+        if not isinstance(p_max, int) or p_max < 2:
+            raise ValueError(f"precision p_max={p_max!r} is not supported: p must be at least 2")
+        if p_max + 2 > depth:
+            raise ValueError(
+                f"precision p_max={p_max} needs words of p_max+2={p_max + 2} bits, "
+                f"one per RAM address, but the RAM depth is {depth}")
+        self.depth = depth
+        self.p_max = p_max
+        addr = unsigned((p_max + 1).bit_length())
+        super().__init__({
+            "run": In(1),
+            "p": In(range(p_max + 1)),
+            "enable": In(1),
+            "Sel": In(NODES),
+            "Sat": In(1),
+            "h_N_in": In(COLS), "h_S_in": In(COLS),
+            "h_E_in": In(ROWS), "h_W_in": In(ROWS),
+            "m_N_in": In(COLS), "m_S_in": In(COLS),
+            "m_E_in": In(ROWS), "m_W_in": In(ROWS),
+            "h": Out(NODES),
+            "hm": Out(NODES),
+            "cntR": Out(addr),
+            "r_cnt": Out(addr),
+            "take": Out(1),
+            "done": Out(1),
+            "checked": Out(1),
+            "stable": Out(NODES),
+            "local_max": Out(NODES),
+            "all_stable": Out(1),
+            "any_max": Out(1),
+            "busy": Out(1),
+            "p_err": Out(1),
+            "host_addr": In(range(depth)),
+            "host_wdata": In(NODES),
+            "host_we": In(1),
+            "host_rdata": Out(NODES),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.counters = cnt = Counters(self.p_max)
+        m.submodules.ram = ram = Memory(shape=NODES, depth=self.depth, init=[])
+        port_a = ram.read_port()
+        port_b = ram.read_port()
+        port_w = ram.write_port()
+
+        running = Signal()
+        p_r = Signal.like(self.p)
+        win = Signal()          # the current write window belongs to an iteration
+        upd = Signal()          # ... and it is an update iteration
+        last_win = Signal()     # the same for the iteration whose flags come next
+        last_upd = Signal()
+        sel_r = Signal(NODES)
+        sat_r = Signal()
+
+        p_ok = (self.p >= 2) & (self.p <= self.p_max)
+        start = ~running & self.run & p_ok
+        with m.If(~running & self.run):
+            m.d.sync += self.p_err.eq(~p_ok)
+        with m.If(start):
+            m.d.sync += [running.eq(1), p_r.eq(self.p)]
+
+        m.d.comb += [
+            cnt.p.eq(p_r),
+            cnt.start.eq(start),
+            cnt.advance.eq(running),
+            self.take.eq(running & cnt.ph1),
+            self.busy.eq(running),
+            self.cntR.eq(cnt.cntR),
+            self.r_cnt.eq(cnt.r_cnt),
+        ]
+        with m.If(start):
+            m.d.comb += cnt.p.eq(self.p)
+        with m.If(start):
+            m.d.sync += [win.eq(0), upd.eq(0)]
+        with m.Elif(self.take):
+            m.d.sync += [
+                win.eq(self.run), upd.eq(self.run & self.enable),
+                last_win.eq(win), last_upd.eq(upd),
+                sel_r.eq(self.Sel), sat_r.eq(self.Sat),
+            ]
+            with m.If(~self.run):
+                m.d.sync += running.eq(0)
+
+        # RAM ports: counters while iterating, host port while idle.
+        write = win & upd
+        m.d.comb += [
+            port_a.addr.eq(self.host_addr),
+            port_b.addr.eq(self.host_addr),
+            port_w.addr.eq(self.host_addr),
+            port_w.data.eq(self.host_wdata),
+            port_w.en.eq(self.host_we),
+            self.h.eq(port_a.data),
+            self.hm.eq(port_b.data),
+            self.host_rdata.eq(port_a.data),
+        ]
+        with m.If(running):
+            m.d.comb += [
+                port_a.addr.eq(cnt.cntR),
+                port_b.addr.eq(cnt.r_cnt),
+                port_w.en.eq(write),
+            ]
+            with m.If(write):
+                m.d.comb += [port_b.addr.eq(cnt.cntW), port_w.addr.eq(cnt.cntW)]
+
+        # The 3x6 node grid; edge nodes take the serial edge inputs.
+        def stream(bus, edge, r, c, dr, dc, i_edge):
+            rr, cc = r + dr, c + dc
+            if 0 <= rr < ROWS and 0 <= cc < COLS:
+                return bus[rr * COLS + cc]
+            return edge[i_edge]
+
+        w_bits = []
+        for r in range(ROWS):
+            for c in range(COLS):
+                i = r * COLS + c
+                node = Node()
+                m.submodules[f"node_{r}_{c}"] = node
+                for name, (dr, dc, h_edge, m_edge, k) in {
+                    "N": (-1, 0, self.h_N_in, self.m_N_in, c),
+                    "S": (1, 0, self.h_S_in, self.m_S_in, c),
+                    "E": (0, 1, self.h_E_in, self.m_E_in, r),
+                    "W": (0, -1, self.h_W_in, self.m_W_in, r),
+                }.items():
+                    m.d.comb += [
+                        getattr(node, f"h_{name}").eq(stream(port_a.data, h_edge, r, c, dr, dc, k)),
+                        getattr(node, f"m_{name}").eq(stream(port_b.data, m_edge, r, c, dr, dc, k)),
+                    ]
+                m.d.comb += [
+                    node.h.eq(port_a.data[i]),
+                    node.hm.eq(port_b.data[i]),
+                    node.ph0.eq(cnt.ph0),
+                    node.ph1.eq(cnt.ph1),
+                    node.ph2.eq(cnt.ph2),
+                    node.enable.eq(upd),
+                    node.Sel.eq(sel_r[i]),
+                    node.Sat.eq(sat_r),
+                    self.stable[i].eq(node.stable),
+                    self.local_max[i].eq(node.local_max),
+                ]
+                w_bits.append(node.w)
+        with m.If(running):
+            m.d.comb += port_w.data.eq(Cat(*w_bits))
+
+        m.d.comb += [
+            self.done.eq(cnt.ph2 & last_win),
+            self.checked.eq(cnt.ph2 & last_win & ~last_upd),
+            self.all_stable.eq(self.stable.all()),
+            self.any_max.eq(self.local_max.any()),
+        ]
+        return m

@@ -1,0 +1,160 @@
+"""Node module of the harmonic planner (paper 000, section 5.2, Fig. 8)."""
+
+from amaranth.hdl import Module, Signal
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+__all__ = ["Node"]
+
+
+def _maj(a, b, c):
+    """Carry of a full adder."""
+    return (a & b) | (a & c) | (b & c)
+
+
+class Node(wiring.Component):
+    """One grid node: Update, Stable, Maximum, Saturation and Mem of Fig. 8.
+
+    All data ports are 1 bit wide and serial.  The node has no storage of its
+    own value: it lives in the cluster's RAM, one bit per address, as described
+    in :mod:`models.harmonic` (constant flag, then bits p..0).  The shared
+    Counters unit walks the RAM so that the node sees, in an iteration of p+2
+    cycles numbered c = 0 .. p+1:
+
+    =========  =========================================================
+    cycle c    what the node sees / does
+    =========  =========================================================
+    0 (ph0)    ``h`` carries the constant flag; the adders see 0 (their
+               inputs are masked) and flush the last sum bit (bit p-1 of
+               the previous iteration's result is written).
+    1 (ph1)    ``h`` carries bit 0; the last carry (result bit p) is
+               written; the third adder starts afresh.
+    2 (ph2)    ``h`` carries bit 1; the constant flag of the new word is
+               written; the Stable and Maximum results of the previous
+               iteration are valid on ``stable`` / ``local_max``.
+    k+1        ``h`` carries bit k; result bit k-2 is written (k >= 2).
+    =========  =========================================================
+
+    So the sum of the four neighbours is formed LSB first by three full adders
+    (eq. 2), and dropping its two low bits, i.e. writing each sum bit two bit
+    positions late, divides it by four.  The write window of one iteration
+    runs from its cycle 2 to cycle 1 of the next one.
+
+    In an iteration with ``enable`` low ("check" iteration) nothing changes:
+    ``w`` is the stored bit, and the second RAM port streams the stored
+    values MSB first on ``hm`` / ``m_*`` (stored bit p at cycle 3 down to bit 0
+    at cycle 1 of the next iteration) for the Maximum comparison.
+
+    Ports
+    -----
+    h : In(1)
+        Own stored word, from RAM port A (LSB first, flag first).
+    h_N, h_E, h_W, h_S : In(1)
+        The four neighbours' words, same timing as ``h``.
+    hm : In(1)
+        Own value MSB first, from RAM port B (check iterations).
+    m_N, m_E, m_W, m_S : In(1)
+        The four neighbours' values MSB first, same timing as ``hm``.
+    ph0, ph1, ph2 : In(1)
+        Cycle strobes from the Counters unit (c = 0, 1, 2).
+    enable : In(1)
+        Update iteration (1) or check iteration (0).  Held over the write
+        window (c = 2 .. c = 1 of the next iteration).
+    Sel, Sat : In(1)
+        Saturation order: in an update iteration with ``Sel`` high the node
+        becomes constant with value ``Sat`` (0 obstacle, 1 goal).  Held over
+        the write window.
+    w : Out(1)
+        Bit to write to RAM port B (Mem multiplexer): the update, the stored
+        bit (constant node or check iteration) or the saturation constant.
+    stable : Out(1)
+        The word written in the previous iteration equals the stored one.
+        Valid when ``ph2`` is high.
+    local_max : Out(1)
+        Free node whose value is >= its four neighbours' (MSB-first values of
+        the previous iteration).  Valid when ``ph2`` is high.
+    """
+
+    h: In(1)
+    h_N: In(1)
+    h_E: In(1)
+    h_W: In(1)
+    h_S: In(1)
+    hm: In(1)
+    m_N: In(1)
+    m_E: In(1)
+    m_W: In(1)
+    m_S: In(1)
+    ph0: In(1)
+    ph1: In(1)
+    ph2: In(1)
+    enable: In(1)
+    Sel: In(1)
+    Sat: In(1)
+    w: Out(1)
+    stable: Out(1)
+    local_max: Out(1)
+
+    def elaborate(self, platform):
+        m = Module()
+
+        # Update: three serial full adders, (N + S) + (E + W), one carry
+        # flip-flop each.  At ph0 the inputs carry the flags and are masked,
+        # which flushes the first two carries into the third adder.
+        live = ~self.ph0
+        a, b = self.h_N & live, self.h_S & live
+        c, d = self.h_E & live, self.h_W & live
+        c1, c2, c3 = Signal(), Signal(), Signal()
+        s1 = a ^ b ^ c1
+        s2 = c ^ d ^ c2
+        cin3 = c3 & ~self.ph1          # c3 holds result bit p at ph1
+        total = s1 ^ s2 ^ cin3
+        m.d.sync += [
+            c1.eq(_maj(a, b, c1)),
+            c2.eq(_maj(c, d, c2)),
+            c3.eq(_maj(s1, s2, cin3)),
+        ]
+
+        # Mem: the stored stream delayed by two flip-flops lines up with the
+        # write address, so it is both the write-back value and the Stable
+        # reference.  At ph2 it holds the stored constant flag.
+        d1, old = Signal(), Signal()
+        m.d.sync += [d1.eq(self.h), old.eq(d1)]
+
+        # Saturation: the constant flag of the word being written.
+        saturate = self.enable & self.Sel
+        flag = old | saturate
+        const = Signal()
+        with m.If(self.ph2):
+            m.d.sync += const.eq(flag)
+
+        with m.If(self.ph2):
+            m.d.comb += self.w.eq(flag)
+        with m.Elif(saturate):
+            m.d.comb += self.w.eq(self.ph1 & self.Sat)   # only bit p may be 1
+        with m.Elif(~self.enable | const):
+            m.d.comb += self.w.eq(old)
+        with m.Elif(self.ph1):
+            m.d.comb += self.w.eq(c3)
+        with m.Else():
+            m.d.comb += self.w.eq(total)
+
+        # Stable: serial compare of the written word with the stored one.
+        diff = Signal()
+        changed = self.w ^ old
+        m.d.sync += diff.eq(changed | (diff & ~self.ph2))
+        m.d.comb += self.stable.eq(~diff)
+
+        # Maximum: MSB-first compare against each neighbour.  eq[n] says the
+        # values agree so far; lt records a neighbour found greater at the
+        # first differing bit.  Reset at ph2 (the flag slot of the stream).
+        lt = Signal()
+        found_lt = 0
+        for nb in (self.m_N, self.m_E, self.m_W, self.m_S):
+            eq = Signal(init=1)
+            found_lt = found_lt | (eq & ~self.hm & nb)
+            m.d.sync += eq.eq(self.ph2 | (eq & ~(self.hm ^ nb)))
+        m.d.sync += lt.eq(~self.ph2 & (lt | found_lt))
+        m.d.comb += self.local_max.eq(~lt & ~const)
+
+        return m

