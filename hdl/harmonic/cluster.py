@@ -174,7 +174,7 @@ class Cluster(wiring.Component):
         m.d.comb += [
             port_a.addr.eq(self.host_addr),
             port_b.addr.eq(self.host_addr),
-            port_w.addr.eq(self.host_addr),
+            port_w.addr.eq(port_b.addr),     # one address: one physical port
             port_w.data.eq(self.host_wdata),
             port_w.en.eq(self.host_we),
             self.h.eq(port_a.data),
@@ -188,7 +188,7 @@ class Cluster(wiring.Component):
                 port_w.en.eq(write),
             ]
             with m.If(write):
-                m.d.comb += [port_b.addr.eq(cnt.cntW), port_w.addr.eq(cnt.cntW)]
+                m.d.comb += port_b.addr.eq(cnt.cntW)
 
         # The 3x6 node grid; edge nodes take the serial edge inputs.
         def stream(bus, edge, r, c, dr, dc, i_edge):

@@ -1,0 +1,139 @@
+"""Synthesize the harmonic node and cluster for Virtex-II and compare with paper 000.
+
+Paper 000 reports its resource use on an XC2V6000-5: the node module takes
+11 FF and 22 LUT4 at 361 MHz (Table 1), the 3x6 cluster without its RAM takes
+198 FF and 398 LUT4 at 300 MHz (Table 2).  This script measures the same
+figures for our Amaranth design: it emits Verilog with :func:`hdl.emit.emit`,
+runs Debian's yosys ``synth_xilinx -family xc2v`` (4-input LUTs, RAMB16) and
+counts the cells of the final ``stat``.
+
+* FF counts every FD* cell, LUT4 every LUT1..LUT4 plus INV (an inverter takes
+  a LUT); MUXF*, carry and RAM primitives are listed apart, so the cluster's
+  FF / LUT4 are "without RAM" as in Table 2.
+* ``-noiopad -noclkbuf``: no IBUF/OBUF/BUFG for the top-level ports.
+* ``-flatten``: the cluster is synthesized as one module.
+* The cluster's 1Kx18 memory (read port A; read port B and the write port
+  on one address signal) maps to one true dual-port RAMB16_S18_S18, as the
+  paper's cluster uses one 1Kx18 block RAM.
+* Each top runs twice: with yosys's default wide-LUT mapping (LUT4s combined
+  by MUXF5..F8) and with ``-nowidelut`` (plain LUT4s, closer to how ISE
+  counts "4 input LUTs").
+* yosys does no timing, so there is no frequency to compare.
+
+    AMARANTH_USE_YOSYS=builtin .venv/bin/python scripts/synth.py [--out build/synth/report.md]
+"""
+
+import argparse
+import os
+import re
+import shlex
+import shutil
+import subprocess
+import sys
+import time
+from collections import Counter
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
+
+from hdl.emit import emit  # noqa: E402
+
+YOSYS = shutil.which("yosys") or "/usr/bin/yosys"
+OUT_DIR = Path("build/synth")
+NODES = 18
+TOPS = [  # (name, params, paper FF / LUT4 / MHz)
+    ("harmonic_node", {}, "11 / 22 / 361 (Table 1)"),
+    ("harmonic_cluster", {"depth": 1024}, "198 / 398 / 300 (Table 2, without RAM)"),
+]
+VARIANTS = {"": "", "-nowidelut": ".nowidelut"}  # extra synth_xilinx flags -> log suffix
+SCRIPT = ("read_verilog {v}; synth_xilinx -family xc2v -top {top} -flatten "
+          "-noiopad -noclkbuf{flags}; stat")
+GROUPS = [  # (group, cell type pattern); first match wins
+    ("FF", r"FD\w*"), ("LUT", r"LUT[1-4]|INV"), ("BRAM", r"RAMB\w+"),
+    ("LUTRAM", r"RAM\w+"), ("SRL", r"SRL\w+"), ("MUXF", r"MUXF\d"),
+    ("carry", r"MUXCY|XORCY|MULT_AND|CARRY\w*"), ("other", r"\w+"),
+]
+
+
+def yosys_cmd(v, top, flags, log):
+    return [YOSYS, "-q", "-l", str(log), "-p",
+            SCRIPT.format(v=v, top=top, flags=f" {flags}" if flags else "")]
+
+
+def run_yosys(v, top, flags, log):
+    """Synthesize; return the cell counts of the last ``stat`` as a Counter."""
+    res = subprocess.run(yosys_cmd(v, top, flags, log), capture_output=True, text=True)
+    if res.returncode:
+        sys.exit(f"yosys failed on {v} (see {log}):\n{res.stderr[-2000:]}")
+    stat = log.read_text().rsplit("Printing statistics.", 1)[1]
+    cells = stat.split("Number of cells:", 1)[1].split("\n\n", 1)[0]
+    return Counter({k: int(n) for k, n in re.findall(r"^\s+(\w+)\s+(\d+)$", cells, re.M)})
+
+
+def group(cells):
+    """Sum the cell counts by GROUPS; also keep the (type, count) list of each group."""
+    sums, parts = Counter(), {}
+    for cell, n in sorted(cells.items()):
+        g = next(g for g, pat in GROUPS if re.fullmatch(pat, cell))
+        sums[g] += n
+        parts.setdefault(g, []).append((cell, n))
+    return sums, parts
+
+
+def report(results, version, elapsed):
+    lines = [
+        "# Harmonic planner: yosys synthesis vs paper 000 (Tables 1-2)", "",
+        f"{version}, target `synth_xilinx -family xc2v` (Virtex-II, 4-input LUTs); "
+        f"run took {elapsed:.1f} s.  Frequency: n/a (yosys gives no timing).", "",
+        "| module | FF | LUT4 | block RAM | paper (FF / LUT4 / MHz) |",
+        "|---|---|---|---|---|",
+    ]
+    notes = []
+    for job, cells in results:
+        s, parts = group(cells)
+        label = f"{job['top']} ({job['flags'] or 'default'})"
+        bram = " + ".join(f"{n} × {c}" for c, n in parts.get("BRAM", [])) or "0"
+        lines.append(f"| {label} | {s['FF']} | {s['LUT']} | {bram} | {job['paper']} |")
+        if job["name"] == "harmonic_cluster":
+            lines.append(f"| ↳ per node (/{NODES}) | {s['FF'] / NODES:.1f} | "
+                         f"{s['LUT'] / NODES:.1f} | | 11.0 / 22.1 / 300 (Table 2 / {NODES}) |")
+        notes.append(f"- {label}: " + "; ".join(
+            f"{g}: " + ", ".join(f"{c} {n}" for c, n in parts[g]) for g, _ in GROUPS if g in parts))
+    lines += ["", "Cells by group (LUT4 column = LUT1..LUT4 + INV; FF = all FD*; "
+              "RAM, MUXF and carry cells are not in FF / LUT4):", "", *notes, "",
+              "Commands (run in the repo root; `-nowidelut` rows add that flag):", ""]
+    lines += ["    " + shlex.join(yosys_cmd(j["v"], j["top"], "", j["log"]))
+              for j, _ in results if not j["flags"]]
+    return "\n".join(lines) + "\n"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--out", default=str(OUT_DIR / "report.md"), help="Markdown report")
+    args = ap.parse_args()
+    if not shutil.which(YOSYS):
+        sys.exit(f"error: {YOSYS} not found; install it with `apt-get install yosys`")
+    out = Path(args.out).resolve()
+    os.chdir(ROOT)
+    t0 = time.monotonic()
+    version = subprocess.run([YOSYS, "-V"], capture_output=True, text=True).stdout.strip()
+    jobs = []
+    for name, params, paper in TOPS:
+        v = emit(name, params, OUT_DIR)
+        for flags, suffix in VARIANTS.items():
+            jobs.append(dict(name=name, paper=paper, top=v.stem, flags=flags, v=v,
+                             log=OUT_DIR / f"{v.stem}{suffix}.log"))
+    with ThreadPoolExecutor() as pool:  # the yosys runs are independent
+        cells = pool.map(lambda j: run_yosys(j["v"], j["top"], j["flags"], j["log"]), jobs)
+        results = list(zip(jobs, cells))
+    text = report(results, version, time.monotonic() - t0)
+    print(text, end="")
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(text)
+
+
+if __name__ == "__main__":
+    main()
