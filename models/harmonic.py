@@ -15,9 +15,13 @@ Rounding
 Update (eq. 2, Jacobi): every free node of the grid is replaced, from the same
 old values, by ``floor((hN + hE + hW + hS) / 4)``; the floor is exact
 truncation, which is what the hardware gets by dropping the two low bits of
-the serial sum (writing the result two bit-positions late).  A floored
-iteration from below is monotone, so relaxation from an all-zero free space
-reaches a fixed point in finitely many iterations.
+the serial sum (writing the result two bit-positions late).  The floored
+iteration is monotone, so from below (free space at 0, as the planner starts,
+goals added later) it rises to a fixed point in finitely many iterations.
+Started above a fixed point, e.g. after a new obstacle lowered values, it may
+instead fall into a period-2 oscillation (paper section 4.3.1: a contraction
+mixed with round-off need not stabilize); restarting the free nodes from 0
+restores convergence.
 
 Flags
 -----

@@ -15,15 +15,9 @@ BUILD = ROOT / "build"
 SIMULATORS = ("icarus", "verilator")
 TIMESCALE = ("1ns", "1ps")
 
-# Warnings Amaranth's generated Verilog raises by construction (lint/README.md
-# gives the reasons).  The same list serves `make lint` and Verilator builds.
-VERILATOR_WAIVERS = (
-    "-Wno-WIDTHEXPAND",   # Amaranth compares with minimal-width constants
-    "-Wno-WIDTHTRUNC",    # ... and applies `!` to vectors (reduction idiom)
-    "-Wno-PROCASSINIT",   # registers carry their reset value as an initializer
-    "-Wno-UNUSEDSIGNAL",  # named wires kept for every Python-level signal
-    "-Wno-DECLFILENAME",  # file and module named after the parameter set
-)
+# Waivers for what Amaranth's Verilog raises by construction, with the reasons
+# (lint/waivers.vlt); `make lint` and every Verilator build use the same file.
+VERILATOR_WAIVERS = ROOT / "lint" / "waivers.vlt"
 
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
@@ -53,11 +47,12 @@ def seed_from_env(default=12345):
     return random.randrange(1 << 31) if text == "random" else int(text)
 
 
-def run(name, params, sim, test_module, env=None, seed=None, tag=""):
+def run(name, params, sim, test_module, env=None, seed=None, tag="", log_file=None):
     """Emit ``name`` at ``params``, build it for ``sim`` and run ``test_module``.
 
     ``env`` is passed to the test (its parameters); ``tag`` separates the test
-    directories of runs that share one build.  Fails unless at least one test
+    directories of runs that share one build; ``log_file`` takes the
+    simulator's output instead of the console.  Fails unless at least one test
     ran and none failed.
     """
     os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
@@ -78,7 +73,7 @@ def run(name, params, sim, test_module, env=None, seed=None, tag=""):
         hdl_toplevel=module,
         build_dir=build_dir,
         timescale=TIMESCALE,
-        build_args=list(VERILATOR_WAIVERS) if sim == "verilator" else [],
+        build_args=[str(VERILATOR_WAIVERS)] if sim == "verilator" else [],
     )
     if seed is None:
         seed = seed_from_env()
@@ -92,6 +87,7 @@ def run(name, params, sim, test_module, env=None, seed=None, tag=""):
         timescale=TIMESCALE,
         seed=seed,
         extra_env={k: str(v) for k, v in (env or {}).items()},
+        log_file=log_file,
     )
     num_tests, num_failed = get_results(results)
     assert num_tests > 0, f"{test_module} ran no test on {sim}"

@@ -140,7 +140,9 @@ class Cluster(wiring.Component):
         sel_r = Signal(NODES)
         sat_r = Signal()
 
-        p_ok = (self.p >= 2) & (self.p <= self.p_max)
+        p_ok = self.p >= 2
+        if (1 << len(self.p)) - 1 > self.p_max:     # p's port can exceed p_max
+            p_ok &= self.p <= self.p_max
         start = ~running & self.run & p_ok
         with m.If(~running & self.run):
             m.d.sync += self.p_err.eq(~p_ok)

@@ -153,3 +153,21 @@ async def cluster_refuses_bad_precision(dut):
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_cluster(sim):
     run("harmonic_cluster", PARAMS, sim, "test_cluster")
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    ({"depth": 1024, "p_max": 1023}, "p_max=1023 needs words of p_max\\+2=1025 bits.*RAM depth is 1024"),
+    ({"depth": 64, "p_max": 63}, "p_max=63 needs words of p_max\\+2=65 bits.*RAM depth is 64"),
+    ({"depth": 64, "p_max": 1}, "p_max=1 is not supported: p must be at least 2"),
+    ({"depth": 2}, "RAM depth must be an integer >= 4"),
+])
+def test_elaboration_refuses(kwargs, message):
+    from hdl.harmonic.cluster import Cluster
+    with pytest.raises(ValueError, match=message):
+        Cluster(**kwargs)
+
+
+def test_elaboration_limits_accepted():
+    from hdl.harmonic.cluster import Cluster
+    assert Cluster(depth=64, p_max=62).p_max == 62
+    assert Cluster().p_max == 1022                  # the paper's 1Kx18 RAM, one block

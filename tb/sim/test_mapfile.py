@@ -1,0 +1,62 @@
+"""Map and scenario loading: the bundled maps parse, bad files name their line."""
+
+from pathlib import Path
+
+import pytest
+
+from sim.mapfile import MapFormatError, load_map, load_scenarios
+
+MAPS = Path(__file__).resolve().parents[2] / "maps"
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in MAPS.glob("*.map")))
+def test_bundled_maps_parse(name):
+    grid = load_map(MAPS / name)
+    text = (MAPS / name).read_text().splitlines()
+    assert grid.shape == (int(text[1].split()[1]), int(text[2].split()[1]))
+    assert grid.sum() == sum(row.count("@") + row.count("T") for row in text[4:])
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in MAPS.glob("*.scen")))
+def test_bundled_scenarios_parse(name):
+    grid = load_map(MAPS / (name.split("-even")[0] + ".map"))
+    scen = load_scenarios(MAPS / name, grid)
+    assert scen and all(not grid[s.start] and not grid[s.goal] for s in scen)
+
+
+GOOD = "type octile\nheight 2\nwidth 3\nmap\n.@.\n...\n"
+
+
+@pytest.mark.parametrize("text,line,message", [
+    ("", 1, "type octile"),
+    ("type octile\nheight x\nwidth 3\nmap\n", 2, "height N"),
+    ("type octile\nheight 2\nwidth 3\nmop\n.@.\n...\n", 4, "'map'"),
+    ("type octile\nheight 2\nwidth 3\nmap\n.@.\n..\n", 6, "2 cells"),
+    ("type octile\nheight 2\nwidth 3\nmap\n.@.\n.x.\n", 6, "unknown terrain 'x'"),
+    ("type octile\nheight 3\nwidth 3\nmap\n.@.\n...\n", 7, "2 of 3 rows"),
+    (GOOD + "...\n", 7, "after the last"),
+])
+def test_bad_map_names_line(tmp_path, text, line, message):
+    path = tmp_path / "bad.map"
+    path.write_text(text)
+    with pytest.raises(MapFormatError, match=message) as info:
+        load_map(path)
+    assert info.value.line == line and str(info.value).startswith(f"{path}:{line}:")
+
+
+def test_scenario_checks(tmp_path):
+    grid_path = tmp_path / "m.map"
+    grid_path.write_text(GOOD)
+    grid = load_map(grid_path)
+    scen = tmp_path / "m.scen"
+    scen.write_text("version 1\n0\tm\t3\t2\t0\t0\t2\t1\t3\n")
+    assert load_scenarios(scen, grid)[0].goal == (1, 2)
+    for bad, why in [("0\tm\t3\t2\t1\t0\t2\t1\t3", "start \\(1, 0\\) is on an obstacle"),
+                     ("0\tm\t3\t2\t0\t0\t5\t1\t3", "goal \\(5, 1\\) outside"),
+                     ("0\tm\t4\t2\t0\t0\t2\t1\t3", "4x2 map"),
+                     ("0\tm\t3\t2\t0\t0\t2\t1", "9 fields"),
+                     ("0\tm\t3\t2\tq\t0\t2\t1\t3", "bad number")]:
+        scen.write_text("version 1\n\n" + bad + "\n")
+        with pytest.raises(MapFormatError, match=why) as info:
+            load_scenarios(scen, grid)
+        assert info.value.line == 3
