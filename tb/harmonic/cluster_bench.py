@@ -58,8 +58,8 @@ class ClusterBench:
         for port in ("run", "enable", "Sel", "Sat", "host_we", "p"):
             getattr(dut, port).value = 0
 
-    async def host_write(self, words):
-        for addr, word in enumerate(words):
+    async def host_write(self, words, base=0):
+        for addr, word in enumerate(words, start=base):
             self.dut.host_addr.value = addr
             self.dut.host_wdata.value = word
             self.dut.host_we.value = 1

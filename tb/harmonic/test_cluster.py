@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """3x6 cluster against models.harmonic, bit-exact, every iteration.
 
 A 3x6 region with a fixed boundary ring is loaded through the host port and
@@ -26,8 +27,15 @@ from tb.harmonic.cluster_bench import ClusterBench, Command
 from tb.harmonic.serial import next_cycle, start
 from tb.runner import SIMULATORS, run
 
-PARAMS = {"depth": 64, "p_max": 62}
-PRECISIONS = [int(x) for x in os.environ.get("CLUSTER_P", "2,8,13,32,62").split(",")]
+# Parameter sets of the regression: the cocotb side learns its set from the
+# environment the pytest side passes.
+SETS = {
+    "small": ({"depth": 64, "p_max": 62}, "2,8,13,32,62"),
+    "paper": ({"depth": 1024}, "100"),            # the paper's 1Kx18 RAM, p_max 1022
+}
+DEPTH = int(os.environ.get("CLUSTER_DEPTH", "64"))
+P_MAX = int(os.environ.get("CLUSTER_P_MAX", str(DEPTH - 2)))
+PRECISIONS = [int(x) for x in os.environ.get("CLUSTER_P", "8").split(",")]
 MAX_ITER = 2000
 
 
@@ -47,11 +55,11 @@ def _initial(rng, p):
 class ModelRun:
     """The model's side of one run, and the plan of commands."""
 
-    def __init__(self, rng, p, h, const, ring):
+    def __init__(self, p, h, const, ring, plan_sel=None, plan_check=()):
+        """``plan_sel``: {iteration: (cell, Sat)}; ``plan_check``: check iterations."""
         self.p, self.ring = p, ring
-        free = np.flatnonzero(~const)
-        self.plan_sel = {3: (rng.choice(free), 1), 6: (rng.choice(free), 0)}
-        self.plan_check = {2, 5}
+        self.plan_sel = plan_sel or {}
+        self.plan_check = set(plan_check)
         self.states = [(h, const)]     # words read by each iteration
         self.expected = []             # (stable, maximum) of each iteration
         self.commands = []
@@ -75,13 +83,13 @@ class ModelRun:
                                            enable=cmd.enable, sel=cmd.sel, sat=cmd.sat)
             self.states.append((hn, cn))
             self.expected.append((stable, maximum))
-            if self.settled is None and cmd.enable and k > max(self.plan_sel):
+            if self.settled is None and cmd.enable and k > max(self.plan_sel, default=-1):
                 # Stable, or (after the obstacle lowered values) the period-2
                 # oscillation a floored Jacobi iteration can fall into (paper
                 # section 4.3.1): either way the RTL has matched it bit-exactly.
                 if stable.all():
                     self.settled, self.outcome = k, "stable"
-                elif all((a == b).all() for a, b in zip(self.states[k - 1], self.states[k + 1])):
+                elif k and all((a == b).all() for a, b in zip(self.states[k - 1], self.states[k + 1])):
                     self.settled, self.outcome = k, "period-2 oscillation"
         return cmd
 
@@ -109,11 +117,20 @@ async def cluster_until_stable(dut, p):
     dut._log.info(f"p={p} seed={cocotb.RANDOM_SEED}")
     await start(dut)
     h, const, ring = _initial(rng, p)
+    free = np.flatnonzero(~const)
+    model = ModelRun(p, h, const, ring, plan_sel={3: (rng.choice(free), 1), 6: (rng.choice(free), 0)},
+                     plan_check={2, 5})
     bench = ClusterBench(dut, p, ring)
-    model = ModelRun(rng, p, h, const, ring)
     await bench.host_write(ram_image(h, const, p))
     assert await bench.host_read(p + 2) == ram_image(h, const, p), "host port readback before the run"
+    await _run_and_check(dut, bench, model)
+    dut._log.info(f"p={p}: {model.outcome} after {model.settled + 1} iterations, "
+                  f"{len(model.expected)} run and compared, readback equal")
 
+
+async def _run_and_check(dut, bench, model):
+    """Iterate the cluster with the model's commands, check everything, read back."""
+    p = model.p
     words = []
 
     def on_words(k, h, const):
@@ -129,8 +146,30 @@ async def cluster_until_stable(dut, p):
     await next_cycle(dut)
     assert not bool(dut.busy.value)
     assert await bench.host_read(p + 2) == ram_image(*model.states[-1], p), "RAM readback after the run"
-    dut._log.info(f"p={p}: {model.outcome} after {model.settled + 1} iterations, "
-                  f"{len(dones)} run and compared, readback equal")
+
+
+@cocotb.test()
+async def cluster_increasing_precision(dut):
+    """Stable at p1, then the same words continue at p2 > p1 (section 3.3.2):
+    the layout keeps every stored bit in place, the new LSB addresses only
+    need zeros, and the words read first at p2 are the p1 values << (p2-p1)."""
+    p1, p2 = 6, min(20, P_MAX)
+    rng = random.Random(cocotb.RANDOM_SEED)
+    await start(dut)
+    h, const, ring = _initial(rng, p1)
+    bench = ClusterBench(dut, p1, ring)
+    model = ModelRun(p1, h, const, ring, plan_check={0})
+    await bench.host_write(ram_image(h, const, p1))
+    await _run_and_check(dut, bench, model)
+    assert model.outcome == "stable"
+    h1, c1 = model.states[-1]
+    await bench.host_write([0] * (p2 - p1), base=p1 + 2)
+    shift = 1 << (p2 - p1)
+    ring2 = ring * shift
+    model2 = ModelRun(p2, h1 * shift, c1, ring2)
+    await _run_and_check(dut, ClusterBench(dut, p2, ring2), model2)
+    assert model2.outcome == "stable"
+    dut._log.info(f"p={p1} stable after {model.settled + 1} iterations, then p={p2} after {model2.settled + 1}")
 
 
 @cocotb.test()
@@ -139,7 +178,8 @@ async def cluster_refuses_bad_precision(dut):
     await start(dut)
     for port in ("enable", "Sel", "Sat", "host_we"):
         getattr(dut, port).value = 0
-    for p, ok in ((1, False), (0, False), (PARAMS["p_max"] + 1, False), (PARAMS["p_max"], True), (2, True)):
+    too_big = [(P_MAX + 1, False)] if P_MAX + 1 < 1 << P_MAX.bit_length() else []
+    for p, ok in [(1, False), (0, False), *too_big, (P_MAX, True), (2, True)]:
         dut.p.value = p
         dut.run.value = 1
         await ClockCycles(dut.clk, 3)
@@ -151,8 +191,12 @@ async def cluster_refuses_bad_precision(dut):
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)
-def test_cluster(sim):
-    run("harmonic_cluster", PARAMS, sim, "test_cluster")
+@pytest.mark.parametrize("name", SETS)
+def test_cluster(sim, name):
+    params, precisions = SETS[name]
+    depth = params["depth"]
+    run("harmonic_cluster", params, sim, "test_cluster",
+        env={"CLUSTER_DEPTH": depth, "CLUSTER_P_MAX": params.get("p_max", depth - 2), "CLUSTER_P": precisions})
 
 
 @pytest.mark.parametrize("kwargs,message", [
