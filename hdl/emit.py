@@ -16,6 +16,7 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 from amaranth.back import verilog  # noqa: E402
 
 from .harmonic.cluster import Cluster  # noqa: E402
+from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
 
 __all__ = ["TOPS", "DEFAULT_SETS", "top_name", "emit"]
@@ -23,12 +24,14 @@ __all__ = ["TOPS", "DEFAULT_SETS", "top_name", "emit"]
 # Component factory of every top module, by the name its Verilog carries.
 TOPS = {
     "harmonic_node": Node,
+    "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).
 DEFAULT_SETS = [
     ("harmonic_node", {}),
+    ("harmonic_counters", {"p_max": 1022}),
     ("harmonic_cluster", {"depth": 1024}),
     ("harmonic_cluster", {"depth": 1024, "p_max": 255}),
 ]

@@ -47,7 +47,7 @@ import numpy as np
 
 __all__ = [
     "one", "as_values", "neighbours", "update", "local_max", "step", "relax",
-    "word_bits", "ram_image", "from_ram_image",
+    "word_bits", "ram_image", "from_ram_image", "counters",
 ]
 
 
@@ -142,6 +142,18 @@ def relax(h, const, p, ring=None, max_iter=1_000_000):
 # offset 1 + (p - k) holds value bit k, so the integer bit sits at offset 1 and
 # the LSB at offset p+1.  Raising the precision therefore only appends LSB
 # addresses; the bits already stored keep their place.
+
+def counters(c, p):
+    """Addresses the Counters unit presents in iteration cycle c (0 .. p+1):
+    ``(cntR, r_cnt, cntW)``.  A synchronous RAM answers one cycle later, so
+    cntR = p+1-c makes the nodes see the flag at c = 0 and value bit k at
+    c = k+1 (LSB first); r_cnt = (c-1) mod (p+2) streams bit p at c = 3 down
+    to bit 0 at c = 1 of the next iteration (MSB first); cntW = (p+4-c) mod
+    (p+2) writes each result bit two bit positions behind the data read."""
+    if not 0 <= c <= p + 1:
+        raise ValueError(f"cycle {c} outside 0 .. p+1 = {p + 1}")
+    return p + 1 - c, (c - 1) % (p + 2), (p + 4 - c) % (p + 2)
+
 
 def word_bits(v, flag, p):
     """The p+2 stored bits of one node, by address offset."""

@@ -159,8 +159,7 @@ class Cluster(wiring.Component):
             self.r_cnt.eq(cnt.r_cnt),
         ]
         with m.If(start):
-            m.d.comb += cnt.p.eq(self.p)
-        with m.If(start):
+            m.d.comb += cnt.p.eq(self.p)            # the lead-in state depends on p
             m.d.sync += [win.eq(0), upd.eq(0)]
         with m.Elif(self.take):
             m.d.sync += [
@@ -231,6 +230,9 @@ class Cluster(wiring.Component):
         with m.If(running):
             m.d.comb += port_w.data.eq(Cat(*w_bits))
 
+        # ph2 stays high while the cluster idles at cycle 2: done is one cycle.
+        with m.If(self.done):
+            m.d.sync += last_win.eq(0)
         m.d.comb += [
             self.done.eq(cnt.ph2 & last_win),
             self.checked.eq(cnt.ph2 & last_win & ~last_upd),

@@ -40,8 +40,8 @@ class Counters(wiring.Component):
     cntR, r_cnt, cntW : Out(address width)
         The three RAM address offsets.
     ph0, ph1, ph2 : Out(1)
-        Strobes of cycles c = 0, 1, 2 (ph2 also marks the cycle after an
-        ``advance`` that left c = 1).
+        High in cycles c = 0, 1, 2 (decoded from cntW, which is 2, 1, 0
+        there whatever p is; held while ``advance`` is low).
     """
 
     def __init__(self, p_max):
@@ -64,29 +64,27 @@ class Counters(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         last = self.p + 1
+        m.d.comb += [
+            self.ph0.eq(self.cntW == 2),
+            self.ph1.eq(self.cntW == 1),
+            self.ph2.eq(self.cntW == 0),
+        ]
         with m.If(self.start):
             m.d.sync += [
                 self.cntR.eq(0),
                 self.r_cnt.eq(self.p),
                 self.cntW.eq(3),
-                self.ph0.eq(0), self.ph1.eq(0), self.ph2.eq(0),
             ]
-        with m.Else():
+        with m.Elif(self.advance):
             m.d.sync += [
-                self.ph0.eq(self.advance & (self.cntR == 0)),
-                self.ph1.eq(self.advance & self.ph0),
-                self.ph2.eq(self.advance & self.ph1),
+                self.cntR.eq(self.cntR - 1),
+                self.r_cnt.eq(self.r_cnt + 1),
+                self.cntW.eq(self.cntW - 1),
             ]
-            with m.If(self.advance):
-                m.d.sync += [
-                    self.cntR.eq(self.cntR - 1),
-                    self.r_cnt.eq(self.r_cnt + 1),
-                    self.cntW.eq(self.cntW - 1),
-                ]
-                with m.If(self.cntR == 0):
-                    m.d.sync += self.cntR.eq(last)
-                with m.If(self.r_cnt == last):
-                    m.d.sync += self.r_cnt.eq(0)
-                with m.If(self.cntW == 0):
-                    m.d.sync += self.cntW.eq(last)
+            with m.If(self.cntR == 0):
+                m.d.sync += self.cntR.eq(last)
+            with m.If(self.r_cnt == last):
+                m.d.sync += self.r_cnt.eq(0)
+            with m.If(self.cntW == 0):
+                m.d.sync += self.cntW.eq(last)
         return m

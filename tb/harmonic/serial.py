@@ -1,36 +1,26 @@
-"""Testbench pieces shared by the harmonic tests: clock/reset, the Counters'
-address sequences, and emulated serial words (a border node's or a
-neighbour's storage, one bit per RAM address)."""
+"""Testbench pieces shared by the harmonic tests: clock/reset, the RAM
+addresses of the Counters (models.harmonic.counters), and emulated serial
+words (a border node's or a neighbour's storage, one bit per RAM address)."""
 
 import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
 
-from models.harmonic import word_bits
+from models.harmonic import counters, word_bits
 
 PERIOD_NS = 10
 
 
-def cnt_r(c, p):
-    """Port A address presented in iteration cycle c (LSB first)."""
-    return p + 1 - c
-
-
-def r_cnt(c, p):
-    """Port B read address presented in cycle c (MSB first)."""
-    return (c - 1) % (p + 2)
-
-
 def cnt_w(c, p):
     """Port B write address of cycle c (two bit positions behind)."""
-    return (p + 4 - c) % (p + 2)
+    return counters(c, p)[2]
 
 
 def read_offsets(c, p):
     """(port A, port B) addresses whose data the nodes see in cycle c: the
     ones presented in the previous cycle (synchronous RAM)."""
-    prev = (c - 1) % (p + 2)
-    return cnt_r(prev, p), r_cnt(prev, p)
+    cnt_r, r_cnt, _ = counters((c - 1) % (p + 2), p)
+    return cnt_r, r_cnt
 
 
 class SerialWord:
