@@ -46,7 +46,7 @@ unchanged values.
 import numpy as np
 
 __all__ = [
-    "one", "as_values", "neighbours", "update", "local_max", "step", "relax",
+    "one", "neighbours", "update", "local_max", "step", "relax",
     "word_bits", "ram_image", "from_ram_image", "counters",
 ]
 
@@ -54,11 +54,6 @@ __all__ = [
 def one(p):
     """The fixed-point 1.0 (goal value) at precision ``p``."""
     return 1 << p
-
-
-def as_values(a):
-    """``a`` as an object array of Python ints (exact at any precision)."""
-    return np.array([int(x) for x in np.ravel(a)], dtype=object).reshape(np.shape(a))
 
 
 def neighbours(h, ring=None):
@@ -135,7 +130,7 @@ def relax(h, const, p, ring=None, max_iter=1_000_000):
     raise RuntimeError(f"not stable after {max_iter} iterations at p={p}")
 
 
-# --- storage format (the cluster's RAM, section 5.2 "Mem and Saturation") ---
+# --- storage format and addressing (the cluster's RAM and Counters, 5.2) ---
 #
 # Word of p+2 bits per node, one bit per RAM address, most significant first
 # from the word's base: offset 0 holds the constant flag (the extra MSB),

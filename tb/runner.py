@@ -47,11 +47,10 @@ def seed_from_env(default=12345):
     return random.randrange(1 << 31) if text == "random" else int(text)
 
 
-def run(name, params, sim, test_module, env=None, seed=None, tag="", log_file=None):
+def run(name, params, sim, test_module, env=None, seed=None, log_file=None):
     """Emit ``name`` at ``params``, build it for ``sim`` and run ``test_module``.
 
-    ``env`` is passed to the test (its parameters); ``tag`` separates the test
-    directories of runs that share one build; ``log_file`` takes the
+    ``env`` is passed to the test (its parameters); ``log_file`` takes the
     simulator's output instead of the console.  Fails unless at least one test
     ran and none failed.
     """
@@ -66,6 +65,7 @@ def run(name, params, sim, test_module, env=None, seed=None, tag="", log_file=No
         raise ValueError(f"unknown simulator {sim!r}; expected one of {SIMULATORS}")
     module = top_name(name, params)
     build_dir = BUILD / "sim" / sim / module
+    waves = os.environ.get("WAVES") == "1"          # WAVES=1: dump a waveform
     source = emit(name, params, build_dir)
     runner = get_runner(sim)
     runner.build(
@@ -74,11 +74,12 @@ def run(name, params, sim, test_module, env=None, seed=None, tag="", log_file=No
         build_dir=build_dir,
         timescale=TIMESCALE,
         build_args=[str(VERILATOR_WAIVERS)] if sim == "verilator" else [],
+        waves=waves,
     )
     if seed is None:
         seed = seed_from_env()
     print(f"{module} on {sim}: seed {seed} (replay with SEED={seed})")
-    test_dir = build_dir / f"run_{test_module}{tag}"
+    test_dir = build_dir / f"run_{test_module}"
     results = runner.test(
         test_module=test_module,
         hdl_toplevel=module,
@@ -88,6 +89,7 @@ def run(name, params, sim, test_module, env=None, seed=None, tag="", log_file=No
         seed=seed,
         extra_env={k: str(v) for k, v in (env or {}).items()},
         log_file=log_file,
+        waves=waves,
     )
     num_tests, num_failed = get_results(results)
     assert num_tests > 0, f"{test_module} ran no test on {sim}"

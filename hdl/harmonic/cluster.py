@@ -26,13 +26,16 @@ class Cluster(wiring.Component):
     ports of one true dual-port block RAM.  One iteration takes p+2 cycles.
 
     Operation: load the words through the host port while idle, raise ``run``
-    with a precision ``p``.  After a one-cycle lead-in the cluster iterates;
-    at every ``take`` cycle (cycle 1 of an iteration) it samples ``run``,
-    ``enable``, ``Sel`` and ``Sat`` for the iteration whose write window
-    starts next cycle, and at every ``done`` cycle (two cycles later) it shows
-    the ``stable`` / ``local_max`` flags of the iteration that just ended.
-    ``run`` low at a ``take`` stops the cluster after that iteration's writes
-    (the flags of that last iteration still come with ``done``).
+    with a precision ``p``.  After a one-cycle lead-in the cluster iterates.
+    At every ``take`` cycle (cycle 1 of an iteration) it samples ``run``,
+    ``enable``, ``Sel`` and ``Sat`` for that iteration, whose write window
+    starts in the next cycle; in the cycle after the next ``take`` (cycle 2
+    of the following iteration) ``done`` shows the ``stable`` /
+    ``local_max`` flags of the iteration.  ``run`` low at a ``take`` stops
+    the cluster once the previous iteration's writes are over (its flags
+    still come with ``done``); the iteration whose command was "stop" only
+    read.  Iteration k's flags come (k+1)(p+2) + 4 cycles after the cycle
+    in which an idle cluster saw ``run``.
 
     Parameters
     ----------
