@@ -194,29 +194,14 @@ class Cluster(wiring.Component):
             with m.If(write):
                 m.d.comb += port_b.addr.eq(cnt.cntW)
 
-        # The 3x6 node grid; edge nodes take the serial edge inputs.
-        def stream(bus, edge, r, c, dr, dc, i_edge):
-            rr, cc = r + dr, c + dc
-            if 0 <= rr < ROWS and 0 <= cc < COLS:
-                return bus[rr * COLS + cc]
-            return edge[i_edge]
-
-        w_bits = []
+        # The 3x6 node grid: each node streams its word from the RAM and
+        # passes it on to its neighbours; edge nodes take the edge inputs.
+        nodes = [[Node() for _ in range(COLS)] for _ in range(ROWS)]
         for r in range(ROWS):
             for c in range(COLS):
                 i = r * COLS + c
-                node = Node()
+                node = nodes[r][c]
                 m.submodules[f"node_{r}_{c}"] = node
-                for name, (dr, dc, h_edge, m_edge, k) in {
-                    "N": (-1, 0, self.h_N_in, self.m_N_in, c),
-                    "S": (1, 0, self.h_S_in, self.m_S_in, c),
-                    "E": (0, 1, self.h_E_in, self.m_E_in, r),
-                    "W": (0, -1, self.h_W_in, self.m_W_in, r),
-                }.items():
-                    m.d.comb += [
-                        getattr(node, f"h_{name}").eq(stream(port_a.data, h_edge, r, c, dr, dc, k)),
-                        getattr(node, f"m_{name}").eq(stream(port_b.data, m_edge, r, c, dr, dc, k)),
-                    ]
                 m.d.comb += [
                     node.h.eq(port_a.data[i]),
                     node.hm.eq(port_b.data[i]),
@@ -229,7 +214,18 @@ class Cluster(wiring.Component):
                     self.stable[i].eq(node.stable),
                     self.local_max[i].eq(node.local_max),
                 ]
-                w_bits.append(node.w)
+                for name, dr, dc, h_edge, m_edge, k in (
+                        ("N", -1, 0, self.h_N_in, self.m_N_in, c),
+                        ("S", 1, 0, self.h_S_in, self.m_S_in, c),
+                        ("E", 0, 1, self.h_E_in, self.m_E_in, r),
+                        ("W", 0, -1, self.h_W_in, self.m_W_in, r)):
+                    rr, cc = r + dr, c + dc
+                    inside = 0 <= rr < ROWS and 0 <= cc < COLS
+                    m.d.comb += [
+                        getattr(node, f"h_{name}").eq(nodes[rr][cc].to if inside else h_edge[k]),
+                        getattr(node, f"m_{name}").eq(nodes[rr][cc].to_m if inside else m_edge[k]),
+                    ]
+        w_bits = [nodes[r][c].w for r in range(ROWS) for c in range(COLS)]
         with m.If(running):
             m.d.comb += port_w.data.eq(Cat(*w_bits))
 

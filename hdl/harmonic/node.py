@@ -64,6 +64,11 @@ class Node(wiring.Component):
         Saturation order: in an update iteration with ``Sel`` high the node
         becomes constant with value ``Sat`` (0 obstacle, 1 goal).  Held over
         the write window.
+    to : Out(1)
+        The node's value, LSB first, for its four neighbours (the paper's
+        to_N, to_E, to_W, to_S are this one signal) and the decision module.
+    to_m : Out(1)
+        The node's value MSB first, for its neighbours' Maximum modules.
     w : Out(1)
         Bit to write to RAM port B (Mem multiplexer): the update, the stored
         bit (constant node or check iteration) or the saturation constant.
@@ -91,12 +96,16 @@ class Node(wiring.Component):
     enable: In(1)
     Sel: In(1)
     Sat: In(1)
+    to: Out(1)
+    to_m: Out(1)
     w: Out(1)
     stable: Out(1)
     local_max: Out(1)
 
     def elaborate(self, platform):
         m = Module()
+        # Mem: the stored word is the node's value as its neighbours see it.
+        m.d.comb += [self.to.eq(self.h), self.to_m.eq(self.hm)]
 
         # Update: three serial full adders, (N + S) + (E + W), one carry
         # flip-flop each.  At ph0 the inputs carry the flags and are masked,
