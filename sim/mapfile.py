@@ -1,8 +1,17 @@
-"""Moving AI benchmark maps and scenarios (maps/SOURCES.md gives the format).
+"""Maps and scenarios: Moving AI benchmark maps, ASCII grids and images.
 
-``load_map`` returns a boolean grid, True where the cell is an obstacle
-(``@``, ``T``, ``O``, ``W``; ``.`` and ``G`` / ``S`` are passable).  Any
-malformed input raises :class:`MapFormatError` naming the file and line.
+Every reader returns a boolean grid (rows, cols), True where the cell is an
+obstacle.  Any malformed input raises :class:`MapFormatError` naming the file
+and, for text formats, the line.
+
+* ``.map``: Moving AI (maps/SOURCES.md gives the format): ``@``, ``T``, ``O``,
+  ``W`` are obstacles; ``.`` and ``G`` / ``S`` are passable.
+* ``.txt``: an ASCII grid, one row per line, ``#`` or ``@`` obstacle, ``.``
+  free; every row as long as the first; blank lines at the end are ignored.
+* ``.pgm`` / ``.png`` (any format Pillow reads): grey level < 128 (dark) is an
+  obstacle, the rest free; colour images are converted to grey first.
+
+:func:`load_grid` picks the reader by the file's suffix.
 """
 
 from dataclasses import dataclass
@@ -10,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["MapFormatError", "Scenario", "load_map", "load_scenarios"]
+__all__ = ["MapFormatError", "Scenario", "load_map", "load_ascii", "load_image", "load_grid", "load_scenarios"]
 
 PASSABLE = set(".GS")
 BLOCKED = set("@TOW")
@@ -20,7 +29,7 @@ class MapFormatError(ValueError):
     """A map or scenario file that does not follow the Moving AI format."""
 
     def __init__(self, path, line, message):
-        super().__init__(f"{path}:{line}: {message}")
+        super().__init__(f"{path}:{line}: {message}" if line is not None else f"{path}: {message}")
         self.path, self.line = path, line
 
 
@@ -67,6 +76,55 @@ def load_map(path):
     if extra:
         raise MapFormatError(path, extra[0], "text after the last map row")
     return grid
+
+
+def load_ascii(path):
+    """An ASCII grid (``#``/``@`` obstacle, ``.`` free) as a bool array, True = obstacle."""
+    path = Path(path)
+    lines = path.read_text().splitlines()
+    while lines and not lines[-1].strip():
+        lines.pop()
+    if not lines:
+        raise MapFormatError(path, 1, "empty grid")
+    width = len(lines[0])
+    grid = np.zeros((len(lines), width), dtype=bool)
+    for r, row in enumerate(lines):
+        if len(row) != width:
+            raise MapFormatError(path, r + 1, f"row has {len(row)} cells, the first row has {width}")
+        for c, ch in enumerate(row):
+            if ch in "#@":
+                grid[r, c] = True
+            elif ch != ".":
+                raise MapFormatError(path, r + 1, f"unknown cell {ch!r} in column {c} (expected '#', '@' or '.')")
+    return grid
+
+
+def load_image(path):
+    """A PGM/PNG image as a bool array: grey < 128 (dark) = obstacle."""
+    from PIL import Image, UnidentifiedImageError
+    path = Path(path)
+    try:
+        with Image.open(path) as im:
+            grey = np.asarray(im.convert("L"))
+    except (UnidentifiedImageError, OSError, SyntaxError, ValueError) as e:
+        if isinstance(e, FileNotFoundError):
+            raise
+        raise MapFormatError(path, None, f"not a readable image ({e})") from None
+    if grey.size == 0:
+        raise MapFormatError(path, None, "empty image")
+    return grey < 128
+
+
+def load_grid(path):
+    """The map at ``path`` by its suffix: ``.map``, ``.txt``, else an image."""
+    suffix = Path(path).suffix.lower()
+    if suffix == ".map":
+        return load_map(path)
+    if suffix == ".txt":
+        return load_ascii(path)
+    if suffix in (".pgm", ".png", ".pbm", ".ppm", ".bmp", ".gif", ".tif", ".tiff"):
+        return load_image(path)
+    raise MapFormatError(path, None, f"unknown map format {suffix or '(no suffix)'!r}: use .map, .txt, .pgm or .png")
 
 
 def load_scenarios(path, grid=None):

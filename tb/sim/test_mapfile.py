@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from sim.mapfile import MapFormatError, load_map, load_scenarios
@@ -60,3 +61,31 @@ def test_scenario_checks(tmp_path):
         with pytest.raises(MapFormatError, match=why) as info:
             load_scenarios(scen, grid)
         assert info.value.line == 3
+
+
+def test_ascii_and_images_agree(tmp_path):
+    from PIL import Image
+
+    from sim.mapfile import load_grid
+    ref = load_map(MAPS / "room-32-32-4.map")
+    (tmp_path / "m.txt").write_text("\n".join("".join("#" if v else "." for v in row) for row in ref) + "\n\n")
+    img = Image.fromarray(np.where(ref, 0, 255).astype(np.uint8))
+    img.save(tmp_path / "m.png")
+    img.save(tmp_path / "m.pgm")
+    for name in ("m.txt", "m.png", "m.pgm"):
+        assert (load_grid(tmp_path / name) == ref).all(), name
+    assert (load_grid(MAPS / "room-32-32-4.map") == ref).all()
+
+
+@pytest.mark.parametrize("name,text,message", [
+    ("a.txt", "..#\n.#\n", "2:.*2 cells"),
+    ("b.txt", "..#\n.x.\n", "2:.*unknown cell 'x'"),
+    ("c.txt", "\n", "1:.*empty"),
+    ("d.png", "not an image", "not a readable image"),
+    ("e.xyz", "", "unknown map format"),
+])
+def test_bad_grids(tmp_path, name, text, message):
+    from sim.mapfile import load_grid
+    (tmp_path / name).write_text(text)
+    with pytest.raises(MapFormatError, match=message):
+        load_grid(tmp_path / name)
