@@ -46,9 +46,10 @@ demo: $(STAMP) icarus
 test: $(STAMP) icarus cxx
 	$(PYTEST) tb
 
-## make sim MODULE=node|cluster|model [SIM=icarus|verilator]: one module's tests
+## make sim MODULE=<name> [SIM=icarus|verilator]: one module's tests (tb/*/test_<name>.py)
 sim: $(STAMP) icarus cxx
-	$(PYTEST) tb/harmonic/test_$(MODULE).py $(if $(filter model,$(MODULE)),,-k $(SIM))
+	@test -n "$(wildcard tb/*/test_$(MODULE).py)" || { echo "no tb/*/test_$(MODULE).py; modules: $(patsubst test_%.py,%,$(notdir $(wildcard tb/*/test_*.py)))"; exit 1; }
+	$(PYTEST) $(wildcard tb/*/test_$(MODULE).py) -k "$(SIM) or not icarus and not verilator"
 
 ## make verilog: synthesizable Verilog of every top into build/verilog/
 verilog: $(STAMP)
