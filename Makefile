@@ -8,6 +8,7 @@ BIN      := $(VENV)/bin
 STAMP    := $(VENV)/.installed
 SIM      ?= icarus
 MODULE   ?= node
+JOBS     ?= 2
 PYTEST   := $(BIN)/python -m pytest
 
 export AMARANTH_USE_YOSYS := builtin
@@ -43,8 +44,13 @@ demo: $(STAMP) icarus
 	$(BIN)/python -m sim.demo --out results/demo
 
 ## make test: model tests plus the whole cocotb regression on Icarus and Verilator
+## (JOBS pytest-xdist workers; the wall time lands in build/regression.json)
 test: $(STAMP) icarus cxx
-	$(PYTEST) tb
+	@mkdir -p build; start=$$(date +%s); \
+	$(PYTEST) -n $(JOBS) tb; rc=$$?; \
+	printf '{"seconds": %d, "passed": %s, "jobs": %d, "date": "%s"}\n' $$(( $$(date +%s) - start )) \
+	  $$( [ $$rc = 0 ] && echo true || echo false ) $(JOBS) "$$(date -u +%FT%TZ)" > build/regression.json; \
+	exit $$rc
 
 ## make sim MODULE=<name> [SIM=icarus|verilator]: one module's tests (tb/*/test_<name>.py)
 sim: $(STAMP) icarus cxx

@@ -5,6 +5,8 @@ Each (simulator, top module, parameter set) gets its own build directory
 never share a build, and a rerun only recompiles when the Verilog changed.
 """
 
+import contextlib
+import fcntl
 import os
 import random
 import sys
@@ -56,15 +58,35 @@ def run(name, params, sim, test_module, env=None, seed=None, log_file=None):
     """
     os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
     tool_env()
-    from cocotb_tools.check_results import get_results
-    from cocotb_tools.runner import get_runner
-
-    from hdl.emit import emit, top_name
+    from hdl.emit import top_name
 
     if sim not in SIMULATORS:
         raise ValueError(f"unknown simulator {sim!r}; expected one of {SIMULATORS}")
     module = top_name(name, params)
     build_dir = BUILD / "sim" / sim / module
+    # Parallel pytest workers (make test runs pytest-xdist) may ask for the same
+    # build at once: the first builds it, the others wait and reuse it.
+    with _locked(build_dir):
+        return _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir)
+
+
+@contextlib.contextmanager
+def _locked(build_dir):
+    build_dir.mkdir(parents=True, exist_ok=True)
+    with open(build_dir / ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
+
+
+def _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir):
+    from cocotb_tools.check_results import get_results
+    from cocotb_tools.runner import get_runner
+
+    from hdl.emit import emit
+
     waves = os.environ.get("WAVES") == "1"          # WAVES=1: dump a waveform
     source = emit(name, params, build_dir)
     runner = get_runner(sim)
