@@ -73,7 +73,7 @@ class MfGen(wiring.Component):
         p_w = max(abs(a) * top + abs(b) for a, b in zip(ms, bs)).bit_length() + 1
 
         # Stage 1: which segment (thermometer count of the boundaries passed).
-        seg = Signal(range(nseg))
+        seg = Signal(range(max(nseg, 2)))      # >= 1 bit: no zero-width wire for one segment
         m.d.comb += seg.eq(sum((self.x >= s).as_unsigned() for s in spec.seg_start[1:])
                            if nseg > 1 else 0)
         # Tables padded to a power of two (the last segment repeated) so that

@@ -146,7 +146,7 @@ async def random_stalls(dut):
 
 
 async def _random_stalls(dut, bench, config, model, rng, ready_p):
-    n = 200
+    n = 200 if config.n <= 2 else 60
     codes = np.array([[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(n)])
     # a few saturated corners too
     codes[:4] = [[0] * config.n, [(1 << config.ip_sz) - 1] * config.n,
