@@ -15,6 +15,9 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 from amaranth.back import verilog  # noqa: E402
 
+from .dflc.core import DflcCore  # noqa: E402
+from .dflc.multi import DflcMulti  # noqa: E402
+from .dflc.top import DflcStream, config_for  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
@@ -30,6 +33,13 @@ TOPS = {
     "harmonic_cluster": Cluster,
     "harmonic_block": lambda n, m, br=1, bc=1, p_max=30, depth=1024: Block(n, m, (br, bc), p_max, depth),
     "harmonic_planner": lambda n, m, br, bc, p_max, depth: Planner(n, m, (br, bc), p_max, depth),
+    # DFLC: fll = a .fll stem (models/dflc_<fll>.fll or tb/dflc/fll/<fll>.fll),
+    # widths ip_sz, dy_ip, mf_op_sz, op_sz, div (lut/array), op (sel_op), par (1 = parallel),
+    # cpr_mf, cpr_mult, cpr_div (extra pipeline registers)
+    "dflc_stream": DflcStream,
+    "dflc_core": lambda par=0, cpr_mf=0, cpr_mult=0, cpr_div=0, **kw: DflcCore(
+        config_for(**kw), parallel=bool(par), cpr_mf=cpr_mf, cpr_mult=cpr_mult, cpr_div=cpr_div),
+    "dflc_multi": DflcMulti,     # test top: the regression's configurations in one build
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).
@@ -40,9 +50,12 @@ DEFAULT_SETS = [
     ("harmonic_cluster", {"depth": 1024, "p_max": 255}),
     ("harmonic_block", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024}),
     ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}),
+    ("dflc_stream", {"fll": "table1"}),
+    ("dflc_core", {"fll": "table1"}),
+    ("dflc_core", {"fll": "table1", "par": 1}),
 ]
 
-_SHORT = {"p_max": "pmax"}
+_SHORT = {"p_max": "pmax", "fll": ""}
 
 
 def top_name(name, params):
