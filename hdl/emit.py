@@ -15,6 +15,9 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 from amaranth.back import verilog  # noqa: E402
 
+from .edt_bfs.array import EdtArray  # noqa: E402
+from .edt_bfs.cell import EdtCell  # noqa: E402
+from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
@@ -26,6 +29,9 @@ TOPS = {
     "harmonic_node": Node,
     "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
+    "edt_cell": EdtCell,
+    "edt_array": EdtArray,
+    "edt_bfs": EdtBfs,
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).
@@ -34,6 +40,9 @@ DEFAULT_SETS = [
     ("harmonic_counters", {"p_max": 1022}),
     ("harmonic_cluster", {"depth": 1024}),
     ("harmonic_cluster", {"depth": 1024, "p_max": 255}),
+    ("edt_cell", {"height": 32, "width": 32}),
+    ("edt_bfs", {"height": 16, "width": 16}),
+    ("edt_bfs", {"height": 32, "width": 32}),
 ]
 
 _SHORT = {"p_max": "pmax"}
