@@ -56,6 +56,11 @@ TOPS = [  # (name, params, paper FF / LUT4 / MHz)
     # the planner top: that block + Control + Decision + host streams, p_max = 62
     ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256},
      "- (paper: Control 844 slices, Decision 3p+682 slices)"),
+    # EDT/BFS (paper 004): Table II gives 1188 gates for "BFS and NNT" and
+    # Table I 232 MHz; hdl/edt_bfs/README.md compares.  The 16x16 array is
+    # left out: yosys 0.23 needs about 6 minutes for the 8x8 one already.
+    ("edt_cell", {"height": 16, "width": 16}, "1188 gates / - / 232 (Tables I-II, per cell?)"),
+    ("edt_array", {"height": 8, "width": 8}, "- (64 cells)"),
 ]
 DFLC_TOPS = [  # (name, params, paper figures), Spartan-3, paper 003 section 7
     ("dflc_core", {"fll": "table1"},

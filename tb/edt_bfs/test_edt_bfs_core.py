@@ -1,0 +1,200 @@
+"""The EDT/BFS core (hdl/edt_bfs/edt_bfs.py: controller, streams, array of cells) against the model.
+
+Every job's distances, vectors (NNT), cfr, visited flags, parents, path,
+iteration counts and cycle count (with an always-valid source and an
+always-ready sink) equal models.edt_bfs.plan_path bit for bit.  Cases:
+random and structured images (rooms, corridors, isolated points) with one to
+three goals; no obstacles; a goal on an obstacle; an unreachable goal; the
+start equal to the goal; no path requested; a changed environment (a moved
+obstacle, loaded into the same array without reset); random stalls on the
+image source and back-pressure on the result stream; a reset in the middle
+of the EDT and of the read-out, after which the core is idle and the next
+job is exact; a start outside a 7x9 array (start_err).  Environment:
+EDT_SIZE (HxW), EDT_JOBS (random jobs).
+"""
+
+import os
+
+import cocotb
+import numpy as np
+import pytest
+from cocotb.triggers import ReadOnly, RisingEdge
+
+from edt_bench import EdtBfsDriver, compare
+from images import FAMILIES, free_cells
+from models.edt_bfs import plan_path
+from tb.runner import SIMULATORS, run, seed_from_env
+
+H, W = (int(v) for v in os.environ.get("EDT_SIZE", "8x8").split("x"))
+JOBS = int(os.environ.get("EDT_JOBS", "6"))
+
+
+async def _setup(dut):
+    drv = EdtBfsDriver(dut, H, W)
+    await drv.start()
+    seed = seed_from_env()
+    dut._log.info(f"seed {seed} (replay with SEED={seed})")
+    return drv, np.random.default_rng(seed)
+
+
+async def _check(drv, img, goals, start, dfar, **kw):
+    model = plan_path(img, goals, start, dfar)
+    got = await drv.job(img, goals, start, dfar, **kw)
+    return compare(got, model, cycles="rng" not in kw), model
+
+
+@cocotb.test()
+async def random_and_structured(dut):
+    drv, rng = await _setup(dut)
+    names = list(FAMILIES)
+    compared = found = 0
+    for n in range(JOBS):
+        img = FAMILIES[names[n % len(names)]](rng, H, W)
+        cells = free_cells(img, rng, 4)
+        if len(cells) < 2:
+            img[0, 0] = False
+            cells = [(0, 0), (0, 0)]
+        start, goals = cells[0], cells[1:1 + int(rng.integers(1, 4))]
+        dfar = int(rng.integers(0, 3))
+        c, model = await _check(drv, img, goals, start, dfar)
+        compared += c
+        found += model.path_found
+    dut._log.info(f"{JOBS} jobs, {compared} values compared, {found} paths")
+    assert compared >= JOBS * 7 * H * W and (found >= 1 or JOBS < 4)
+
+
+@cocotb.test()
+async def edge_cases(dut):
+    drv, rng = await _setup(dut)
+    h, w = H, W
+    jobs = 0
+    # no obstacles: nothing reached, all cfr, one EDT iteration
+    img = np.zeros((h, w), dtype=bool)
+    _, m = await _check(drv, img, [(0, 0)], (h - 1, w - 1), 2)
+    assert m.iterations_edt == 1 and m.path_found and (m.distance == -1).all()
+    # a goal on an obstacle (dropped) and a second goal
+    img[h // 2, w // 2] = True
+    _, m = await _check(drv, img, [(h // 2, w // 2), (h - 1, 0)], (0, w - 1), 0)
+    assert m.path[-1] == (h - 1, 0)
+    # only a goal on an obstacle: nothing visited, no path
+    _, m = await _check(drv, img, [(h // 2, w // 2)], (0, 0), 0)
+    assert not m.path_found and m.iterations_bfs == 1
+    # unreachable goal behind a wall
+    wall = np.zeros((h, w), dtype=bool)
+    wall[:, w // 2] = True
+    _, m = await _check(drv, wall, [(0, 0)], (h - 1, w - 1), 0)
+    assert not m.path_found
+    # start equal to the goal
+    _, m = await _check(drv, wall, [(1, 1)], (1, 1), 0)
+    assert m.path == [(1, 1)]
+    # start outside the cfr (next to the wall, dfar 1)
+    _, m = await _check(drv, wall, [(0, 0)], (3, w // 2 - 1), 1)
+    assert not m.path_found
+    # no path requested
+    _, m = await _check(drv, wall, [(0, 0)], None, 0)
+    # a large dfar: no cfr pixel (clamped to the d_i width, exact)
+    _, m = await _check(drv, wall, [(0, 0)], (0, 1), 10_000)
+    assert not m.cfr.any()
+    jobs = 8
+    dut._log.info(f"{jobs} edge-case jobs compared")
+
+
+@cocotb.test()
+async def changed_environment(dut):
+    """A moved obstacle loaded into the same array: nothing left over from the old image."""
+    drv, rng = await _setup(dut)
+    h, w = H, W
+    img = np.zeros((h, w), dtype=bool)
+    img[2:4, 2:w - 2] = True
+    goals, start = [(h - 1, w - 1)], (0, 0)
+    _, m1 = await _check(drv, img, goals, start, 1)
+    moved = np.zeros_like(img)
+    moved[h - 3:h - 1, 2:w - 2] = True
+    _, m2 = await _check(drv, moved, goals, start, 1)
+    assert not np.array_equal(m1.distance, m2.distance)
+    # and back, plus a different goal set
+    _, m3 = await _check(drv, img, [(h - 1, 0)], (0, w - 1), 0)
+
+
+@cocotb.test()
+async def back_pressure(dut):
+    """Random image stalls and result back-pressure: same results, more cycles."""
+    drv, rng = await _setup(dut)
+    for n in range(3):
+        img = FAMILIES["random"](rng, H, W, 0.15)
+        cells = free_cells(img, rng, 3)
+        model = plan_path(img, cells[1:], cells[0], 0)
+        got = await drv.job(img, cells[1:], cells[0], 0, rng=rng, p_valid=0.6, p_ready=0.4)
+        compare(got, model, cycles=False)
+        assert got["cycles"] > model.cycles
+
+
+async def _idle_after_reset(drv):
+    d = drv.dut
+    await drv.reset()
+    await ReadOnly()
+    assert int(d.busy.value) == 0 and int(d.c_stream__ready.value) == 1
+    assert int(d.o_stream__valid.value) == 0 and int(d.i_stream__ready.value) == 0
+    await RisingEdge(d.clk)
+
+
+@cocotb.test()
+async def reset_mid_job(dut):
+    drv, rng = await _setup(dut)
+    img = FAMILIES["rooms"](rng, H, W)
+    img[0, 0] = img[H - 1, W - 1] = False
+    cells = [(0, 0), (H - 1, W - 1)]
+    # in the EDT (after the load), then in the middle of the read-out
+    for abort in (W + 3, W + 3 * W + H * W // 2):
+        assert await drv.job(img, cells[1:], cells[0], 0, abort_after=abort) is None
+        await _idle_after_reset(drv)
+        await _check(drv, img, cells[1:], cells[0], 0)
+
+
+@cocotb.test()
+async def start_out_of_range(dut):
+    """A start outside the array (possible when a side is no power of two): start_err, no path."""
+    drv, rng = await _setup(dut)
+    rows, cols = 1 << drv.widths["row"], 1 << drv.widths["col"]
+    starts = [(r, 0) for r in range(H, rows)] + [(0, c) for c in range(W, cols)]
+    img = FAMILIES["random"](rng, H, W, 0.1)
+    goals = free_cells(img, rng, 2)
+    for start in starts:
+        got = await drv.job(img, goals, start, 0)
+        compare(got, plan_path(img, goals, None, 0))   # as without a start: no path beats
+        assert got["start_err"] == 1 and not got["path"]
+    # a valid start clears the flag
+    got = await drv.job(img, goals, goals[0], 0)
+    assert got["start_err"] == 0
+    dut._log.info(f"{len(starts)} out-of-range starts")
+    assert len(starts) > 0 or (H & (H - 1) == 0 and W & (W - 1) == 0)
+
+
+def _params(size):
+    h, w = size
+    return {"height": h, "width": w}
+
+
+# All five tests at 8x8 on both simulators and 16x16 on Icarus; two random
+# 32x32 jobs on Icarus.  A Verilator build grows with the cell count (about
+# 100 kB of C++ per cell instance) and Icarus runs a 32x32 array at about
+# 15 ms per cycle, so the rest of the large cases run only with EDT_BIG=1
+# (hdl/edt_bfs/README.md gives the measured times).
+# (sim, size, random jobs, cocotb test filter or None for all five tests)
+CASES = [(sim, (8, 8), 6, None) for sim in SIMULATORS] + [
+    ("icarus", (16, 16), 3, None), ("icarus", (7, 9), 3, None),      # 7x9: non-square, start_err
+    ("icarus", (32, 32), 1, "random_and_structured")]
+BIG = [("icarus", (32, 32), 3, None), ("verilator", (16, 16), 2, None),
+       ("verilator", (32, 32), 1, "random_and_structured")]
+
+
+@pytest.mark.parametrize("sim, size, jobs, only", CASES + BIG,
+                         ids=[f"{s}-{n[0]}x{n[1]}{'-' + o if o else ''}{'-big' if c in BIG else ''}"
+                              for c in CASES + BIG for s, n, _, o in [c]])
+def test_edt_bfs_core(sim, size, jobs, only):
+    if (sim, size, jobs, only) in BIG and os.environ.get("EDT_BIG") != "1":
+        pytest.skip("large array: set EDT_BIG=1")
+    env = {"EDT_SIZE": f"{size[0]}x{size[1]}", "EDT_JOBS": jobs}
+    if only:
+        env["COCOTB_TEST_FILTER"] = only
+    run("edt_bfs", _params(size), sim, "test_edt_bfs_core", env=env)
