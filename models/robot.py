@@ -35,10 +35,12 @@ It keeps a *true* pose and an *odometric* estimate:
   the paper's MATLAB host did (time is absent from it).
 * Wheel slip (``slip`` = s, 0 by default) makes the ground travel differ from
   the wheel rotation the encoders see: ground travel = wheel travel times
-  ``(1 + b + e)``, with ``b`` ~ N(0, s) drawn once per wheel and run
-  (systematic: unequal effective wheel radii, the dominant odometry error on
-  small robots) and ``e`` ~ N(0, s) drawn per wheel and period (random
-  slip), from a seeded generator.  The true pose moves by the ground travel,
+  ``(1 + b + e)``, with ``e`` ~ N(0, s) drawn per wheel and period (random
+  slip) and ``b`` ~ N(0, s/5) drawn once per wheel and run (systematic:
+  unequal effective wheel radii, the error that makes odometry drift most on
+  small robots; a wheel difference δ bends the true path by about
+  δ d² / (2L) over a distance d), from a seeded generator.  s = 0.02 gives a
+  few centimetres over a metre, the paper's order of magnitude.  The true pose moves by the ground travel,
   the odometry by the ticks, so they drift apart as in the paper's section 8.
 """
 
@@ -121,7 +123,7 @@ class Robot:
         self.params = params
         self.slip = float(slip)
         self.rng = np.random.default_rng(seed)
-        self.bias = self.rng.normal(0.0, self.slip, 2) if self.slip > 0 else np.zeros(2)
+        self.bias = self.rng.normal(0.0, self.slip / 5, 2) if self.slip > 0 else np.zeros(2)
         self.true_pose = tuple(float(v) for v in pose)
         self.travel = np.zeros(2)              # cumulative wheel rotation as travel (right, left), m
         self.odometry = Odometry(pose, params)
