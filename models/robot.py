@@ -44,6 +44,7 @@ It keeps a *true* pose and an *odometric* estimate:
   the odometry by the ticks, so they drift apart as in the paper's section 8.
 """
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -85,11 +86,11 @@ def arc_step(pose, ds_r, ds_l, axle=KHEPERA_II.axle):
     x, y, th = pose
     dth = (ds_r - ds_l) / axle                 # eq. 15
     ds = (ds_r + ds_l) / 2                     # eq. 17
-    # eq. 18, with its eq. 19 limit; 2 sin(dθ/2)/dθ written as sinc keeps both
-    # in one smooth expression (np.sinc(t) = sin(πt)/(πt)).
-    chord = ds * np.sinc(dth / (2 * np.pi))
-    mid = th + dth / 2
-    return (x + chord * np.cos(mid), y + chord * np.sin(mid), th + dth)
+    # eq. 18, and its eq. 19 limit where dθ is too small for the quotient
+    half = dth / 2
+    chord = ds * (math.sin(half) / half if abs(half) > 1e-9 else 1 - half * half / 6)
+    mid = th + half
+    return (x + chord * math.cos(mid), y + chord * math.sin(mid), th + dth)
 
 
 class Odometry:
