@@ -577,7 +577,7 @@ def ascent_next(h):
     return nr, nc
 
 
-def _goal_mask(goals, shape):
+def _ascent_goals(goals, shape):
     if isinstance(goals, np.ndarray) and goals.dtype == bool:
         if goals.shape != shape:
             raise ValueError(f"goal mask is {goals.shape}, the field is {shape}")
@@ -617,7 +617,7 @@ def trajectory(h, goals, start, nxt=None):
     ends, after at most ``h.size`` steps.
     """
     h = np.asarray(h, dtype=object)
-    goal = _goal_mask(goals, h.shape)
+    goal = _ascent_goals(goals, h.shape)
     r, c = (int(x) for x in start)
     if not (0 <= r < h.shape[0] and 0 <= c < h.shape[1]):
         raise ValueError(f"start ({r}, {c}) outside the {h.shape[0]}x{h.shape[1]} field")
@@ -640,7 +640,7 @@ def ascent_reaches(h, goals, cells=None):
     mask) limits the answer to those cells; the others are False.
     """
     h = np.asarray(h, dtype=object)
-    goal = _goal_mask(goals, h.shape)
+    goal = _ascent_goals(goals, h.shape)
     nr, nc = ascent_next(h)
     rows, cols = h.shape
     known = np.full(h.shape, -1, dtype=np.int8)          # -1 unknown, 0 no, 1 yes

@@ -3,7 +3,9 @@
 Claim tested: on a converged field (no free local maximum, section 4.1), the
 steepest 4-neighbour ascent reaches a goal from EVERY free cell a goal can
 reach, on the bundled maps, the paper's corridor and a spiral (3.2.2), and a
-multi-goal map.  Every path is also checked cell by cell: 4-connected, free
+multi-goal map (den312d is left out: 14 s in the model).  The fields come
+from the block-synchronous planner (models.harmonic.plan, 8x8 blocks, I = 4,
+p = 16, 32, ... until no local maximum).  Every path is also checked cell by cell: 4-connected, free
 or goal cells only, values strictly increasing, ending on a goal.  And the
 converse, so the test can fail: with too little precision the same ascent
 gets stuck on plateaus.
