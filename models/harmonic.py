@@ -43,10 +43,15 @@ written, every node is stable, and the local-maximum flags are computed on the
 unchanged values.
 """
 
+from collections import deque
+from dataclasses import dataclass, field
+
 import numpy as np
 
 __all__ = [
     "one", "neighbours", "update", "local_max", "step", "relax",
+    "pad_to_blocks", "reachable", "PlanResult", "plan", "decision", "visit_cycles",
+    "VISIT_OVERHEAD", "RUN_OVERHEAD", "SET_OVERHEAD", "TRIANGLES",
     "word_bits", "ram_image", "from_ram_image", "counters",
 ]
 
@@ -130,6 +135,347 @@ def relax(h, const, p, ring=None, max_iter=1_000_000):
     raise RuntimeError(f"not stable after {max_iter} iterations at p={p}")
 
 
+# --- the block-synchronous planner (section 4 pseudo-code, 3.3, 4.5, 5.1) ---
+#
+# Timing of the Control module (hdl/harmonic/controller.py), in clock cycles.
+# A block visit runs K iterations of p+2 cycles on the block's clusters:
+#
+#   =====================  ==================================================
+#   phase                  cycles
+#   =====================  ==================================================
+#   block visit            K*(p+2) + VISIT_OVERHEAD: one start-request cycle,
+#                          the clusters' lead-in cycle, K iterations, the two
+#                          cycles in which the last iteration's top bits are
+#                          written and its flags come, one decision cycle
+#                          (next block / pass / level), one cycle spare
+#   update visit, K        K = min(i + 1, I) when iteration i (1-based) was
+#                          the first stable one, else K = I.  The flags of an
+#                          iteration come at cycle 2 of the next one, after
+#                          that one's command was taken, so an early stop
+#                          always costs one confirmation iteration; it reads
+#                          the same words and borders, so it changes nothing
+#                          and is not counted in ``block_iterations``
+#   check visit            K = 1 (one check iteration: Maximum flags)
+#   clear visit            K = 1 (free nodes written 0, Sel/Sat applied)
+#   run                    RUN_OVERHEAD: the START command's cycle is not
+#                          counted, the last decision cycle is
+#   dynamic order          SET_OVERHEAD + a clear pass (B clear visits)
+#   precision change       0: the new LSB addresses were zeroed at load and
+#                          the MSB-first layout keeps the stored bits in place
+#   =====================  ==================================================
+
+VISIT_OVERHEAD = 6
+RUN_OVERHEAD = 0
+SET_OVERHEAD = 0
+
+_INT64_P_MAX = 60       # 4 * 2**60 < 2**63: int64 arithmetic is exact up to here
+
+
+def visit_cycles(k, p):
+    """Cycles of one block visit running ``k`` iterations at precision ``p``."""
+    return k * (p + 2) + VISIT_OVERHEAD
+
+
+def pad_to_blocks(obstacle, block):
+    """Pad ``obstacle`` (bool, True = obstacle) at the bottom and right with
+    obstacles to multiples of ``block = (n, m)``."""
+    obstacle = np.asarray(obstacle, dtype=bool)
+    n, m = _check_block(block)
+    rows = -(-obstacle.shape[0] // n) * n
+    cols = -(-obstacle.shape[1] // m) * m
+    out = np.ones((rows, cols), dtype=bool)
+    out[:obstacle.shape[0], :obstacle.shape[1]] = obstacle
+    return out
+
+
+def _check_block(block):
+    try:
+        n, m = (int(x) for x in block)
+    except (TypeError, ValueError):
+        raise ValueError(f"block must be (n, m), not {block!r}") from None
+    if n < 1 or m < 1:
+        raise ValueError(f"block ({n}, {m}): n and m must be at least 1")
+    return n, m
+
+
+def _goal_mask(goals, shape):
+    mask = np.zeros(shape, dtype=bool)
+    if isinstance(goals, np.ndarray) and goals.dtype == bool:
+        mask[:goals.shape[0], :goals.shape[1]] = goals
+        return mask
+    for r, c in goals:
+        if not (0 <= r < shape[0] and 0 <= c < shape[1]):
+            raise ValueError(f"goal ({r}, {c}) is outside the {shape[0]}x{shape[1]} map")
+        mask[r, c] = True
+    return mask
+
+
+def reachable(obstacle, goals):
+    """Free cells 4-connected to a goal (goals included): a bool mask.
+
+    ``goals``: a bool mask or a list of (row, col)."""
+    free = ~np.asarray(obstacle, dtype=bool)
+    goal = _goal_mask(goals, free.shape) & free
+    seen = goal.copy()
+    queue = deque(map(tuple, np.argwhere(goal)))
+    rows, cols = free.shape
+    while queue:
+        r, c = queue.popleft()
+        for rr, cc in ((r - 1, c), (r, c + 1), (r, c - 1), (r + 1, c)):
+            if 0 <= rr < rows and 0 <= cc < cols and free[rr, cc] and not seen[rr, cc]:
+                seen[rr, cc] = True
+                queue.append((rr, cc))
+    return seen
+
+
+@dataclass
+class PlanResult:
+    """Outcome of :func:`plan` on an H x W map (values cropped to H x W).
+
+    ``h``: values at precision ``p`` (object ints, goal = 2**p); ``const``:
+    goals, obstacles and walled-off cells.  ``maxima``: local maxima among
+    the free (non-constant) nodes at the last check pass (0 when converged).
+    ``unreachable``: free cells of the input map no goal reaches; they were
+    loaded as constant-0 obstacles.  ``sweeps``: update passes over all
+    blocks; ``block_iterations``: update iterations counted as the pseudo-code
+    counts them (i, the stable one included), summed over block visits;
+    ``check_iterations``: check iterations (one per block per check pass);
+    ``node_updates``: block_iterations * n*m (every node of a block is
+    updated in an iteration, obstacles and padding included);
+    ``clear_passes``: passes that restarted the free nodes from 0 after a
+    dynamic order; ``cycles``: the clock cycles the RTL spends from its START
+    command to idle (see the timing table above); ``levels``: per precision
+    level, dicts with p, sweeps, block_iterations, maxima (None if the level
+    ended without a check); ``events_applied``: events that were due.
+    """
+    h: np.ndarray
+    const: np.ndarray
+    p: int
+    converged: bool
+    maxima: int
+    unreachable: np.ndarray
+    sweeps: int = 0
+    block_iterations: int = 0
+    check_iterations: int = 0
+    node_updates: int = 0
+    clear_passes: int = 0
+    cycles: int = 0
+    levels: list = field(default_factory=list)
+    events_applied: int = 0
+    block: tuple = (1, 1)
+    blocks: tuple = (1, 1)
+    padded_h: np.ndarray = None
+    padded_const: np.ndarray = None
+
+    def potential(self):
+        """Values as floats in [0, 1]."""
+        return np.array([[int(v) / one(self.p) for v in row] for row in self.h], dtype=float)
+
+
+def _schedule(schedule):
+    sched = [int(p) for p in schedule]
+    if not sched or sched[0] < 2 or any(b <= a for a, b in zip(sched, sched[1:])):
+        raise ValueError(f"schedule {tuple(schedule)}: needs increasing precisions, the first >= 2")
+    return sched
+
+
+def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=()):
+    """Block-synchronous relaxation with increasing precision (section 4).
+
+    The map (``obstacle``: bool H x W, True = obstacle; ``goals``: mask or
+    (row, col) list) is padded with obstacles to whole blocks of ``block =
+    (n, m)`` nodes (:func:`pad_to_blocks`).  Free cells no goal reaches are
+    walled off (constant 0) before the run.  Block b = br*BC + bc (row-major)
+    covers rows br*n .. br*n+n-1 and columns bc*m .. bc*m+m-1; blocks are
+    visited in order b = 0 .. B-1.
+
+    A *pass* visits every block once.  In an update pass (sweep) each block
+    runs up to ``iters`` (I) Jacobi iterations, stopping early after the
+    first iteration in which no node of the block changed (it counts);
+    neighbours in other blocks read their latest stored values (the border
+    storage), outside the map reads 0.  Sweeps repeat until one changes
+    nothing, i.e. every block is stable in its first iteration.  (The
+    pseudo-code's ``block_cvg`` alone would also accept a block that changed
+    in its first iterations and then was stable: its neighbours' borders
+    changed, so the map need not be a fixed point; we require no change.)
+    Then a check pass: one check iteration per block, the Maximum
+    flags.  No local maximum: converged.  Otherwise the next precision of
+    ``schedule`` (the new low bits start at 0, i.e. values shift left); after
+    the last one: not converged, ``maxima`` left.
+
+    ``events``: dynamic orders ``(s, (r, c), kind)``, kind ``"obstacle"`` or
+    ``"goal"``.  Passes are numbered 0, 1, ... from the start of the run
+    (update and check passes alike).  An event with s >= 1 is applied at the
+    end of pass s-1 (the Control module takes a host order at the next pass
+    boundary); s = 0: before the run, as a SET command sent while idle (its
+    cycles are not part of the run).  Applying an order is a clear pass: node
+    (r, c) becomes constant (goal 2**p or obstacle 0) and every free node
+    restarts from 0 at the current precision.  From 0 the floored iteration
+    rises monotonically to its fixed point, whereas started above it (a new
+    obstacle lowers values) it may oscillate with period 2 (see the module
+    docstring), so every run terminates.  The next pass is an update sweep
+    at the same precision.  Free cells a new obstacle cuts off from every
+    goal are not walled off by the planner: they stay a zero plateau and
+    count as maxima; the host walls them off with more obstacle orders.
+    """
+    n, m = _check_block(block)
+    iters = int(iters)
+    if iters < 1:
+        raise ValueError(f"iters={iters}: at least 1 iteration per block")
+    sched = _schedule(schedule)
+    obstacle = np.asarray(obstacle, dtype=bool)
+    H, W = obstacle.shape
+    obst = pad_to_blocks(obstacle, (n, m))
+    goal = _goal_mask(goals, obst.shape)
+    if (goal & obst).any():
+        r, c = np.argwhere(goal & obst)[0]
+        raise ValueError(f"goal ({r}, {c}) is on an obstacle")
+    if not goal.any():
+        raise ValueError("no goal")
+    reach = reachable(obst, goal)
+    unreachable = ~obst & ~reach
+    const = obst | goal | unreachable
+    rows, cols = obst.shape
+    BR, BC = rows // n, cols // m
+    B = BR * BC
+    evs = sorted(((int(s), (int(r), int(c)), str(kind)) for s, (r, c), kind in events),
+                 key=lambda e: e[0])
+    for s, (r, c), kind in evs:
+        if kind not in ("obstacle", "goal"):
+            raise ValueError(f"event kind {kind!r}: expected 'obstacle' or 'goal'")
+        if not (0 <= r < rows and 0 <= c < cols) or s < 0:
+            raise ValueError(f"event at pass {s} on ({r}, {c}): outside the {rows}x{cols} map")
+
+    dtype = np.int64 if sched[-1] <= _INT64_P_MAX else object
+    p = sched[0]
+    pad = np.zeros((rows + 2, cols + 2), dtype=dtype)     # a 0 ring: outside the map
+    hv = pad[1:-1, 1:-1]
+    hv[goal] = one(p)
+    res = PlanResult(h=None, const=None, p=p, converged=False, maxima=0,
+                     unreachable=unreachable[:H, :W], block=(n, m), blocks=(BR, BC))
+
+    def apply(r, c, kind):
+        const[r, c] = True
+        hv[~const] = 0
+        hv[r, c] = one(p) if kind == "goal" else 0
+
+    due = deque(evs)
+    while due and due[0][0] == 0:
+        _, (r, c), kind = due.popleft()
+        apply(r, c, kind)
+        res.events_applied += 1
+
+    def update_visit(r0, c0):
+        """Up to I iterations of one block; returns (counted i, stable)."""
+        fixed = const[r0:r0 + n, c0:c0 + m]
+        for i in range(1, iters + 1):
+            old = hv[r0:r0 + n, c0:c0 + m]
+            s = (pad[r0:r0 + n, c0 + 1:c0 + m + 1] + pad[r0 + 2:r0 + n + 2, c0 + 1:c0 + m + 1]
+                 + pad[r0 + 1:r0 + n + 1, c0:c0 + m] + pad[r0 + 1:r0 + n + 1, c0 + 2:c0 + m + 2])
+            new = np.where(fixed, old, s >> 2)
+            if (new == old).all():
+                return i, True
+            hv[r0:r0 + n, c0:c0 + m] = new
+        return iters, False
+
+    corners = [(br * n, bc * m) for br in range(BR) for bc in range(BC)]
+    level = {"p": p, "sweeps": 0, "block_iterations": 0, "maxima": None}
+    passes = 0
+    cycles = RUN_OVERHEAD
+    mode = "update"
+    while True:
+        if mode == "update":
+            changed = False
+            for r0, c0 in corners:
+                i, stable = update_visit(r0, c0)
+                res.block_iterations += i
+                level["block_iterations"] += i
+                k = min(i + 1, iters) if stable else iters
+                cycles += visit_cycles(k, p)
+                changed |= i > 1 or not stable     # the block changed
+            res.sweeps += 1
+            level["sweeps"] += 1
+        else:   # check pass: the Maximum flags of every block, nothing written
+            cycles += B * visit_cycles(1, p)
+            res.check_iterations += B
+            nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
+            maxima = int(local_max(hv, const, nb).sum())
+            level["maxima"] = maxima
+        passes += 1
+        if due and due[0][0] <= passes:         # a pending order: a clear pass
+            while due and due[0][0] <= passes:
+                _, (r, c), kind = due.popleft()
+                apply(r, c, kind)
+                res.events_applied += 1
+                cycles += SET_OVERHEAD + B * visit_cycles(1, p)
+                res.clear_passes += 1
+            mode = "update"
+            continue
+        if mode == "update":
+            mode = "check" if not changed else "update"
+            continue
+        mode = "update"
+        if maxima == 0:
+            res.converged = True
+            break
+        later = [q for q in sched if q > p]
+        if not later:
+            break
+        res.levels.append(level)
+        shift = later[0] - p
+        pad <<= shift
+        p = later[0]
+        level = {"p": p, "sweeps": 0, "block_iterations": 0, "maxima": None}
+    res.levels.append(level)
+    res.p = p
+    res.maxima = 0 if res.converged else maxima
+    res.cycles = cycles
+    res.node_updates = res.block_iterations * n * m
+    res.padded_h = np.array(hv, dtype=object)
+    res.padded_const = const.copy()
+    res.h = res.padded_h[:H, :W].copy()
+    res.const = const[:H, :W].copy()
+    return res
+
+
+# Decision module (5.3): the four triangles of a node and two consecutive
+# neighbours, in this order (the tie-break: the first of equal slopes wins).
+TRIANGLES = (("N", "E"), ("E", "S"), ("S", "W"), ("W", "N"))
+_OFFSET = {"N": (-1, 0), "E": (0, 1), "S": (1, 0), "W": (0, -1)}
+
+
+def decision(h, r, c):
+    """The steepest of the four triangles at node (r, c) of ``h`` (section 5.3).
+
+    The triangle of two consecutive neighbours (X', Y'), (X'', Y'') that
+    maximizes (h - h')**2 + (h - h'')**2 (outside the map reads 0); ties go to
+    the first in :data:`TRIANGLES` order (NE, ES, SW, WN).  Returns
+    ``(t, (g_row, g_col))``: the triangle's index and the gradient of its
+    plane in grid axes (row down, column right): g_col = h_E - h or h - h_W,
+    g_row = h_S - h or h - h_N: the direction of steepest ascent.
+    """
+    h = np.asarray(h, dtype=object)
+    rows, cols = h.shape
+    if not (0 <= r < rows and 0 <= c < cols):
+        raise ValueError(f"node ({r}, {c}) is outside the {rows}x{cols} map")
+    centre = int(h[r, c])
+
+    def value(d):
+        rr, cc = r + _OFFSET[d][0], c + _OFFSET[d][1]
+        return int(h[rr, cc]) if 0 <= rr < rows and 0 <= cc < cols else 0
+
+    v = {d: value(d) for d in "NESW"}
+    best, best_t = -1, 0
+    for t, (a, b) in enumerate(TRIANGLES):
+        score = (centre - v[a]) ** 2 + (centre - v[b]) ** 2
+        if score > best:
+            best, best_t = score, t
+    pair = TRIANGLES[best_t]
+    g_row = v["S"] - centre if "S" in pair else centre - v["N"]
+    g_col = v["E"] - centre if "E" in pair else centre - v["W"]
+    return best_t, (g_row, g_col)
+
+
 # --- storage format and addressing (the cluster's RAM and Counters, 5.2) ---
 #
 # Word of p+2 bits per node, one bit per RAM address, most significant first
@@ -182,3 +528,137 @@ def from_ram_image(words, p, shape):
             v = (v << 1) | ((words[off] >> i) & 1)
         h[i] = v
     return h.reshape(shape), const.reshape(shape)
+
+
+# --- trajectory: gradient ascent on a computed field (paper 2.2, 5.3) -------
+#
+# The paper's Decision module (5.3) picks a continuous direction from the
+# steepest of the four triangles around the robot's node.  A planner that
+# returns a *path of cells* needs the discrete version of that ascent: from a
+# cell, step to the 4-neighbour (N, E, W, S: the node's own neighbours, eq. 2)
+# with the largest value, provided it is strictly larger than the cell's own
+# value.  Ties go to the first of N, E, W, S in that order, so the path is a
+# function of the field alone.  4-connected on purpose: the field's
+# "no local maximum" property (the stop criterion of the planner, 4.1) is a
+# statement about 4-neighbours, and a diagonal step could cut between two
+# obstacle corners.
+#
+# Why this reaches a goal from every free cell of a converged field: converged
+# means no free cell is >= all of its 4 neighbours, so every free cell has a
+# strictly higher neighbour; that neighbour is not an obstacle (obstacles
+# hold 0 and no value is below 0) and not outside the grid (ignored), so it is
+# free or a goal.  Values strictly increase along the path, so no cell repeats
+# and the path ends, which can only happen on a constant node above every
+# free value: a goal.  The path has at most (free cells + 1) cells.
+
+ASCENT_MOVES = ((-1, 0), (0, 1), (0, -1), (1, 0))    # N, E, W, S: tie-break order
+
+
+def ascent_next(h):
+    """For every cell, the cell the steepest 4-neighbour ascent moves to.
+
+    Returns ``(rows, cols)`` integer arrays; a cell with no strictly higher
+    neighbour (a goal, an obstacle, a local maximum or plateau) maps to itself.
+    Ties between equal highest neighbours go to the first of N, E, W, S.
+    """
+    h = np.asarray(h, dtype=object)
+    rows, cols = h.shape
+    pad = np.full((rows + 2, cols + 2), -1, dtype=object)      # outside: never chosen
+    pad[1:-1, 1:-1] = h
+    best = h.copy()
+    rr, cc = np.indices((rows, cols))
+    nr, nc = rr.copy(), cc.copy()
+    for dr, dc in ASCENT_MOVES:
+        nb = pad[1 + dr:1 + dr + rows, 1 + dc:1 + dc + cols]
+        higher = np.asarray(nb > best, dtype=bool)              # strict: the first of a tie wins
+        best = np.where(higher, nb, best)
+        nr = np.where(higher, rr + dr, nr)
+        nc = np.where(higher, cc + dc, nc)
+    return nr, nc
+
+
+def _ascent_goals(goals, shape):
+    if isinstance(goals, np.ndarray) and goals.dtype == bool:
+        if goals.shape != shape:
+            raise ValueError(f"goal mask is {goals.shape}, the field is {shape}")
+        return goals
+    mask = np.zeros(shape, dtype=bool)
+    for r, c in goals:
+        mask[r, c] = True
+    return mask
+
+
+class Trajectory:
+    """A gradient-ascent path: ``start``, ``path`` (list of (r, c), the start
+    first), ``reached_goal`` (False: the ascent stopped on a local maximum or
+    plateau, e.g. a cell no goal can reach or a field computed with too little
+    precision)."""
+
+    __slots__ = ("start", "path", "reached_goal")
+
+    def __init__(self, start, path, reached_goal):
+        self.start, self.path, self.reached_goal = tuple(start), [tuple(c) for c in path], bool(reached_goal)
+
+    def as_dict(self):
+        return {"start": list(self.start), "path": [list(c) for c in self.path],
+                "reached_goal": self.reached_goal}
+
+    def __repr__(self):
+        return f"Trajectory(start={self.start}, steps={len(self.path) - 1}, reached_goal={self.reached_goal})"
+
+
+def trajectory(h, goals, start, nxt=None):
+    """Steepest 4-neighbour ascent of field ``h`` from ``start`` until a goal.
+
+    ``goals``: a bool mask or a list of (r, c).  ``nxt``: :func:`ascent_next`
+    of ``h`` when the caller already has it (many starts on one field).
+    Stops at a goal (``reached_goal`` True) or where no neighbour is strictly
+    higher (False).  The values along the path strictly increase, so it always
+    ends, after at most ``h.size`` steps.
+    """
+    h = np.asarray(h, dtype=object)
+    goal = _ascent_goals(goals, h.shape)
+    r, c = (int(x) for x in start)
+    if not (0 <= r < h.shape[0] and 0 <= c < h.shape[1]):
+        raise ValueError(f"start ({r}, {c}) outside the {h.shape[0]}x{h.shape[1]} field")
+    nr, nc = ascent_next(h) if nxt is None else nxt
+    path = [(r, c)]
+    while not goal[r, c]:
+        r2, c2 = int(nr[r, c]), int(nc[r, c])
+        if (r2, c2) == (r, c):
+            break
+        r, c = r2, c2
+        path.append((r, c))
+    return Trajectory(start, path, goal[r, c])
+
+
+def ascent_reaches(h, goals, cells=None):
+    """Bool array: True where the ascent from that cell ends on a goal.
+
+    Follows :func:`ascent_next` once for all cells (memoized along the paths),
+    so checking every free cell of a map costs one pass.  ``cells`` (bool
+    mask) limits the answer to those cells; the others are False.
+    """
+    h = np.asarray(h, dtype=object)
+    goal = _ascent_goals(goals, h.shape)
+    nr, nc = ascent_next(h)
+    rows, cols = h.shape
+    known = np.full(h.shape, -1, dtype=np.int8)          # -1 unknown, 0 no, 1 yes
+    known[goal] = 1
+    todo = np.argwhere(np.ones(h.shape, dtype=bool) if cells is None else cells)
+    for r0, c0 in todo:
+        chain, r, c = [], int(r0), int(c0)
+        while known[r, c] < 0:
+            chain.append((r, c))
+            r2, c2 = int(nr[r, c]), int(nc[r, c])
+            if (r2, c2) == (r, c):
+                known[r, c] = 0
+                break
+            r, c = r2, c2
+        for cell in chain:
+            known[cell] = known[r, c]
+    out = known == 1
+    return out if cells is None else out & cells
+
+
+__all__ += ["ASCENT_MOVES", "ascent_next", "Trajectory", "trajectory", "ascent_reaches"]
