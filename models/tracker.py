@@ -30,8 +30,11 @@ One control period (12.5 ms, section 2) of :class:`ClosedLoop`:
    the constant speed ``speed``; the robot moves one period (true pose with
    slip, encoders, odometry: models.robot).
 
-The chain is done when the odometric canonical abscissa reaches x_c >= 1 (the
-end vertex's strip boundary).
+Several chains (sim navigate) are tracked one after another: the tracker
+moves on to the next chain when the look-ahead point passes the end of the
+current one (x_c + Δ >= 1), so it turns into the joint as it turns into a
+corner inside a chain; the run ends when the odometric canonical abscissa of
+the last chain reaches x_c >= 1 (the end vertex's strip boundary).
 
 Defaults (:class:`TrackerParams`): speed 0.05 m/s, look-ahead 0.04 m,
 κ_fs = 60 1/m (a 17 mm turn radius at full scale), |κ_p| <= 120 1/m.  With
@@ -150,12 +153,15 @@ class ClosedLoop:
         return self.chains[self.index]
 
     def _canonical(self):
-        """Canonical state of the odometric pose; moves on to the next chain at x_c >= 1."""
+        """Canonical state of the odometric pose; moves on to the next chain when the
+        look-ahead point passes the end of this one (x_c + Δ >= 1), ends at x_c >= 1 on the last."""
         while True:
             x, y, th, _ = self.chain.psi_inv(self.robot.pose)
-            if float(x) < 1.0:
+            last = self.index + 1 == len(self.chains)
+            end = 1.0 if last else 1.0 - self.params.lookahead / self.chain.length
+            if float(x) < end:
                 return float(x), float(y), float(th)
-            if self.index + 1 == len(self.chains):
+            if last:
                 self.done = True
                 return None
             self.index += 1
