@@ -15,6 +15,8 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 from amaranth.back import verilog  # noqa: E402
 
+from .dflc.core import DflcCore  # noqa: E402
+from .dflc.top import DflcStream, config_for  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
@@ -26,6 +28,10 @@ TOPS = {
     "harmonic_node": Node,
     "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
+    # DFLC: fll = a .fll stem (models/dflc_<fll>.fll or tb/dflc/fll/<fll>.fll),
+    # widths ip_sz, dy_ip, mf_op_sz, op_sz, div (lut/array), op (sel_op), par (1 = parallel)
+    "dflc_stream": DflcStream,
+    "dflc_core": lambda par=0, **kw: DflcCore(config_for(**kw), parallel=bool(par)),
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).
@@ -34,9 +40,12 @@ DEFAULT_SETS = [
     ("harmonic_counters", {"p_max": 1022}),
     ("harmonic_cluster", {"depth": 1024}),
     ("harmonic_cluster", {"depth": 1024, "p_max": 255}),
+    ("dflc_stream", {"fll": "table1"}),
+    ("dflc_core", {"fll": "table1"}),
+    ("dflc_core", {"fll": "table1", "par": 1}),
 ]
 
-_SHORT = {"p_max": "pmax"}
+_SHORT = {"p_max": "pmax", "fll": ""}
 
 
 def top_name(name, params):

@@ -374,10 +374,12 @@ def _rule_terms(path, rule, inputs, output):
     return found, ops, concl[0].term.name
 
 
-def load_fll(path, *, ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div_type="lut"):
+def load_fll(path, *, ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div_type="lut", sel_op=None):
     """Read a .fll file with pyfuzzylite and build the DFLC configuration.
 
-    The widths are the paper's generics (Table 2 defaults).  Raises
+    The widths are the paper's generics (Table 2 defaults).  ``sel_op``
+    (min, prod, max, probor) overrides the antecedent operator the rule block
+    names (the comparison with pyfuzzylite then no longer applies).  Raises
     :class:`FllError` naming the file and the variable / term / rule at fault.
     """
     import fuzzylite as fl
@@ -391,6 +393,9 @@ def load_fll(path, *, ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div_type="lut"):
         raise ValueError(f"op_sz = {op_sz} < MF_op_sz = {mf_op_sz}: the output must hold a singleton code")
     if div_type not in DIV_TYPES:
         raise ValueError(f"div_type = {div_type!r}: expected one of {DIV_TYPES}")
+    override = sel_op
+    if sel_op is not None and sel_op not in SEL_OPS:
+        raise ValueError(f"sel_op = {sel_op!r}: expected one of {SEL_OPS}")
     try:
         text = path.read_text()
     except OSError as e:
@@ -482,6 +487,8 @@ def load_fll(path, *, ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div_type="lut"):
     else:
         sel_op = "min"           # one input, no operator: all four are the identity
 
+    if override is not None:
+        sel_op = override
     q_max = (1 << frac) * cmax * (1 << len(inputs)) * full
     return DflcConfig(
         name=engine.name or path.stem, ip_sz=ip_sz, dy_ip=dy_ip, mf_op_sz=mf_op_sz, op_sz=op_sz,

@@ -1,0 +1,96 @@
+"""MF degree generator of one input (paper 003 Fig. 8 trap_gen_p)."""
+
+from amaranth.hdl import Array, Const, Module, Signal, signed, unsigned
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+__all__ = ["MfGen", "bits_for"]
+
+
+def bits_for(v):
+    """Unsigned width that holds 0 .. v."""
+    return max(1, int(v).bit_length())
+
+
+class MfGen(wiring.Component):
+    """Degrees of truth of the two active MFs (slots) of one input.
+
+    Arithmetic, not ROM-based: the input range is cut into segments at the MF
+    breakpoints (``models.dflc.InputSpec``); in segment q the slots are MFs
+    ``base = seg_base[q]`` and ``base + 1`` with degrees
+    ``mu_slot = (x * M[q][slot] + B[q][slot]) >> shift``, which the loader has
+    verified to equal round(full * MF(x)) at every code.  Cost per input: one
+    ip_sz-bit comparator per segment boundary (9 triangles: 7, constant
+    operands), a constant table of (base, M0, B0, M1, B1) per segment and two
+    small multipliers (ip_sz x |M| bits).  A ROM over all codes would need
+    2^ip_sz words of 2*dy_ip + bits(MF_ip_no) bits per input (4096 x 20 bits
+    for Table 1), far beyond the paper's ROM budget.
+
+    Timing: two register stages, each loaded only when its valid input is
+    high, so the result stays put while the rule selector walks its 2^n
+    combinations.
+
+    ======  ==================================================================
+    cycle   what happens
+    ======  ==================================================================
+    t       ``x`` with ``v_in`` high
+    t+1     segment registered (comparators + table)
+    t+2     ``base``, ``mu0``, ``mu1`` registered, ``v_out`` high for 1 cycle
+    ======  ==================================================================
+
+    Ports
+    -----
+    x : In(ip_sz)          input code
+    v_in : In(1)           ``x`` is a new sample
+    base : Out(bits)       MF index of slot 0 (slot 1 is base + 1)
+    mu0, mu1 : Out(dy_ip)  degrees of truth of the slots
+    v_out : Out(1)         new degrees this cycle
+    """
+
+    def __init__(self, spec, ip_sz, dy_ip):
+        self.spec, self.ip_sz, self.dy_ip = spec, ip_sz, dy_ip
+        if len(spec.seg_start) < 1 or spec.seg_start[0] != 0:
+            raise ValueError(f"input {spec.name}: segment table must start at code 0")
+        self.base_w = bits_for(len(spec.mfs) - 2)
+        super().__init__({
+            "x": In(ip_sz), "v_in": In(1),
+            "base": Out(self.base_w), "mu0": Out(dy_ip), "mu1": Out(dy_ip), "v_out": Out(1),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        spec, top = self.spec, (1 << self.ip_sz) - 1
+        nseg = len(spec.seg_start)
+        ms = [v for pair in spec.seg_m for v in pair]
+        bs = [v for pair in spec.seg_b for v in pair]
+        m_w = max(abs(v) for v in ms).bit_length() + 1
+        b_w = max(abs(v) for v in bs).bit_length() + 1
+        p_w = max(abs(a) * top + abs(b) for a, b in zip(ms, bs)).bit_length() + 1
+
+        # Stage 1: which segment (thermometer count of the boundaries passed).
+        seg = Signal(range(nseg))
+        m.d.comb += seg.eq(sum((self.x >= s).as_unsigned() for s in spec.seg_start[1:])
+                           if nseg > 1 else 0)
+        t_base = Array(Const(v, self.base_w) for v in spec.seg_base)
+        t_m = [Array(Const(p[k], signed(m_w)) for p in spec.seg_m) for k in (0, 1)]
+        t_b = [Array(Const(p[k], signed(b_w)) for p in spec.seg_b) for k in (0, 1)]
+        x1 = Signal(self.ip_sz)
+        base1 = Signal(self.base_w)
+        m1 = [Signal(signed(m_w), name=f"m{k}_1") for k in (0, 1)]
+        b1 = [Signal(signed(b_w), name=f"b{k}_1") for k in (0, 1)]
+        v1 = Signal()
+        m.d.sync += v1.eq(self.v_in)
+        with m.If(self.v_in):
+            m.d.sync += [x1.eq(self.x), base1.eq(t_base[seg])]
+            m.d.sync += [m1[k].eq(t_m[k][seg]) for k in (0, 1)]
+            m.d.sync += [b1[k].eq(t_b[k][seg]) for k in (0, 1)]
+
+        # Stage 2: mu = (x * M + B) >> shift (exact by construction, see above).
+        m.d.sync += self.v_out.eq(v1)
+        with m.If(v1):
+            m.d.sync += self.base.eq(base1)
+            for k, mu in enumerate((self.mu0, self.mu1)):
+                p = Signal(signed(p_w), name=f"p{k}")
+                m.d.comb += p.eq(x1 * m1[k] + b1[k])
+                m.d.sync += mu.eq(p[spec.shift:spec.shift + self.dy_ip])
+        return m

@@ -1,0 +1,113 @@
+"""DFLC stream top (paper 003 Fig. 8 flc_ip wrapper; FSL = a FIFO stream)."""
+
+import re
+from pathlib import Path
+
+from amaranth.hdl import Module, Signal
+from amaranth.lib import data, stream, wiring
+from amaranth.lib.fifo import SyncFIFO
+from amaranth.lib.wiring import In, Out
+
+from models.dflc import load_fll
+
+from .core import DflcCore, latency
+from .mf_gen import bits_for
+
+__all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth"]
+
+ROOT = Path(__file__).resolve().parents[2]
+FLL_DIRS = (ROOT / "models", ROOT / "tb" / "dflc" / "fll")
+
+
+def resolve_fll(fll):
+    """A .fll path, or a stem: ``table1`` -> models/dflc_table1.fll,
+    ``n3_prod`` -> tb/dflc/fll/n3_prod.fll (the test fixtures)."""
+    p = Path(str(fll))
+    if p.suffix == ".fll" and p.exists():
+        return p
+    for d in FLL_DIRS:
+        for cand in (d / f"dflc_{fll}.fll", d / f"{fll}.fll"):
+            if cand.exists():
+                return cand
+    raise ValueError(f"fll = {fll!r}: no such .fll (looked for a path, and dflc_{fll}.fll / "
+                     f"{fll}.fll in models/ and tb/dflc/fll/)")
+
+
+def config_for(fll="table1", ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div="lut", op=None):
+    """The DflcConfig of an emitted top (keyword names as in the module name)."""
+    return load_fll(resolve_fll(fll), ip_sz=ip_sz, dy_ip=dy_ip, mf_op_sz=mf_op_sz, op_sz=op_sz,
+                    div_type=div, sel_op=op)
+
+
+def fifo_depth(config, parallel):
+    p = 1 if parallel else 1 << config.n
+    return -(-latency(config, parallel) // p) + 2
+
+
+def stream_latency(config, parallel=False):
+    """Cycles from the i_stream handshake to o_stream.valid (empty output FIFO)."""
+    return latency(config, parallel) + 1
+
+
+class DflcStream(wiring.Component):
+    """The DFLC core between two valid/ready streams, honouring back-pressure.
+
+    ``i_stream.payload`` is an ArrayLayout of n input codes (input j at bits
+    [j*ip_sz, (j+1)*ip_sz)); ``o_stream.payload`` is ``{y: op_sz, zero: 1}``
+    (y in the low bits, the zero-strength flag above it).
+
+    The core's pipeline never stalls; instead the top admits a sample only
+    when the output FIFO will have room for it: ``samples in flight + FIFO
+    level < depth`` with depth = ceil(L / P) + 2, enough that a consumer that
+    is always ready never throttles the input.  So at full throughput a sample
+    enters every P = 2^n cycles (every cycle in the parallel option) and leaves
+    ``stream_latency = L + 1`` cycles later (L = :func:`core.latency`; the
+    FIFO adds one).  ``o_stream.valid`` depends on nothing but the FIFO.
+    Reset (synchronous) empties the pipeline and the FIFO.
+
+    Keyword parameters (``hdl.emit`` TOPS ``dflc_stream``): ``fll`` (stem or
+    path), ``ip_sz``, ``dy_ip``, ``mf_op_sz``, ``op_sz``, ``div`` (lut /
+    array), ``op`` (override sel_op), ``par`` (1: parallel option).
+    """
+
+    def __init__(self, config=None, parallel=False, **kw):
+        if config is None:
+            par = kw.pop("par", 0)
+            parallel = parallel or bool(par)
+            config = config_for(**kw)
+        elif kw:
+            raise TypeError(f"unexpected parameters {sorted(kw)} with an explicit config")
+        self.config, self.parallel = config, bool(parallel)
+        self.depth = fifo_depth(config, self.parallel)
+        c = config
+        super().__init__({
+            "i_stream": In(stream.Signature(data.ArrayLayout(c.ip_sz, c.n))),
+            "o_stream": Out(stream.Signature(data.StructLayout({"y": c.op_sz, "zero": 1}))),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        c = self.config
+        m.submodules.core = core = DflcCore(c, self.parallel)
+        m.submodules.fifo = fifo = SyncFIFO(width=c.op_sz + 1, depth=self.depth)
+        inflight = Signal(range(self.depth + 1))
+        room = Signal()
+        m.d.comb += room.eq(inflight + fifo.level < self.depth)
+        accept = Signal()
+        m.d.comb += [
+            core.i_valid.eq(self.i_stream.valid & room),
+            core.i_codes.eq(self.i_stream.payload),
+            self.i_stream.ready.eq(core.i_ready & room),
+            accept.eq(self.i_stream.valid & self.i_stream.ready),
+            fifo.w_en.eq(core.o_valid),
+            fifo.w_data.eq(core.o_y | (core.o_zero << c.op_sz)),
+            self.o_stream.valid.eq(fifo.r_rdy),
+            self.o_stream.payload.eq(fifo.r_data),
+            fifo.r_en.eq(self.o_stream.ready),
+        ]
+        m.d.sync += inflight.eq(inflight + accept - core.o_valid)
+        return m
+
+
+def module_name_ok(name):
+    return re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name) is not None

@@ -1,0 +1,189 @@
+"""DFLC stream top (hdl/dflc/top.py) against models.dflc, bit-exact, with cocotb-bus.
+
+One build per configuration; in each, cocotb tests:
+
+* ``sweep``: a dense sweep of the input space (per input: every segment
+  boundary / MF breakpoint and its +-1 codes, the extremes, and a grid of 64
+  codes (fewer for the fixtures); all their combinations) through the stream
+  at full rate, every output compared with ``Dflc.infer`` (y and zero flag).
+* ``random_stalls``: random samples with random idle cycles on the input and
+  random back-pressure on the output; a cocotb-bus Scoreboard checks that the
+  outputs are the model's, in order, none lost or duplicated.
+* ``cycles``: at full throughput the input accepts exactly one sample every
+  2^n cycles (1 in the parallel option), outputs come equally spaced, and
+  the first output is ``stream_latency`` cycles after its input handshake.
+* ``reset_mid_stream``: reset while samples are in flight and the output is
+  stalled; afterwards the top is ready, emits nothing, and a fresh batch comes
+  out exactly.
+
+Configurations (one Verilator build each): the paper's default (Table 1, min,
+LUT divider, n = 2, 9 triangles, sequential); n = 3 with 5/3/4 MFs, prod,
+restoring array and missing rules; trapezoids with gaps (zero firing
+strength), max, LUT, parallel; 5/4 MFs, probor, array, parallel; n = 1
+sequential.
+"""
+
+import itertools
+import json
+import os
+import random
+
+import cocotb
+import numpy as np
+import pytest
+from cocotb.triggers import ClockCycles, RisingEdge
+from cocotb_bus.scoreboard import Scoreboard
+
+from dflc_bench import DflcStream, pack
+from hdl.dflc.top import config_for, stream_latency
+from models.dflc import Dflc
+from tb.runner import SIMULATORS, run
+
+CONFIGS = {
+    "table1": {"fll": "table1"},
+    "n3": {"fll": "n3_prod", "div": "array"},
+    "trap": {"fll": "trap_max", "par": 1},
+    "or5": {"fll": "mf5_or", "div": "array", "par": 1},
+    "n1": {"fll": "n1"},
+}
+
+
+def _setup(dut):
+    params = json.loads(os.environ["DFLC_PARAMS"])
+    par = bool(params.pop("par", 0))
+    config = config_for(**params)
+    return config, par, Dflc(config), int(os.environ.get("DFLC_SEED", "1"))
+
+
+def sweep_axes(model, grid, per_axis_cap=None):
+    c = model.config
+    top = (1 << c.ip_sz) - 1
+    axes = []
+    for spec in c.inputs:
+        pts = {0, 1, top - 1, top, *range(0, top + 1, (top + 1) // grid)}
+        for s in spec.seg_start:
+            pts |= {s - 1, s, s + 1}
+        for mf in spec.mfs:
+            for p in mf.points:
+                pts |= {p - 1, p, p + 1}
+        pts = sorted(v for v in pts if 0 <= v <= top)
+        if per_axis_cap and len(pts) > per_axis_cap:
+            keep = set(np.linspace(0, len(pts) - 1, per_axis_cap).round().astype(int))
+            pts = [v for i, v in enumerate(pts) if i in keep]
+        axes.append(pts)
+    return axes
+
+
+@cocotb.test()
+async def sweep(dut):
+    config, par, model, _ = _setup(dut)
+    bench = DflcStream(dut, config)
+    await bench.start()
+    if config.name == "dflc_table1":
+        axes = sweep_axes(model, 64)                 # >= 64 x 64 plus breakpoints +-1
+    else:
+        axes = sweep_axes(model, 16, per_axis_cap={1: 400, 2: 40, 3: 12}[config.n])
+    codes = np.array(list(itertools.product(*axes)), dtype=np.int64)
+    y, zero = model.infer(codes)
+    got = await bench.run(codes.tolist())
+    bad = [(list(codes[i]), got[i], (int(y[i]), bool(zero[i])))
+           for i in range(len(codes)) if got[i] != (int(y[i]), bool(zero[i]))]
+    assert not bad, f"{len(bad)} of {len(codes)} differ; first (codes, rtl, model): {bad[:3]}"
+    assert len(got) == len(codes)
+    dut._log.info(f"sweep: {len(codes)} samples bit-exact ({int(zero.sum())} zero-strength)")
+    if config.name == "dflc_table1":
+        assert len(axes[0]) >= 64 and len(codes) >= 64 * 64
+    if config.name == "trap_max":
+        assert zero.any()
+
+
+@cocotb.test()
+async def random_stalls(dut):
+    config, par, model, seed = _setup(dut)
+    rng = random.Random(seed)
+    bench = DflcStream(dut, config, rng=rng, idle=0.3, ready_p=0.5)
+    await bench.start()
+    n = 600
+    codes = np.array([[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(n)])
+    # a few saturated corners too
+    codes[:4] = [[0] * config.n, [(1 << config.ip_sz) - 1] * config.n,
+                 [0, (1 << config.ip_sz) - 1][: config.n] + [0] * (config.n - 2),
+                 [(1 << config.ip_sz) - 1] + [0] * (config.n - 1)]
+    y, zero = model.infer(codes)
+    expected = [(int(a), bool(b)) for a, b in zip(y, zero)]
+    sb = Scoreboard(dut)
+    compared = []
+
+    def check(tr):
+        got = bench.unpack(tr[1])
+        want = expected_q.pop(0)
+        assert got == want, f"output {len(compared)}: rtl {got}, model {want}"
+        compared.append(got)
+
+    expected_q = list(expected)
+    sb.add_interface(bench.out_mon, expected_q, compare_fn=check)
+    out = await bench.run(codes.tolist(), timeout_cycles=n * 40 + 500)
+    assert out == expected
+    await ClockCycles(dut.clk, 40)
+    assert len(compared) == n and not expected_q and len(bench.outputs) == n, "lost or duplicated"
+    assert len(bench.in_mon._recvQ) == n
+    sb.result  # noqa: B018 - raises if anything is left over
+
+
+@cocotb.test()
+async def cycles(dut):
+    config, par, model, seed = _setup(dut)
+    rng = random.Random(seed + 1)
+    bench = DflcStream(dut, config, rng=rng)
+    await bench.start()
+    p = 1 if par else 1 << config.n
+    n = 40
+    codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(n)]
+    out = await bench.run(codes)
+    y, zero = model.infer(np.array(codes))
+    assert out == [(int(a), bool(b)) for a, b in zip(y, zero)]
+    ins = [cyc for cyc, _ in bench.in_mon._recvQ]
+    outs = [cyc for cyc, _, _ in bench.outputs]
+    assert len(ins) == n and len(outs) == n
+    assert set(np.diff(ins)) == {p}, f"input spacing {sorted(set(np.diff(ins)))}, expected {p}"
+    assert set(np.diff(outs)) == {p}, f"output spacing {sorted(set(np.diff(outs)))}, expected {p}"
+    lat = outs[0] - ins[0]
+    assert lat == stream_latency(config, par), f"latency {lat}, documented {stream_latency(config, par)}"
+    dut._log.info(f"cycles: {p} per sample, latency {lat}")
+
+
+@cocotb.test()
+async def reset_mid_stream(dut):
+    config, par, model, seed = _setup(dut)
+    rng = random.Random(seed + 2)
+    bench = DflcStream(dut, config, rng=rng, ready_p=0.0)    # output stalled: the FIFO fills
+    await bench.start()
+    codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(30)]
+    for row in codes:
+        bench.source.append(pack(row, config.ip_sz))
+    await ClockCycles(dut.clk, rng.randrange(20, 40))
+    assert len(bench.in_mon._recvQ) > 0, "some samples entered before the reset"
+    await bench.reset()
+    bench.sink.set(1.0)
+    # ready and empty: input ready at once, nothing comes out
+    await RisingEdge(dut.clk)
+    assert int(dut.i_stream__ready.value) == 1
+    for _ in range(3 * stream_latency(config, par)):
+        await RisingEdge(dut.clk)
+        assert int(dut.o_stream__valid.value) == 0, "output after reset without input"
+    assert bench.outputs == []
+    fresh = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(12)]
+    out = await bench.run(fresh)
+    y, zero = model.infer(np.array(fresh))
+    assert out == [(int(a), bool(b)) for a, b in zip(y, zero)]
+    await ClockCycles(dut.clk, 2 * stream_latency(config, par))
+    assert len(bench.outputs) == len(fresh), "nothing from before the reset may appear"
+
+
+@pytest.mark.parametrize("name", list(CONFIGS))
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_dflc_stream(sim, name):
+    from tb.runner import seed_from_env
+    params = CONFIGS[name]
+    run("dflc_stream", params, sim, "test_dflc_stream",
+        env={"DFLC_PARAMS": json.dumps(params), "DFLC_SEED": seed_from_env()})
