@@ -64,15 +64,34 @@ def run_loop(chains, engine="model", params=TrackerParams(), start=None, slip=0.
 
 
 def run_loop_rtl(job, sim, log_file=None):
-    """The closed loop inside the simulator (sim/track_rtl.py) on the DFLC RTL."""
-    from tb.runner import run
+    """The closed loop inside the simulator (sim/track_rtl.py) on the DFLC RTL.
+
+    The simulator's output goes to ``log_file`` (default
+    ``build/track/<sim>_track_rtl.log``); the runner's own chatter is muted.
+    """
+    import logging
+
     from sim.track_rtl import DFLC_PARAMS, DFLC_TOP
+    from tb.runner import BUILD, run
+    log_file = Path(log_file) if log_file else BUILD / "track" / f"{sim}_track_rtl.log"
+    log_file.parent.mkdir(parents=True, exist_ok=True)
+    loggers = [logging.getLogger(n) for n in ("Icarus", "Verilator")]
+
+    def quiet(record):            # the runner resets its loggers' levels; a filter stays
+        return record.levelno >= logging.ERROR
     with tempfile.TemporaryDirectory() as work:
         work = Path(work)
         (work / "job.json").write_text(json.dumps(job))
-        run(DFLC_TOP, DFLC_PARAMS, sim, "sim.track_rtl",
-            env={"TRACK_JOB": work / "job.json", "TRACK_RESULT": work / "result.json"},
-            log_file=log_file or work / "sim.log")
+        try:
+            for lg in loggers:
+                lg.addFilter(quiet)
+            run(DFLC_TOP, DFLC_PARAMS, sim, "sim.track_rtl",
+                env={"TRACK_JOB": work / "job.json", "TRACK_RESULT": work / "result.json"}, log_file=log_file)
+        except (AssertionError, RuntimeError, SystemExit) as e:
+            raise CliError(f"the DFLC run on {sim} failed ({e}); its log: {log_file}") from None
+        finally:
+            for lg in loggers:
+                lg.removeFilter(quiet)
         return json.loads((work / "result.json").read_text())
 
 
