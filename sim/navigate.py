@@ -169,6 +169,8 @@ def plot_navigation(out, obstacle, field, label, cells, poly, result, title):
     ax.plot(true[:, 0], true[:, 1], color="tab:red", lw=1.2, label="true pose")
     ax.plot(*poly[0], "o", color="tab:orange", ms=7, label="start")
     ax.plot(*poly[-1], "*", color="red", ms=13, label="goal")
+    ax.set_xlim(0, W * cell)
+    ax.set_ylim(H * cell, 0)
     ax.set_xlabel("x (m)")
     ax.set_ylabel("y (m)")
     ax.set_title(title, fontsize=8)

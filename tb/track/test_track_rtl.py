@@ -73,13 +73,13 @@ def test_track_rtl(sim, tmp_path):
     from models.tracker import TrackerParams
     from sim.tracking import read_path_csv, run_loop
     line = ROOT / "paths" / "line.csv"
-    ref = run_loop([Swam(read_path_csv(line))], "model", TrackerParams(speed=0.5),
+    ref = run_loop([Swam(read_path_csv(line))], "model", TrackerParams(speed=1.0),
                    start=(0.0, 0.02, math.radians(10)))
     js = tmp_path / f"{sim}.json"
-    res = subprocess.run([sys.executable, "-m", "sim", "track", str(line), "--engine", sim, "--speed", "0.5",
+    res = subprocess.run([sys.executable, "-m", "sim", "track", str(line), "--engine", sim, "--speed", "1.0",
                           "--start", "0,0.02,10", "--json", str(js)], cwd=ROOT, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert "Skipping compilation" not in res.stdout + res.stderr       # the runner's chatter is muted
     out = json.loads(js.read_text())
-    assert out["engine"] == sim and 100 < out["steps"] < 400
+    assert out["engine"] == sim and 50 < out["steps"] < 200
     assert out["curvature_codes"] == ref["curvature_codes"]
