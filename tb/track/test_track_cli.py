@@ -6,6 +6,7 @@
   pillar, so the plan turns; to a goal back under the start it U-turns, so
   it needs two chains): reaches the goal, 0 collisions, chains strictly
   monotone and joined end to start, the polyline never enters an obstacle.
+* navigate on the bundled maze map (EDT plan, 8 chains): goal, no collision.
 * Bad input, each a one-line error, exit status 2, no traceback: a chain that
   is not monotone, a malformed CSV line, a too-short path, a bad --start; an
   unreachable goal (both planners), a start on an obstacle, a goal next to
@@ -132,3 +133,15 @@ def test_navigate_errors(files, capsys):
         assert main(["navigate", *map(str, args)]) == 2, msg
         err = capsys.readouterr().err
         assert msg in err and err.startswith("sim navigate: error:"), (msg, err)
+
+
+def test_navigate_bundled_maze(tmp_path):
+    """A bundled benchmark map whose plan needs many chains: goal reached, no collision."""
+    out = tmp_path / "maze.json"
+    rc = main(["navigate", str(ROOT / "maps" / "maze-32-32-2.map"), "--start", "1,10", "--goal", "8,26",
+               "--planner", "edt", "--speed", "0.2", "--json", str(out)])
+    r = json.loads(out.read_text())
+    print("maze", len(r["chains"]), "chains", r["steps"], "periods", f"max {r['max_cross_track'] * 1e3:.1f} mm")
+    assert rc == 0 and r["reached_goal"] and r["collisions"] == 0 and r["odometry_collisions"] == 0
+    assert len(r["chains"]) >= 5
+    assert r["max_cross_track"] < 0.03              # the worst case is a 90-degree joint at 0.2 m/s
