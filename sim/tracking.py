@@ -12,6 +12,8 @@
 
 import json
 import math
+import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -82,14 +84,30 @@ def run_loop_rtl(job, sim, log_file=None):
     with tempfile.TemporaryDirectory() as work:
         work = Path(work)
         (work / "job.json").write_text(json.dumps(job))
+        build_log = log_file.with_name(log_file.stem + "_build.log")
+        sys.stdout.flush()
+        sys.stderr.flush()
+        saved = os.dup(1), os.dup(2)
         try:
             for lg in loggers:
                 lg.addFilter(quiet)
-            run(DFLC_TOP, DFLC_PARAMS, sim, "sim.track_rtl",
-                env={"TRACK_JOB": work / "job.json", "TRACK_RESULT": work / "result.json"}, log_file=log_file)
-        except (AssertionError, RuntimeError, SystemExit) as e:
-            raise CliError(f"the DFLC run on {sim} failed ({e}); its log: {log_file}") from None
+            # the build tools (make, the compilers) write to the process's own
+            # stdout/stderr: send them to a build log
+            with open(build_log, "ab") as fh:
+                os.dup2(fh.fileno(), 1)
+                os.dup2(fh.fileno(), 2)
+                run(DFLC_TOP, DFLC_PARAMS, sim, "sim.track_rtl",
+                    env={"TRACK_JOB": work / "job.json", "TRACK_RESULT": work / "result.json"},
+                    log_file=log_file)
+        except (AssertionError, RuntimeError, SystemExit, OSError) as e:
+            raise CliError(f"the DFLC run on {sim} failed ({e}); logs: {build_log}, {log_file}") from None
         finally:
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os.dup2(saved[0], 1)
+            os.dup2(saved[1], 2)
+            os.close(saved[0])
+            os.close(saved[1])
             for lg in loggers:
                 lg.removeFilter(quiet)
         return json.loads((work / "result.json").read_text())
