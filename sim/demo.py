@@ -130,7 +130,7 @@ def main(argv=None):
             # so with an RTL engine only the runs without slip go through the simulator
             engine = args.engine if not slip else "model"
             nav = argparse.Namespace(planner=planner, engine=engine, cell=args.cell, speed=args.speed,
-                                     lookahead=0.04, slip=slip, seed=args.seed, schedule=DEFAULT_SCHEDULE,
+                                     lookahead=TrackerParams.lookahead, slip=slip, seed=args.seed, schedule=DEFAULT_SCHEDULE,
                                      block="6,12", iters=6, dfar=0)
             t0 = time.time()
             result, field, label, cells, poly = navigate(obstacle, start, goal, nav)
@@ -174,7 +174,7 @@ def main(argv=None):
             lines.append(f"EDT/BFS planner (model): {f['iterations_edt']} EDT + {f['iterations_bfs']} BFS iterations "
                          f"({f['cycles']} RTL cycles); path {f['path_cells']} cells")
     lines += [
-        f"navigation: Khepera II (L 53 mm, 0.08 mm ticks, 12.5 ms period), {args.speed} m/s, look-ahead 40 mm, "
+        f"navigation: Khepera II (L 53 mm, 0.08 mm ticks, 12.5 ms period), {args.speed} m/s, look-ahead {TrackerParams.lookahead * 1e3:.0f} mm, "
         f"DFLC engine {args.engine}",
         "  planner   slip   vertices chains periods goal collisions   cross-track (mm): odometry max  true max  true rms",
     ]
