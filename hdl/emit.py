@@ -16,6 +16,7 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 from amaranth.back import verilog  # noqa: E402
 
 from .dflc.core import DflcCore  # noqa: E402
+from .dflc.multi import DflcMulti  # noqa: E402
 from .dflc.top import DflcStream, config_for  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
@@ -32,6 +33,7 @@ TOPS = {
     # widths ip_sz, dy_ip, mf_op_sz, op_sz, div (lut/array), op (sel_op), par (1 = parallel)
     "dflc_stream": DflcStream,
     "dflc_core": lambda par=0, **kw: DflcCore(config_for(**kw), parallel=bool(par)),
+    "dflc_multi": DflcMulti,     # test top: the regression's configurations in one build
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).

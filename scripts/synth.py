@@ -19,6 +19,9 @@ counts the cells of the final ``stat``.
   by MUXF5..F8) and with ``-nowidelut`` (plain LUT4s, closer to how ISE
   counts "4 input LUTs").
 * yosys does no timing, so there is no frequency to compare.
+* DFLC (paper 003, section 7): the core alone (``dflc_core``, Table 2
+  parameters, models/dflc_table1.fll) and its parallel option, on the paper's
+  Spartan-3: ``synth_xilinx -family xc3s`` (DFLC_TOPS, own table).
 
     AMARANTH_USE_YOSYS=builtin .venv/bin/python scripts/synth.py [--out build/synth/report.md]
 """
@@ -48,8 +51,13 @@ TOPS = [  # (name, params, paper FF / LUT4 / MHz)
     ("harmonic_node", {}, "11 / 22 / 361 (Table 1)"),
     ("harmonic_cluster", {"depth": 1024}, "198 / 398 / 300 (Table 2, without RAM)"),
 ]
+DFLC_TOPS = [  # (name, params, paper figures), Spartan-3, paper 003 section 7
+    ("dflc_core", {"fll": "table1"},
+     "1303 LUT4, 8 MULT18X18, 12 ROM64X1 + 54 ROM256X1, 85 MHz, 4 clocks/sample"),
+    ("dflc_core", {"fll": "table1", "par": 1}, "(beyond the paper: 1 clock/sample)"),
+]
 VARIANTS = {"": "", "-nowidelut": ".nowidelut"}  # extra synth_xilinx flags -> log suffix
-SCRIPT = ("read_verilog {v}; synth_xilinx -family xc2v -top {top} -flatten "
+SCRIPT = ("read_verilog {v}; synth_xilinx -family {family} -top {top} -flatten "
           "-noiopad -noclkbuf{flags}; stat")
 GROUPS = [  # (group, cell type pattern); first match wins
     ("FF", r"FD\w*"), ("LUT", r"LUT[1-4]|INV"), ("BRAM", r"RAMB\w+"),
@@ -58,14 +66,14 @@ GROUPS = [  # (group, cell type pattern); first match wins
 ]
 
 
-def yosys_cmd(v, top, flags, log):
+def yosys_cmd(v, top, flags, log, family="xc2v"):
     return [YOSYS, "-q", "-l", str(log), "-p",
-            SCRIPT.format(v=v, top=top, flags=f" {flags}" if flags else "")]
+            SCRIPT.format(v=v, top=top, family=family, flags=f" {flags}" if flags else "")]
 
 
-def run_yosys(v, top, flags, log):
+def run_yosys(v, top, flags, log, family="xc2v"):
     """Synthesize; return the cell counts of the last ``stat`` as a Counter."""
-    res = subprocess.run(yosys_cmd(v, top, flags, log), capture_output=True, text=True)
+    res = subprocess.run(yosys_cmd(v, top, flags, log, family), capture_output=True, text=True)
     if res.returncode:
         sys.exit(f"yosys failed on {v} (see {log}):\n{res.stderr[-2000:]}")
     stat = log.read_text().rsplit("Printing statistics.", 1)[1]
@@ -92,6 +100,8 @@ def report(results, version, elapsed):
         "|---|---|---|---|---|",
     ]
     notes = []
+    dflc = [(j, c) for j, c in results if j["name"].startswith("dflc")]
+    results = [(j, c) for j, c in results if not j["name"].startswith("dflc")]
     for job, cells in results:
         s, parts = group(cells)
         label = f"{job['top']} ({job['flags'] or 'default'})"
@@ -107,7 +117,33 @@ def report(results, version, elapsed):
               "Commands (run in the repo root; `-nowidelut` rows add that flag):", ""]
     lines += ["    " + shlex.join(yosys_cmd(j["v"], j["top"], "", j["log"]))
               for j, _ in results if not j["flags"]]
+    if dflc:
+        lines += dflc_report(dflc)
     return "\n".join(lines) + "\n"
+
+
+def dflc_report(results):
+    """The DFLC section: Spartan-3 counts beside paper 003's utilization text."""
+    lines = ["", "# DFLC core: yosys synthesis vs paper 003 (section 7)", "",
+             "Target `synth_xilinx -family xc3s` (Spartan-3, the paper's XC3S1500); the paper's "
+             "figures are Synplify + ISE place-and-route of the core alone.", "",
+             "| module | FF | LUT4 | MULT18X18 | block RAM | LUT RAM/ROM | paper |",
+             "|---|---|---|---|---|---|---|"]
+    notes = []
+    for job, cells in results:
+        s, parts = group(cells)
+        label = f"{job['top']} ({job['flags'] or 'default'})"
+        mult = sum(n for c, n in parts.get("other", []) if c.startswith("MULT"))
+        bram = " + ".join(f"{n} × {c}" for c, n in parts.get("BRAM", [])) or "0"
+        lram = " + ".join(f"{n} × {c}" for c, n in parts.get("LUTRAM", []) + [
+            (c, n) for c, n in parts.get("other", []) if c.startswith("ROM")]) or "0"
+        lines.append(f"| {label} | {s['FF']} | {s['LUT']} | {mult} | {bram} | {lram} | {job['paper']} |")
+        notes.append(f"- {label}: " + "; ".join(
+            f"{g}: " + ", ".join(f"{c} {n}" for c, n in parts[g]) for g, _ in GROUPS if g in parts))
+    lines += ["", *notes, "", "Commands:", ""]
+    lines += ["    " + shlex.join(yosys_cmd(j["v"], j["top"], "", j["log"], j["family"]))
+              for j, _ in results if not j["flags"]]
+    return lines
 
 
 def main():
@@ -121,13 +157,14 @@ def main():
     t0 = time.monotonic()
     version = subprocess.run([YOSYS, "-V"], capture_output=True, text=True).stdout.strip()
     jobs = []
-    for name, params, paper in TOPS:
-        v = emit(name, params, OUT_DIR)
-        for flags, suffix in VARIANTS.items():
-            jobs.append(dict(name=name, paper=paper, top=v.stem, flags=flags, v=v,
-                             log=OUT_DIR / f"{v.stem}{suffix}.log"))
+    for family, tops in (("xc2v", TOPS), ("xc3s", DFLC_TOPS)):
+        for name, params, paper in tops:
+            v = emit(name, params, OUT_DIR)
+            for flags, suffix in VARIANTS.items():
+                jobs.append(dict(name=name, paper=paper, top=v.stem, flags=flags, v=v, family=family,
+                                 log=OUT_DIR / f"{v.stem}{suffix}.log"))
     with ThreadPoolExecutor() as pool:  # the yosys runs are independent
-        cells = pool.map(lambda j: run_yosys(j["v"], j["top"], j["flags"], j["log"]), jobs)
+        cells = pool.map(lambda j: run_yosys(j["v"], j["top"], j["flags"], j["log"], j["family"]), jobs)
         results = list(zip(jobs, cells))
     text = report(results, version, time.monotonic() - t0)
     print(text, end="")

@@ -71,9 +71,15 @@ class MfGen(wiring.Component):
         seg = Signal(range(nseg))
         m.d.comb += seg.eq(sum((self.x >= s).as_unsigned() for s in spec.seg_start[1:])
                            if nseg > 1 else 0)
-        t_base = Array(Const(v, self.base_w) for v in spec.seg_base)
-        t_m = [Array(Const(p[k], signed(m_w)) for p in spec.seg_m) for k in (0, 1)]
-        t_b = [Array(Const(p[k], signed(b_w)) for p in spec.seg_b) for k in (0, 1)]
+        # Tables padded to a power of two (the last segment repeated) so that
+        # every value of ``seg`` selects an entry (a complete case in Verilog).
+        pad = (1 << len(seg)) - nseg
+        seg_base = list(spec.seg_base) + [spec.seg_base[-1]] * pad
+        seg_m = list(spec.seg_m) + [spec.seg_m[-1]] * pad
+        seg_b = list(spec.seg_b) + [spec.seg_b[-1]] * pad
+        t_base = Array(Const(v, self.base_w) for v in seg_base)
+        t_m = [Array(Const(p[k], signed(m_w)) for p in seg_m) for k in (0, 1)]
+        t_b = [Array(Const(p[k], signed(b_w)) for p in seg_b) for k in (0, 1)]
         x1 = Signal(self.ip_sz)
         base1 = Signal(self.base_w)
         m1 = [Signal(signed(m_w), name=f"m{k}_1") for k in (0, 1)]

@@ -16,7 +16,9 @@ from .mf_gen import bits_for
 __all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth"]
 
 ROOT = Path(__file__).resolve().parents[2]
-FLL_DIRS = (ROOT / "models", ROOT / "tb" / "dflc" / "fll")
+# models/: the shipped controllers; tb/dflc/fll/: test fixtures;
+# build/dflc_fll/: .fll files `python -m sim dflc` copied under a content tag.
+FLL_DIRS = (ROOT / "models", ROOT / "tb" / "dflc" / "fll", ROOT / "build" / "dflc_fll")
 
 
 def resolve_fll(fll):

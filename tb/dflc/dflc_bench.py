@@ -6,7 +6,7 @@ its closed loop inside the simulator::
 
     from dflc_bench import DflcStream
     bench = DflcStream(dut, config)           # config: models.dflc.DflcConfig
-    await bench.start()                       # clock + reset
+    await bench.start()                       # clock + synchronous reset
     y, zero = await bench.infer([c1, c2])     # one sample through the top
     outs = await bench.run(code_rows)         # many, pipelined, in order
 
@@ -14,7 +14,7 @@ The top for a .fll is emitted with ``hdl.emit.emit("dflc_stream", {"fll":
 STEM_OR_PATH, ...}, out_dir)``; ``hdl.dflc.top.config_for(**params)`` gives
 the matching config.
 
-Pieces (cocotb-bus): :class:`StreamSource` (a BusDriver that presents one
+:class:`StreamBench` holds the cocotb-bus pieces: :class:`StreamSource` (a BusDriver that presents one
 sample per transaction and holds it until the handshake, with optional random
 idle cycles), :class:`StreamMonitor` (a BusMonitor recording every output
 handshake with its cycle), :class:`ReadyToggler` (random back-pressure on
@@ -45,7 +45,10 @@ class Cycles:
 
     def __init__(self, clk):
         self.clk, self.now = clk, 0
-        cocotb.start_soon(self._count())
+        self._task = cocotb.start_soon(self._count())
+
+    def kill(self):
+        self._task.cancel()
 
     async def _count(self):
         while True:
@@ -128,37 +131,125 @@ class ReadyToggler:
     async def _run(self):
         while True:
             await RisingEdge(self.clock)
-            self.signal.value = int(self.p >= 1.0 or self.rng.random() < self.p)
+            if self.p < 1.0:
+                self.signal.value = int(self.rng.random() < self.p)
 
     def set(self, p):
         self.p = p
+        if p >= 1.0:
+            self.signal.value = 1
+
+    def kill(self):
+        self._task.cancel()
 
 
 class DflcStream:
-    """A DFLC stream top under cocotb: start, reset, one sample or many."""
+    """A DFLC stream top under cocotb: start, reset, one sample or many.
 
-    def __init__(self, dut, config, rng=None, idle=0.0, ready_p=1.0):
+    ``infer`` / ``run`` drive the streams from one coroutine (two triggers per
+    cycle: cheap enough for long sweeps and closed loops) with the output
+    always ready; :class:`StreamBench` adds the cocotb-bus driver, monitors and
+    random stalls.  ``prefix`` selects an instance of a multi-configuration
+    test top (``hdl/dflc/multi.py``: ports ``<key>_i_stream__valid`` ...); ""
+    for a plain ``dflc_stream_*`` top.  After ``run``, ``in_cycles`` /
+    ``out_cycles`` hold the cycle of every input / output handshake.
+    """
+
+    def __init__(self, dut, config, prefix=""):
         self.dut, self.config = dut, config
-        self.rng = rng or random.Random(0)
         self.mask = (1 << config.op_sz) - 1
-        self.cycles = Cycles(dut.clk)
-        self.outputs = []                       # (cycle, y, zero)
-        self.source = StreamSource(dut, "i_stream", dut.clk, rng=self.rng, idle=idle)
-        self.in_mon = InputMonitor(dut, "i_stream", dut.clk, self.cycles, reset=dut.rst)
-        self.out_mon = StreamMonitor(dut, "o_stream", dut.clk, self.cycles, reset=dut.rst,
-                                     callback=self._got)
-        self.sink = ReadyToggler(dut.o_stream__ready, dut.clk, rng=self.rng, p=ready_p)
-
-    def _got(self, tr):
-        cycle, payload = tr
-        self.outputs.append((cycle, payload & self.mask, bool(payload >> self.config.op_sz)))
+        self.i_name, self.o_name = f"{prefix}i_stream", f"{prefix}o_stream"
+        self.i_valid = getattr(dut, f"{self.i_name}__valid")
+        self.i_ready = getattr(dut, f"{self.i_name}__ready")
+        self.i_payload = getattr(dut, f"{self.i_name}__payload")
+        self.o_valid = getattr(dut, f"{self.o_name}__valid")
+        self.o_ready = getattr(dut, f"{self.o_name}__ready")
+        self.o_payload = getattr(dut, f"{self.o_name}__payload")
+        self.i_valid.value = 0
+        self.o_ready.value = 1
+        self.in_cycles, self.out_cycles = [], []
 
     def unpack(self, payload):
         return payload & self.mask, bool(payload >> self.config.op_sz)
 
-    async def start(self):
-        cocotb.start_soon(Clock(self.dut.clk, PERIOD_NS, unit="ns").start())
+    async def start(self, clock=True):
+        """Start the clock (unless ``clock`` is False: already running) and reset."""
+        if clock:
+            cocotb.start_soon(Clock(self.dut.clk, PERIOD_NS, unit="ns").start())
         await self.reset()
+
+    async def reset(self, cycles=2):
+        """Synchronous reset for ``cycles`` clocks; inputs idle, output ready."""
+        self.i_valid.value = 0
+        self.o_ready.value = 1
+        self.dut.rst.value = 1
+        await ClockCycles(self.dut.clk, cycles)
+        self.dut.rst.value = 0
+        await RisingEdge(self.dut.clk)
+
+    async def infer(self, codes_row):
+        """One sample through the top: (y code, zero flag)."""
+        return (await self.run([codes_row]))[0]
+
+    async def run(self, samples, timeout_cycles=None):
+        """Many samples at full rate, output always ready; [(y, zero)] in order."""
+        rows = [pack(r, self.config.ip_sz) for r in samples]
+        n = len(rows)
+        limit = timeout_cycles or (n * ((1 << self.config.n) + 2) + 200)
+        out, self.in_cycles, self.out_cycles = [], [], []
+        sent, cycle = 0, 0
+        self.o_ready.value = 1
+        while len(out) < n:
+            if sent < n:
+                self.i_payload.value = rows[sent]
+                self.i_valid.value = 1
+            else:
+                self.i_valid.value = 0
+            await ReadOnly()
+            if sent < n and int(self.i_ready.value):
+                self.in_cycles.append(cycle)
+                sent += 1
+            if int(self.o_valid.value):
+                out.append(self.unpack(int(self.o_payload.value)))
+                self.out_cycles.append(cycle)
+            await RisingEdge(self.dut.clk)
+            cycle += 1
+            if cycle > limit:
+                raise TimeoutError(f"DFLC stream: {len(out)} of {n} outputs after {limit} cycles")
+        self.i_valid.value = 0
+        return out
+
+
+class StreamBench:
+    """cocotb-bus pieces around a DFLC stream top, for stall and reset tests:
+    a :class:`StreamSource` (random idle cycles), a :class:`StreamMonitor` on
+    each side and a :class:`ReadyToggler` (random back-pressure).  Outputs are
+    collected in ``outputs`` as (cycle, y, zero)."""
+
+    def __init__(self, dut, config, rng=None, idle=0.0, ready_p=1.0, prefix=""):
+        self.dut, self.config = dut, config
+        self.rng = rng or random.Random(0)
+        self.mask = (1 << config.op_sz) - 1
+        self.cycles = Cycles(dut.clk)
+        self.outputs = []
+        self.i_name, self.o_name = f"{prefix}i_stream", f"{prefix}o_stream"
+        self.source = StreamSource(dut, self.i_name, dut.clk, rng=self.rng, idle=idle)
+        self.in_mon = InputMonitor(dut, self.i_name, dut.clk, self.cycles, reset=dut.rst)
+        self.out_mon = StreamMonitor(dut, self.o_name, dut.clk, self.cycles, reset=dut.rst,
+                                     callback=self._got)
+        self.sink = ReadyToggler(getattr(dut, f"{self.o_name}__ready"), dut.clk, rng=self.rng, p=ready_p)
+
+    def _got(self, tr):
+        self.outputs.append((tr[0], *self.unpack(tr[1])))
+
+    def unpack(self, payload):
+        return payload & self.mask, bool(payload >> self.config.op_sz)
+
+    def stop(self):
+        """End this bench's coroutines (before another bench takes the same DUT)."""
+        for part in (self.source, self.in_mon, self.out_mon, self.sink, self.cycles):
+            part.kill()
+        self.source.bus.valid.value = 0
 
     async def reset(self, cycles=2):
         """Synchronous reset; drops whatever the source was presenting."""
@@ -171,29 +262,17 @@ class DflcStream:
         self.outputs.clear()
         self.in_mon._recvQ.clear()
 
-    async def infer(self, codes_row):
-        """One sample through the top: (y code, zero flag)."""
-        before = len(self.outputs)
-        self.source.append(pack(codes_row, self.config.ip_sz))
-        await self._wait_outputs(before + 1, 1)
-        _, y, zero = self.outputs[before]
-        return y, zero
-
     async def run(self, samples, timeout_cycles=None):
-        """Many samples, pipelined; returns [(y, zero)] in order."""
-        samples = [list(r) for r in samples]
+        """Queue the samples on the source; wait for as many outputs; [(y, zero)]."""
         before = len(self.outputs)
         for row in samples:
             self.source.append(pack(row, self.config.ip_sz))
-        await self._wait_outputs(before + len(samples), len(samples), timeout_cycles)
-        return [(y, z) for _, y, z in self.outputs[before:before + len(samples)]]
-
-    async def _wait_outputs(self, count, n_new, timeout_cycles=None):
-        p = 1 << self.config.n
-        limit = timeout_cycles or (n_new * (p + 2) * 20 + 200)
+        n = len(samples)
+        limit = timeout_cycles or (n * ((1 << self.config.n) + 2) * 20 + 200)
         start = self.cycles.now
-        while len(self.outputs) < count:
+        while len(self.outputs) < before + n:
             await RisingEdge(self.dut.clk)
             if self.cycles.now - start > limit:
-                raise TimeoutError(f"DFLC stream: {len(self.outputs)} of {count} outputs after "
-                                   f"{limit} cycles")
+                raise TimeoutError(f"DFLC stream: {len(self.outputs) - before} of {n} outputs "
+                                   f"after {limit} cycles")
+        return [(y, z) for _, y, z in self.outputs[before:before + n]]

@@ -1,6 +1,8 @@
 """DFLC stream top (hdl/dflc/top.py) against models.dflc, bit-exact, with cocotb-bus.
 
-One build per configuration; in each, cocotb tests:
+One simulator build: the test top ``dflc_multi_setregress`` (hdl/dflc/multi.py)
+holds one DflcStream per configuration; each cocotb test below runs on every
+instance in turn:
 
 * ``sweep``: a dense sweep of the input space (per input: every segment
   boundary / MF breakpoint and its +-1 codes, the extremes, and a grid of 64
@@ -16,7 +18,7 @@ One build per configuration; in each, cocotb tests:
   stalled; afterwards the top is ready, emits nothing, and a fresh batch comes
   out exactly.
 
-Configurations (one Verilator build each): the paper's default (Table 1, min,
+Configurations (hdl/dflc/multi.py SETS["regress"]): the paper's default (Table 1, min,
 LUT divider, n = 2, 9 triangles, sequential); n = 3 with 5/3/4 MFs, prod,
 restoring array and missing rules; trapezoids with gaps (zero firing
 strength), max, LUT, parallel; 5/4 MFs, probor, array, parallel; n = 1
@@ -24,7 +26,6 @@ sequential.
 """
 
 import itertools
-import json
 import os
 import random
 
@@ -34,25 +35,51 @@ import pytest
 from cocotb.triggers import ClockCycles, RisingEdge
 from cocotb_bus.scoreboard import Scoreboard
 
-from dflc_bench import DflcStream, pack
+from cocotb.clock import Clock
+from dflc_bench import PERIOD_NS, DflcStream, StreamBench, pack
+from hdl.dflc.multi import SETS
 from hdl.dflc.top import config_for, stream_latency
 from models.dflc import Dflc
-from tb.runner import SIMULATORS, run
+from tb.runner import SIMULATORS, run, seed_from_env
 
-CONFIGS = {
-    "table1": {"fll": "table1"},
-    "n3": {"fll": "n3_prod", "div": "array"},
-    "trap": {"fll": "trap_max", "par": 1},
-    "or5": {"fll": "mf5_or", "div": "array", "par": 1},
-    "n1": {"fll": "n1"},
-}
+SET = "regress"
+ONLY = os.environ.get("DFLC_ONLY")          # e.g. DFLC_ONLY=t1: one instance only
+_CONFIGS = {}
 
 
-def _setup(dut):
-    params = json.loads(os.environ["DFLC_PARAMS"])
-    par = bool(params.pop("par", 0))
-    config = config_for(**params)
-    return config, par, Dflc(config), int(os.environ.get("DFLC_SEED", "1"))
+def instances(dut):
+    """(key, config, parallel, model) of every instance of the test top; all
+    other instances idle (valid low, ready high)."""
+    if not _CONFIGS:
+        for key, params in SETS[SET].items():
+            p = dict(params)
+            par = bool(p.pop("par", 0))
+            config = config_for(**p)
+            _CONFIGS[key] = (config, par, Dflc(config))
+    for key in _CONFIGS:
+        getattr(dut, f"{key}_i_stream__valid").value = 0
+        getattr(dut, f"{key}_o_stream__ready").value = 1
+    for key, (config, par, model) in _CONFIGS.items():
+        if ONLY is None or key in ONLY.split(","):
+            yield key, config, par, model
+
+
+def seed():
+    return int(os.environ.get("DFLC_SEED", "1"))
+
+
+def start_clock(dut):
+    cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
+
+
+async def new_bench(dut, key, config, **kw):
+    """The fast DflcStream bench without kw, the cocotb-bus StreamBench with."""
+    if kw:
+        bench = StreamBench(dut, config, prefix=f"{key}_", **kw)
+    else:
+        bench = DflcStream(dut, config, prefix=f"{key}_")
+    await bench.reset()
+    return bench
 
 
 def sweep_axes(model, grid, per_axis_cap=None):
@@ -76,9 +103,13 @@ def sweep_axes(model, grid, per_axis_cap=None):
 
 @cocotb.test()
 async def sweep(dut):
-    config, par, model, _ = _setup(dut)
-    bench = DflcStream(dut, config)
-    await bench.start()
+    start_clock(dut)
+    for key, config, par, model in instances(dut):
+        bench = await new_bench(dut, key, config)
+        await _sweep(dut, bench, config, model)
+
+
+async def _sweep(dut, bench, config, model):
     if config.name == "dflc_table1":
         axes = sweep_axes(model, 64)                 # >= 64 x 64 plus breakpoints +-1
     else:
@@ -90,7 +121,7 @@ async def sweep(dut):
            for i in range(len(codes)) if got[i] != (int(y[i]), bool(zero[i]))]
     assert not bad, f"{len(bad)} of {len(codes)} differ; first (codes, rtl, model): {bad[:3]}"
     assert len(got) == len(codes)
-    dut._log.info(f"sweep: {len(codes)} samples bit-exact ({int(zero.sum())} zero-strength)")
+    dut._log.info(f"sweep {config.name}: {len(codes)} samples bit-exact ({int(zero.sum())} zero-strength)")
     if config.name == "dflc_table1":
         assert len(axes[0]) >= 64 and len(codes) >= 64 * 64
     if config.name == "trap_max":
@@ -99,11 +130,16 @@ async def sweep(dut):
 
 @cocotb.test()
 async def random_stalls(dut):
-    config, par, model, seed = _setup(dut)
-    rng = random.Random(seed)
-    bench = DflcStream(dut, config, rng=rng, idle=0.3, ready_p=0.5)
-    await bench.start()
-    n = 600
+    start_clock(dut)
+    for key, config, par, model in instances(dut):
+        rng = random.Random(seed())
+        bench = await new_bench(dut, key, config, rng=rng, idle=0.3, ready_p=0.5)
+        await _random_stalls(dut, bench, config, model, rng)
+        bench.stop()
+
+
+async def _random_stalls(dut, bench, config, model, rng):
+    n = 300
     codes = np.array([[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(n)])
     # a few saturated corners too
     codes[:4] = [[0] * config.n, [(1 << config.ip_sz) - 1] * config.n,
@@ -132,32 +168,40 @@ async def random_stalls(dut):
 
 @cocotb.test()
 async def cycles(dut):
-    config, par, model, seed = _setup(dut)
-    rng = random.Random(seed + 1)
-    bench = DflcStream(dut, config, rng=rng)
-    await bench.start()
+    start_clock(dut)
+    for key, config, par, model in instances(dut):
+        rng = random.Random(seed() + 1)
+        bench = await new_bench(dut, key, config)
+        await _cycles(dut, bench, config, par, model, rng)
+
+
+async def _cycles(dut, bench, config, par, model, rng):
     p = 1 if par else 1 << config.n
     n = 40
     codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(n)]
     out = await bench.run(codes)
     y, zero = model.infer(np.array(codes))
     assert out == [(int(a), bool(b)) for a, b in zip(y, zero)]
-    ins = [cyc for cyc, _ in bench.in_mon._recvQ]
-    outs = [cyc for cyc, _, _ in bench.outputs]
+    ins, outs = bench.in_cycles, bench.out_cycles
     assert len(ins) == n and len(outs) == n
     assert set(np.diff(ins)) == {p}, f"input spacing {sorted(set(np.diff(ins)))}, expected {p}"
     assert set(np.diff(outs)) == {p}, f"output spacing {sorted(set(np.diff(outs)))}, expected {p}"
     lat = outs[0] - ins[0]
     assert lat == stream_latency(config, par), f"latency {lat}, documented {stream_latency(config, par)}"
-    dut._log.info(f"cycles: {p} per sample, latency {lat}")
+    dut._log.info(f"cycles {config.name}: {p} per sample, latency {lat}")
 
 
 @cocotb.test()
 async def reset_mid_stream(dut):
-    config, par, model, seed = _setup(dut)
-    rng = random.Random(seed + 2)
-    bench = DflcStream(dut, config, rng=rng, ready_p=0.0)    # output stalled: the FIFO fills
-    await bench.start()
+    start_clock(dut)
+    for key, config, par, model in instances(dut):
+        rng = random.Random(seed() + 2)
+        bench = await new_bench(dut, key, config, rng=rng, ready_p=0.0)   # output stalled
+        await _reset_mid_stream(dut, bench, config, par, model, rng)
+        bench.stop()
+
+
+async def _reset_mid_stream(dut, bench, config, par, model, rng):
     codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(30)]
     for row in codes:
         bench.source.append(pack(row, config.ip_sz))
@@ -167,10 +211,10 @@ async def reset_mid_stream(dut):
     bench.sink.set(1.0)
     # ready and empty: input ready at once, nothing comes out
     await RisingEdge(dut.clk)
-    assert int(dut.i_stream__ready.value) == 1
+    assert int(getattr(dut, f"{bench.i_name}__ready").value) == 1
     for _ in range(3 * stream_latency(config, par)):
         await RisingEdge(dut.clk)
-        assert int(dut.o_stream__valid.value) == 0, "output after reset without input"
+        assert int(getattr(dut, f"{bench.o_name}__valid").value) == 0, "output after reset without input"
     assert bench.outputs == []
     fresh = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(12)]
     out = await bench.run(fresh)
@@ -180,10 +224,9 @@ async def reset_mid_stream(dut):
     assert len(bench.outputs) == len(fresh), "nothing from before the reset may appear"
 
 
-@pytest.mark.parametrize("name", list(CONFIGS))
 @pytest.mark.parametrize("sim", SIMULATORS)
-def test_dflc_stream(sim, name):
-    from tb.runner import seed_from_env
-    params = CONFIGS[name]
-    run("dflc_stream", params, sim, "test_dflc_stream",
-        env={"DFLC_PARAMS": json.dumps(params), "DFLC_SEED": seed_from_env()})
+def test_dflc_stream(sim):
+    env = {"DFLC_SEED": seed_from_env()}
+    if ONLY:
+        env["DFLC_ONLY"] = ONLY
+    run("dflc_multi", {"set": SET}, sim, "test_dflc_stream", env=env)

@@ -1,0 +1,184 @@
+"""DFLC fuzzy controller (paper 003): evaluate a .fll controller on a CSV of inputs.
+
+    python -m sim dflc [--fll FILE] --input IN.csv [--engine model|icarus|verilator]
+                       [--json OUT] [--surface OUT.png]
+
+IN.csv has a header naming the .fll's input variables (any order) and one
+sample per row in the variables' own units; values outside a variable's range
+saturate.  The model engine is models/dflc.py (bit-exact with the RTL); the
+icarus / verilator engines emit the stream top for the .fll
+(``dflc_stream_<stem>_<hash>``) and run the samples through it in cocotb.
+JSON keys: outputs (floats, output units), codes (output codes), zero_strength
+(booleans: no rule fired, the output is the .fll's default), cycles_per_sample,
+latency (clock cycles; the RTL engines report what they measured, the model
+engine the design's figures).  --surface plots the control surface of a
+2-input controller (model).
+"""
+
+import csv
+import hashlib
+import json
+import math
+import re
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from .cli import CliError
+
+ROOT = Path(__file__).resolve().parents[1]
+ENGINES = ("model", "icarus", "verilator")
+
+
+def add_arguments(p):
+    p.add_argument("--fll", default=str(ROOT / "models" / "dflc_table1.fll"),
+                   help="controller in fuzzylite's FLL (default: models/dflc_table1.fll, paper Table 1)")
+    p.add_argument("--input", required=True, metavar="IN.csv", help="samples: header = input variable names")
+    p.add_argument("--engine", choices=ENGINES, default="model")
+    p.add_argument("--parallel", action="store_true", help="RTL: the parallel option (one sample per clock)")
+    p.add_argument("--div", choices=("lut", "array"), default="lut", help="divider (Table 2 div_type)")
+    p.add_argument("--json", metavar="OUT", help="write the results as JSON")
+    p.add_argument("--surface", metavar="OUT.png", help="plot the control surface (2-input controllers)")
+
+
+def load_config(path, div):
+    from models.dflc import FllError, load_fll
+    try:
+        return load_fll(path, div_type=div)
+    except FllError as e:
+        raise CliError(str(e)) from None
+
+
+def read_csv(path, names):
+    """(N, n) float array ordered as ``names``; CliError naming the place of any fault."""
+    try:
+        text = Path(path).read_text()
+    except OSError as e:
+        raise CliError(f"{path}: cannot read: {e.strerror or e}") from None
+    rows = list(csv.reader(text.splitlines()))
+    rows = [r for r in rows if any(cell.strip() for cell in r)]
+    if not rows:
+        raise CliError(f"{path}: empty file; expected a header naming {', '.join(names)}")
+    header = [h.strip() for h in rows[0]]
+    unknown = [h for h in header if h not in names]
+    if unknown:
+        raise CliError(f"{path}: unknown variable {unknown[0]!r} in the header "
+                       f"(the controller's inputs: {', '.join(names)})")
+    missing = [v for v in names if v not in header]
+    if missing:
+        raise CliError(f"{path}: the header lacks input variable(s) {', '.join(missing)}")
+    dup = [h for h in header if header.count(h) > 1]
+    if dup:
+        raise CliError(f"{path}: variable {dup[0]!r} appears twice in the header")
+    if len(rows) < 2:
+        raise CliError(f"{path}: no samples after the header")
+    out = np.zeros((len(rows) - 1, len(names)))
+    col = {h: k for k, h in enumerate(header)}
+    for i, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise CliError(f"{path} line {i}: {len(row)} cells, the header has {len(header)}")
+        for j, name in enumerate(names):
+            cell = row[col[name]].strip()
+            try:
+                v = float(cell)
+            except ValueError:
+                raise CliError(f"{path} line {i}, column {name}: {cell!r} is not a number") from None
+            if math.isnan(v):
+                raise CliError(f"{path} line {i}, column {name}: NaN is not a sample")
+            out[i - 2, j] = v
+    return out
+
+
+def rtl_params(fll_path, config, div, parallel):
+    """Copy the .fll under build/dflc_fll/ as <stem>_<hash>.fll: a stem that
+    names the emitted module and changes with the file's content."""
+    data = Path(fll_path).read_bytes()
+    stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(fll_path).stem) or "fll"
+    tag = f"{stem}_{hashlib.sha1(data).hexdigest()[:8]}"
+    d = ROOT / "build" / "dflc_fll"
+    d.mkdir(parents=True, exist_ok=True)
+    (d / f"{tag}.fll").write_bytes(data)
+    params = {"fll": tag}
+    if div != "lut":
+        params["div"] = div
+    if parallel:
+        params["par"] = 1
+    return params
+
+
+def run_rtl(params, codes, sim):
+    from tb.runner import run
+    with tempfile.TemporaryDirectory() as tmp:
+        job, result = Path(tmp) / "job.json", Path(tmp) / "result.json"
+        job.write_text(json.dumps({"params": params, "codes": codes.tolist()}))
+        log = ROOT / "build" / "dflc_fll" / f"sim_{sim}.log"
+        run("dflc_stream", params, sim, "sim.dflc_job",
+            env={"DFLC_JOB": job, "DFLC_RESULT": result}, log_file=log)
+        return json.loads(result.read_text())
+
+
+def plot_surface(model, out):
+    c = model.config
+    if c.n != 2:
+        raise CliError(f"--surface needs a 2-input controller; {c.name} has {c.n}")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    a, b = c.inputs
+    xs = np.linspace(a.lo, a.hi, 129)
+    ys = np.linspace(b.lo, b.hi, 129)
+    X, Y = np.meshgrid(xs, ys, indexing="ij")
+    val, _, zero = model.evaluate(np.stack([X.ravel(), Y.ravel()], axis=1))
+    Z = np.where(zero, np.nan, val).reshape(X.shape)
+    fig, ax = plt.subplots(figsize=(6, 5))
+    im = ax.pcolormesh(ys, xs, Z, shading="auto", cmap="coolwarm")
+    fig.colorbar(im, ax=ax, label=c.output_name)
+    ax.set_xlabel(b.name)
+    ax.set_ylabel(a.name)
+    ax.set_title(f"{c.name}: control surface (bit-exact model, {c.sel_op}, {c.div_type})")
+    Path(out).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=100, bbox_inches="tight")
+    plt.close(fig)
+
+
+def run(args):
+    from hdl.dflc.top import stream_latency
+    from models.dflc import Dflc
+    if not Path(args.fll).exists():
+        raise CliError(f"{args.fll}: no such .fll file")
+    config = load_config(args.fll, args.div)
+    model = Dflc(config)
+    values = read_csv(args.input, model.input_names)
+    codes = model.encode(values)
+    if args.engine == "model":
+        y, zero = model.infer(codes)
+        y, zero = [int(v) for v in y], [bool(v) for v in zero]
+        cps = 1 if args.parallel else 1 << config.n
+        lat = stream_latency(config, args.parallel)
+    else:
+        if shutil.which("iverilog") is None and args.engine == "icarus":
+            raise CliError("iverilog not found (Debian: apt-get install iverilog)")
+        params = rtl_params(args.fll, config, args.div, args.parallel)
+        res = run_rtl(params, codes, args.engine)
+        y, zero = res["y"], res["zero"]
+        ins, outs = res["in_cycles"], res["out_cycles"]
+        diffs = sorted(set(np.diff(ins).tolist())) if len(ins) > 1 else []
+        cps = diffs[0] if len(diffs) == 1 else (1 if args.parallel else 1 << config.n)
+        lat = outs[0] - ins[0]
+    outputs = [float(v) for v in model.decode(y)]
+    result = {"fll": str(args.fll), "engine": args.engine, "inputs": list(model.input_names),
+              "output": model.output_name, "outputs": outputs, "codes": y, "zero_strength": zero,
+              "cycles_per_sample": cps, "latency": lat}
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(result, indent=1))
+    else:
+        print(f"{config.name} ({args.engine}): {len(y)} samples, {cps} cycles/sample, latency {lat}")
+        print(",".join(model.input_names) + f",{model.output_name},code,zero")
+        for row, v, code, z in zip(values, outputs, y, zero):
+            print(",".join(f"{x:g}" for x in row) + f",{v:.6g},{code},{int(z)}")
+    if args.surface:
+        plot_surface(model, args.surface)
+    return 0

@@ -1,0 +1,97 @@
+"""``python -m sim dflc``: results equal the model, errors are one line, the RTL engine agrees."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from models.dflc import DEFAULT_FLL, Dflc
+from sim.cli import CliError, main
+
+ROOT = Path(__file__).resolve().parents[2]
+FIXTURES = Path(__file__).resolve().parent / "fll"
+
+
+def write(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def cli(*args):
+    return subprocess.run([sys.executable, "-m", "sim", "dflc", *map(str, args)], cwd=ROOT,
+                          capture_output=True, text=True)
+
+
+def test_model_engine_json_and_surface(tmp_path):
+    csv = write(tmp_path, "in.csv", "phi2,phi1\n0,0\n10,-30\n170,100\n-180,180\n400,-999\n")
+    out, png = tmp_path / "o.json", tmp_path / "s.png"
+    assert main(["dflc", "--input", str(csv), "--json", str(out), "--surface", str(png)]) == 0
+    res = json.loads(out.read_text())
+    m = Dflc.from_fll(DEFAULT_FLL)
+    vals = np.array([[0, 0], [-30, 10], [100, 170], [180, -180], [-999, 400]], dtype=float)
+    y, codes, zero = m.evaluate(vals)
+    assert res["codes"] == codes.tolist() and res["outputs"] == y.tolist()
+    assert res["zero_strength"] == zero.tolist()
+    assert res["cycles_per_sample"] == 4 and res["latency"] == 13
+    assert png.stat().st_size > 1000
+
+
+def test_zero_strength_flag(tmp_path):
+    csv = write(tmp_path, "in.csv", "x\n0.7\n0.1\n")
+    out = tmp_path / "o.json"
+    assert main(["dflc", "--fll", str(FIXTURES / "n1.fll"), "--input", str(csv), "--json", str(out)]) == 0
+    res = json.loads(out.read_text())
+    assert res["zero_strength"] == [True, False] and res["outputs"][0] == pytest.approx(0.0, abs=1e-3)
+
+
+@pytest.mark.parametrize("text,match", [
+    ("phi1,theta\n1,2\n", "unknown variable 'theta'"),
+    ("phi1\n1\n", "lacks input variable.*phi2"),
+    ("phi1,phi2\n1,abc\n", "line 2, column phi2: 'abc' is not a number"),
+    ("phi1,phi2\n1\n", "line 2: 1 cells"),
+    ("", "empty file"),
+])
+def test_bad_csv(tmp_path, text, match):
+    csv = write(tmp_path, "in.csv", text)
+    with pytest.raises(CliError, match=match):
+        from sim.dflc import run
+        import argparse
+        run(argparse.Namespace(fll=str(DEFAULT_FLL), input=str(csv), engine="model", parallel=False,
+                               div="lut", json=None, surface=None))
+
+
+def test_errors_are_one_line(tmp_path):
+    csv = write(tmp_path, "in.csv", "a,b\n1,2\n")
+    gauss = write(tmp_path, "g.fll", (FIXTURES / "n1.fll").read_text().replace(
+        "term: t1 Triangle 0.125 0.375 0.500", "term: t1 Gaussian 0.375 0.1"))
+    junk = write(tmp_path, "junk.fll", "this is not FLL\n")
+    for args, match in [
+        (("--input", csv), "unknown variable 'a'"),
+        (("--fll", gauss, "--input", csv), "term t1 is Gaussian"),
+        (("--fll", junk, "--input", csv), "junk.fll"),
+        (("--fll", tmp_path / "none.fll", "--input", csv), "no such .fll"),
+        (("--input", tmp_path / "none.csv"), "cannot read"),
+        (("--fll", FIXTURES / "n3_prod.fll", "--input", write(tmp_path, "c.csv", "a,b,c\n1,0,2\n"),
+          "--surface", tmp_path / "x.png"), "2-input"),
+    ]:
+        r = cli(*args)
+        assert r.returncode == 2, (args, r.stderr)
+        assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+        assert __import__("re").search(match, r.stderr), (match, r.stderr)
+
+
+def test_icarus_engine_matches_model(tmp_path):
+    rng = np.random.default_rng(5)
+    vals = rng.uniform(-200, 200, (24, 2))
+    csv = write(tmp_path, "in.csv", "phi1,phi2\n" + "\n".join(f"{a},{b}" for a, b in vals) + "\n")
+    out = tmp_path / "o.json"
+    r = cli("--input", csv, "--engine", "icarus", "--json", out)
+    assert r.returncode == 0, r.stderr[-2000:]
+    res = json.loads(out.read_text())
+    y, codes, zero = Dflc.from_fll(DEFAULT_FLL).evaluate(vals)
+    assert res["codes"] == codes.tolist() and res["zero_strength"] == zero.tolist()
+    assert res["cycles_per_sample"] == 4 and res["latency"] == 13
