@@ -18,6 +18,9 @@ from amaranth.back import verilog  # noqa: E402
 from .dflc.core import DflcCore  # noqa: E402
 from .dflc.multi import DflcMulti  # noqa: E402
 from .dflc.top import DflcStream, config_for  # noqa: E402
+from .edt_bfs.array import EdtArray  # noqa: E402
+from .edt_bfs.cell import EdtCell  # noqa: E402
+from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
@@ -34,6 +37,9 @@ TOPS = {
     "dflc_stream": DflcStream,
     "dflc_core": lambda par=0, **kw: DflcCore(config_for(**kw), parallel=bool(par)),
     "dflc_multi": DflcMulti,     # test top: the regression's configurations in one build
+    "edt_cell": EdtCell,
+    "edt_array": EdtArray,
+    "edt_bfs": EdtBfs,
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).
@@ -45,6 +51,9 @@ DEFAULT_SETS = [
     ("dflc_stream", {"fll": "table1"}),
     ("dflc_core", {"fll": "table1"}),
     ("dflc_core", {"fll": "table1", "par": 1}),
+    ("edt_cell", {"height": 32, "width": 32}),
+    ("edt_bfs", {"height": 16, "width": 16}),
+    ("edt_bfs", {"height": 32, "width": 32}),
 ]
 
 _SHORT = {"p_max": "pmax", "fll": ""}

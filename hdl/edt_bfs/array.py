@@ -1,0 +1,135 @@
+"""The n x m cellular array of the EDT/BFS core (paper 004, section IV)."""
+
+from amaranth.hdl import Cat, ClockSignal, Const, Instance, Module, Mux, ResetSignal, Signal, signed
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from models.edt_bfs import OFFSETS
+
+from .cell import EdtCell, cell_widths
+
+__all__ = ["EdtArray"]
+
+
+def _mux_tree(items, sel):
+    """``items[sel]`` as a tree of 2:1 multiplexers on the bits of ``sel``; 0 past the end."""
+    width = len(items[0])
+    level = list(items)
+    for bit in range(len(sel)):
+        if len(level) % 2:
+            level.append(Const(0, width))
+        level = [Mux(sel[bit], level[j + 1], level[j]) for j in range(0, len(level), 2)]
+    return level[0]
+
+
+def default_path(top, height, width):
+    """The Verilog module name hdl.emit gives ``top`` at this size."""
+    from hdl.emit import top_name
+    return top_name(top, {"height": height, "width": width})
+
+
+class EdtArray(wiring.Component):
+    """``height`` x ``width`` cells (:class:`EdtCell`'s logic), each wired to its 8 neighbours.
+
+    Load pipeline (section IV): each row enters at its leftmost cell and
+    shifts right, one column per ``shift`` cycle; the column shifted in first
+    ends in column ``width - 1`` after ``width`` shifts.  Cells outside the
+    array read as not done / not visited.
+
+    ``path`` is the hierarchical name of this array in the emitted design
+    (its Verilog module name when it is the top; default: hdl.emit's name for
+    ``edt_array`` at this size): the cells other than (1, 1) instantiate
+    the module emitted for cell (1, 1) by name (see ``elaborate``).  Both
+    sides must be >= 3.
+
+    Ports
+    -----
+    shift, step_edt, step_cfr, step_bfs, k, dfar : In
+        Broadcast to every cell (see :class:`EdtCell`).
+    in_obst, in_goal : In(height)
+        The column entering the leftmost cells, bit r = row r.
+    changed : Out(1)
+        OR of the cells' ``changed``: some cell sets done / visited this cycle.
+    rd_row, rd_col : In
+        Read-out address (combinational multiplexer, no latency).
+    rd_done, rd_di, rd_dx, rd_dy, rd_cfr, rd_visited, rd_parent : Out
+        The registers of cell (rd_row, rd_col), combinational.  An address
+        outside the array reads 0.
+    """
+
+    def __init__(self, height, width, path=None):
+        self.height, self.width = height, width
+        self.path = path or default_path("edt_array", height, width)
+        w = self.w = cell_widths(height, width)
+        if height < 3 or width < 3:
+            raise ValueError(f"array {height}x{width}: both sides must be >= 3 (an interior cell is the prototype)")
+        super().__init__({
+            "shift": In(1), "step_edt": In(1), "step_cfr": In(1), "step_bfs": In(1),
+            "k": In(w["k"]), "dfar": In(w["di"]),
+            "in_obst": In(height), "in_goal": In(height),
+            "changed": Out(1),
+            "rd_row": In(w["row"]), "rd_col": In(w["col"]),
+            "rd_done": Out(1), "rd_di": Out(w["di"]), "rd_dx": Out(signed(w["dx"])),
+            "rd_dy": Out(signed(w["dy"])), "rd_cfr": Out(1), "rd_visited": Out(1),
+            "rd_parent": Out(4),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        h, wd = self.height, self.width
+        # One cell is elaborated by Amaranth (``proto``, cell (0, 0)); every
+        # other cell is an Instance of the module Amaranth emits for it, by its
+        # hierarchical name.  Amaranth 0.5 elaborates every submodule anew and
+        # emits no shared module definitions: 1024 elaborated cells take minutes
+        # and a million Verilog lines; one definition and 1023 instances take
+        # seconds.  So the Verilog module of this array must be named
+        # ``self.path`` (hdl.emit names its tops that way).
+        cell_type = f"{self.path}.proto"
+        # An interior cell: Amaranth drops submodule ports driven by constants,
+        # and the instances need them all.
+        proto_at = (1, 1)
+        proto = EdtCell(h, wd)
+        outs = ("done", "delta", "dx", "dy", "visited", "di", "cfr", "parent", "changed")
+        cells = [[{f: Signal(proto.signature.members[f].shape, name=f"c{r}_{c}_{f}") for f in outs}
+                  for c in range(wd)] for r in range(h)]
+        for r in range(h):
+            for c in range(wd):
+                me = cells[r][c]
+                ins = {
+                    "shift": self.shift, "step_edt": self.step_edt, "step_cfr": self.step_cfr,
+                    "step_bfs": self.step_bfs, "k": self.k, "dfar": self.dfar,
+                }
+                for i, (dr, dc) in OFFSETS.items():
+                    inside = 0 <= r + dr < h and 0 <= c + dc < wd
+                    for f in ("done", "delta", "dx", "dy", "visited"):
+                        # outside the array a neighbour is not done, not visited
+                        ins[f"n{i}_{f}"] = (cells[r + dr][c + dc][f] if inside
+                                            else Const(0, proto.signature.members[f"n{i}_{f}"].shape))
+                if c == 0:
+                    # load pipeline: each row enters at its leftmost cell, whose
+                    # west neighbour p_3 is the input column while shifting
+                    # (and absent, 0, otherwise)
+                    ins["n3_done"] = self.in_obst[r] & self.shift
+                    ins["n3_visited"] = self.in_goal[r] & self.shift
+                if (r, c) == proto_at:
+                    m.submodules.proto = proto
+                    m.d.comb += [getattr(proto, n).eq(v) for n, v in ins.items()]
+                    m.d.comb += [me[f].eq(getattr(proto, f)) for f in outs]
+                else:
+                    ports = {f"i_{n}": v for n, v in ins.items()}
+                    ports.update({f"o_{f}": me[f] for f in outs})
+                    m.submodules[f"cell_{r}_{c}"] = Instance(
+                        cell_type, i_clk=ClockSignal(), i_rst=ResetSignal(), **ports)
+        m.d.comb += self.changed.eq(Cat(*[cell["changed"] for row in cells for cell in row]).any())
+
+        # Read-out multiplexer: one word per cell; a binary tree of 2:1
+        # multiplexers on the column bits, then on the row bits (a 1024-way
+        # case statement takes Icarus minutes to compile).  Addresses outside
+        # the array read 0.
+        fields = ("done", "di", "dx", "dy", "cfr", "visited", "parent")
+        rows = [_mux_tree([Cat(*[cell[f] for f in fields]) for cell in row], self.rd_col)
+                for row in cells]
+        word = _mux_tree(rows, self.rd_row)
+        m.d.comb += Cat(self.rd_done, self.rd_di, self.rd_dx, self.rd_dy, self.rd_cfr,
+                        self.rd_visited, self.rd_parent).eq(word)
+        return m

@@ -1,0 +1,232 @@
+"""One cell of the EDT/NNT + BFS array (paper 004, section IV, Fig. 2)."""
+
+from amaranth.hdl import C, Cat, Module, Mux, Signal, signed
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from models.edt_bfs import OFFSETS, widths
+
+__all__ = ["EdtCell", "CellRegs", "cell_logic", "cell_widths"]
+
+MAX_SIDE = 256      # elaboration limit: the read-out and the widths are sized for it
+
+
+def cell_widths(height, width):
+    """Register widths of a cell of an ``height`` x ``width`` array (models.edt_bfs.widths), checked."""
+    for name, v in (("height", height), ("width", width)):
+        if not isinstance(v, int) or not 1 <= v <= MAX_SIDE:
+            raise ValueError(f"array {name} {v!r}: must be an integer in 1..{MAX_SIDE}")
+    w = widths(height, width)
+    # the checks the formulas promise (stated in models.edt_bfs.widths)
+    assert w["delta_max"] < 1 << w["delta"], (w["delta_max"], w["delta"])
+    assert w["k_max"] < 1 << w["k"] and w["k_di"] < 1 << w["di"]
+    assert height - 1 < 1 << (w["dx"] - 1) and width - 1 < 1 << (w["dy"] - 1)
+    assert w["delta_max"] + 2 * height + 2 * width < 1 << (w["cand"] - 1)
+    return w
+
+
+class EdtCell(wiring.Component):
+    """Processing element of Fig. 2: ADD-SUB, INC, MAX tree, +2k adder, registers.
+
+    Parameters
+    ----------
+    height, width : int
+        Size of the array the cell belongs to; they fix the widths
+        (:func:`models.edt_bfs.widths`): k (iteration) ``ceil log2(k_max+1)``
+        bits, δ ``ceil log2(k_max^2+k_max+1)``, d_i ``ceil log2(k_di+1)``,
+        Δx / Δy signed with ``ceil log2(H)`` / ``ceil log2(W)`` magnitude bits,
+        where ``k_di`` is the smallest k with ``k^2+k >= (H-1)^2+(W-1)^2``
+        and ``k_max = k_di + 1``.
+
+    Ports (neighbour i = 1..8 numbered as in Fig. 1: 6 2 5 / 3 0 1 / 7 4 8)
+    -----------------------------------------------------------------------
+    shift : In(1)
+        Load pipeline (section IV): ``done <- n3_done``, ``visited <-
+        n3_visited``, the marks of the cell on the left (p_3; the array feeds
+        column 0's p_3 inputs with the incoming column during a shift); δ,
+        Δx, Δy, d_i, cfr and parent are cleared, so nothing of a previous
+        image survives a load.  Using p_3's wires keeps every input port
+        distinct, which the array's instances need.
+    step_edt : In(1)
+        EDT iteration ``k`` (mode 1, step 2).  The registers δ, Δx, Δy, d_i,
+        done load the MAX tree's winner only under the paper's three
+        conditions: done = 0, some neighbour done, ``δ_m + 2k >= 0`` (MSB 0);
+        a done cell adds 2k to δ (eq. 4).
+    step_cfr : In(1)
+        Mode 2 (step 3): ``cfr <- ~done | (d_i > dfar)`` (a never reached
+        cell, possible only without obstacles, is infinitely far);
+        ``visited <- visited & cfr`` (a goal outside the cfr is dropped).
+    step_bfs : In(1)
+        Mode 3 (step 4): a cfr cell not yet visited with a visited neighbour
+        becomes visited, ``parent`` = the smallest such neighbour index.
+    k : In(k bits)
+        Iteration number from the controller's counter.
+    dfar : In(d_i bits)
+        d_far.
+    n{i}_done, n{i}_delta, n{i}_dx, n{i}_dy, n{i}_visited : In
+        Neighbour p_i's registers (tie them to 0 outside the array).
+    done, delta (δ), dx (Δx), dy (Δy), visited : Out
+        The registers the neighbours read.  (Δx, Δy) = p - nearest obstacle
+        pixel, signed (the NNT).
+    di, cfr, parent : Out
+        Integer distance (the iteration that set done), collision-free flag,
+        BFS parent (0 = none / root).
+    changed : Out(1)
+        This cycle's step sets done (EDT) or visited (BFS): the controller's
+        termination test.
+
+    Timing: every step is one clock; outputs are registers, ``changed`` is
+    combinational from the registers and the step inputs.
+    """
+
+    def __init__(self, height, width):
+        self.height, self.width = height, width
+        w = self.w = cell_widths(height, width)
+        ports = {
+            "shift": In(1),
+            "step_edt": In(1), "step_cfr": In(1), "step_bfs": In(1),
+            "k": In(w["k"]), "dfar": In(w["di"]),
+        }
+        for i in range(1, 9):
+            ports.update({
+                f"n{i}_done": In(1), f"n{i}_delta": In(w["delta"]),
+                f"n{i}_dx": In(signed(w["dx"])), f"n{i}_dy": In(signed(w["dy"])),
+                f"n{i}_visited": In(1),
+            })
+        ports.update({
+            "done": Out(1), "delta": Out(w["delta"]), "dx": Out(signed(w["dx"])),
+            "dy": Out(signed(w["dy"])), "visited": Out(1), "di": Out(w["di"]),
+            "cfr": Out(1), "parent": Out(4), "changed": Out(1),
+        })
+        super().__init__(ports)
+
+    def elaborate(self, platform):
+        m = Module()
+        regs = CellRegs(self.w, self)
+        nbs = {i: CellRegs.of_ports(self, i) for i in range(1, 9)}
+        ctl = {n: getattr(self, n) for n in ("shift", "step_edt", "step_cfr", "step_bfs", "k", "dfar")}
+        m.d.comb += self.changed.eq(cell_logic(m, self.w, ctl, regs, nbs))
+        return m
+
+
+class CellRegs:
+    """The registers of one cell (or a neighbour's view of them)."""
+
+    FIELDS = ("done", "delta", "dx", "dy", "visited", "di", "cfr", "parent")
+
+    def __init__(self, w, src=None, prefix=""):
+        if src is not None:
+            for f in self.FIELDS:
+                setattr(self, f, getattr(src, f))
+            return
+        self.done = Signal(name=f"{prefix}done")
+        self.delta = Signal(w["delta"], name=f"{prefix}delta")
+        self.dx = Signal(signed(w["dx"]), name=f"{prefix}dx")
+        self.dy = Signal(signed(w["dy"]), name=f"{prefix}dy")
+        self.visited = Signal(name=f"{prefix}visited")
+        self.di = Signal(w["di"], name=f"{prefix}di")
+        self.cfr = Signal(name=f"{prefix}cfr")
+        self.parent = Signal(4, name=f"{prefix}parent")
+
+    @classmethod
+    def of_ports(cls, cell, i):
+        obj = cls.__new__(cls)
+        for f in ("done", "delta", "dx", "dy", "visited"):
+            setattr(obj, f, getattr(cell, f"n{i}_{f}"))
+        return obj
+
+    @classmethod
+    def zero(cls):
+        obj = cls.__new__(cls)
+        obj.done = obj.visited = obj.delta = obj.dx = obj.dy = None
+        return obj
+
+
+def cell_logic(m, w, ctl, regs, nbs, prefix=""):
+    """Fig. 2's logic of one cell into module ``m``; returns its ``changed`` value.
+
+    ``regs``: the cell's registers (CellRegs); ``nbs[i]``: neighbour p_i's
+    registers (the ports n{i}_*); ``ctl``: the broadcast controls.
+    """
+    cw = w["cand"]
+
+    # ADD-SUB and INC (eq. 1-3): candidate δ_i, Δx_i, Δy_i of each neighbour.
+    cands = []
+    for i in range(1, 9):
+        nb = nbs.get(i)
+        if nb is None:
+            continue
+        sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
+        big_x = (Cat(C(1, 1), nb.dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), nb.dx).as_signed()) if sr else 0
+        big_y = (Cat(C(1, 1), nb.dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), nb.dy).as_signed()) if sc else 0
+        d = Signal(signed(cw), name=f"{prefix}delta_{i}")
+        m.d.comb += d.eq(nb.delta - big_x - big_y)
+        x = (nb.dx + sr) if sr else nb.dx                 # INC: Δx_i (eq. 1)
+        y = (nb.dy + sc) if sc else nb.dy
+        cands.append((i, nb.done, d, x, y))
+
+    # MAX: seven CMP-MUX in three levels.  A CMP-MUX keeps its left
+    # (lower-indexed) set unless the right one is valid and strictly greater,
+    # so ties go to the smallest neighbour index.  Missing neighbours (array
+    # border) drop out of the tree.
+    def cmp_mux(a, b, name):
+        if a is None:
+            return b
+        if b is None:
+            return a
+        va, da, xa, ya = a
+        vb, db, xb, yb = b
+        sel = Signal(name=f"{prefix}sel_{name}")
+        v = Signal(name=f"{prefix}v_{name}")
+        d = Signal(signed(cw), name=f"{prefix}d_{name}")
+        x = Signal(signed(w["dx"]), name=f"{prefix}x_{name}")
+        y = Signal(signed(w["dy"]), name=f"{prefix}y_{name}")
+        m.d.comb += [
+            sel.eq(vb & (~va | (db > da))),
+            v.eq(va | vb),
+            d.eq(Mux(sel, db, da)), x.eq(Mux(sel, xb, xa)), y.eq(Mux(sel, yb, ya)),
+        ]
+        return v, d, x, y
+
+    by_index = {i: (v, d, x, y) for i, v, d, x, y in cands}
+    l1 = [cmp_mux(by_index.get(j), by_index.get(j + 1), f"{j}{j + 1}") for j in (1, 3, 5, 7)]
+    l2 = [cmp_mux(l1[0], l1[1], "1234"), cmp_mux(l1[2], l1[3], "5678")]
+    vm, dm, xm, ym = cmp_mux(l2[0], l2[1], "m")
+
+    # +2k adder; its sign is the third enable condition.
+    dnew = Signal(signed(cw + 1), name=f"{prefix}dnew")
+    k2 = Cat(C(0, 1), ctl["k"])
+    m.d.comb += dnew.eq(dm + k2)
+    en_edt = Signal(name=f"{prefix}en_edt")
+    m.d.comb += en_edt.eq(ctl["step_edt"] & ~regs.done & vm & ~dnew[-1])
+
+    # BFS: the smallest visited neighbour index (priority encoder).
+    vis = [(i, nbs[i].visited) for i in range(1, 9) if nbs.get(i) is not None]
+    first = C(0, 4)
+    for i, v in reversed(vis):
+        first = Mux(v, i, first)
+    any_v = Cat(*[v for _, v in vis]).any()
+    en_bfs = Signal(name=f"{prefix}en_bfs")
+    m.d.comb += en_bfs.eq(ctl["step_bfs"] & regs.cfr & ~regs.visited & any_v)
+
+    cfr_new = ~regs.done | (regs.di > ctl["dfar"])
+
+    with m.If(ctl["shift"]):
+        m.d.sync += [
+            # load pipeline: take the west neighbour's (p_3's) marks
+            regs.done.eq(nbs[3].done), regs.visited.eq(nbs[3].visited),
+            regs.delta.eq(0), regs.dx.eq(0), regs.dy.eq(0), regs.di.eq(0),
+            regs.cfr.eq(0), regs.parent.eq(0),
+        ]
+    with m.Elif(en_edt):
+        m.d.sync += [
+            regs.done.eq(1), regs.delta.eq(dnew), regs.dx.eq(xm), regs.dy.eq(ym),
+            regs.di.eq(ctl["k"]),
+        ]
+    with m.Elif(ctl["step_edt"] & regs.done):
+        m.d.sync += regs.delta.eq(regs.delta + k2)                 # eq. 4
+    with m.Elif(ctl["step_cfr"]):
+        m.d.sync += [regs.cfr.eq(cfr_new), regs.visited.eq(regs.visited & cfr_new)]
+    with m.Elif(en_bfs):
+        m.d.sync += [regs.visited.eq(1), regs.parent.eq(first)]
+    return en_edt | en_bfs
