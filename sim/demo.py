@@ -1,12 +1,12 @@
 """Demo: harmonic planning on a bundled benchmark map, model and RTL.
 
 1. Load a Moving AI map and one of its scenarios (start, goal).
-2. Golden model (models.harmonic): relax the potential from zero until every
-   node is stable, and raise the precision while local maxima remain (the
-   paper's increasing-precision loop, section 3.3.2 and the section 4
-   pseudo-code).  Free cells the goal cannot reach are walled off first: they
+2. Golden model (models.harmonic.plan, the map as one block): relax the
+   potential from zero until every node is stable, and raise the precision
+   while local maxima remain (the paper's increasing-precision loop, section
+   3.3.2 and the section 4 pseudo-code).  Free cells the goal cannot reach are walled off first: they
    would stay a zero plateau for ever.
-3. Follow the gradient from the start (steepest 4-neighbour ascent) and
+3. Follow the gradient from the start (models.harmonic.trajectory) and
    compare the path with a plain BFS shortest path.
 4. RTL: run the 3x6 Cluster (emitted Verilog, Icarus or Verilator through
    cocotb) on a window of the map on that path, from zero with the model's
@@ -34,7 +34,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
 from hdl.harmonic.cluster import COLS, ROWS  # noqa: E402
-from models.harmonic import local_max, neighbours, one, ram_image, relax, step  # noqa: E402
+from models.harmonic import neighbours, one, plan, ram_image, step, trajectory  # noqa: E402
 from sim.mapfile import load_map, load_scenarios  # noqa: E402
 
 MOVES = ((-1, 0), (0, 1), (0, -1), (1, 0))
@@ -53,36 +53,6 @@ def bfs(free, source):
                 dist[rr, cc] = dist[r, c] + 1
                 queue.append((rr, cc))
     return dist
-
-
-def plan(obstacle, goal, p0, p_step, p_max):
-    """Increasing-precision relaxation; returns (h, const, p, levels)."""
-    const = obstacle.copy()
-    const[goal] = True
-    h = np.zeros(obstacle.shape, dtype=object)
-    h[goal] = one(p0)
-    p, levels = p0, []
-    while True:
-        h, iterations = relax(h, const, p)
-        maxima = int(local_max(h, const, neighbours(h)).sum())
-        levels.append({"p": p, "iterations": iterations, "local_maxima": maxima})
-        if maxima == 0 or p + p_step > p_max:
-            return h, const, p, levels
-        h = h * (1 << p_step)       # same values, p_step more fraction bits
-        p += p_step
-
-
-def ascend(h, const, start, goal, limit):
-    """Steepest 4-neighbour ascent from ``start``; stops at the goal or a maximum."""
-    path = [start]
-    while path[-1] != goal and len(path) <= limit:
-        r, c = path[-1]
-        best = max(((h[r + dr, c + dc], (r + dr, c + dc)) for dr, dc in MOVES
-                    if 0 <= r + dr < h.shape[0] and 0 <= c + dc < h.shape[1]), key=lambda t: t[0])
-        if best[0] <= h[r, c]:
-            break
-        path.append(best[1])
-    return path
 
 
 def pick_window(free, path):
@@ -199,9 +169,15 @@ def main(argv=None):
         raise SystemExit(f"start {start} cannot reach goal {goal}")
     obstacle = obstacle | (dist < 0)             # unreachable pockets become walls
 
-    h, const, p, levels = plan(obstacle, goal, args.p0, args.p_step, args.p_max)
+    # The model's planner with the whole map as one block (so every level is
+    # one Jacobi relaxation, counted until the sweep that finds it stable).
+    res = plan(obstacle, [goal], block=obstacle.shape, iters=10**9,
+               schedule=range(args.p0, args.p_max + 1, args.p_step))
+    h, const, p = res.h, res.const, res.p
+    levels = [{"p": lv["p"], "iterations": lv["block_iterations"], "local_maxima": lv["maxima"]}
+              for lv in res.levels]
     t_model = time.time() - t_start
-    path = ascend(h, const, start, goal, limit=obstacle.size)
+    path = trajectory(h, [goal], start).path
     reached = path[-1] == goal
 
     out = Path(args.out)
