@@ -44,6 +44,7 @@ from .cli import CliError, check_cell, parse_cell
 
 ENGINES = ("model", "icarus", "verilator")
 DEFAULT_SCHEDULE = "16:16:256"
+MAX_BLOCK_SIDE = 4096   # the map is padded to whole blocks: keep that bounded
 P_LIMIT = 1022          # the deepest word (p+2 bits) a 1024-deep node RAM holds
 
 
@@ -80,6 +81,8 @@ def parse_schedule(text, limit=P_LIMIT):
                 raise CliError(f"--schedule {text!r}: STEP must be >= 1")
             if last < first:
                 raise CliError(f"--schedule {text!r}: PMAX {last} is below P1 {first}")
+            if first < 2 or last > limit:
+                raise CliError(f"--schedule {text!r}: precisions must lie in 2..{limit}")
             ps = list(range(first, last + 1, step))
         else:
             ps = [int(x) for x in text.split(",")]
@@ -106,6 +109,8 @@ def parse_block(text, default):
         raise CliError(f"--block {text!r}: expected NxM (two positive integers, e.g. 16x16)") from None
     if n < 1 or m < 1:
         raise CliError(f"--block {text!r}: both sides must be >= 1")
+    if n > MAX_BLOCK_SIDE or m > MAX_BLOCK_SIDE:
+        raise CliError(f"--block {text!r}: sides above {MAX_BLOCK_SIDE} are not supported")
     return n, m
 
 

@@ -153,8 +153,11 @@ BAD_MAP = "type octile\nheight 2\nwidth 3\nmap\n.@.\n.x.\n"
     ([ROOM, "--goal", "3,3", "--schedule", "32:8:16"], "below P1"),
     ([ROOM, "--goal", "3,3", "--schedule", "1,8"], r"2\.\.1022"),
     ([ROOM, "--goal", "3,3", "--schedule", "16:16:2048"], r"2\.\.1022"),
+    ([ROOM, "--goal", "3,3", "--schedule", "2:1:99999999999"], r"2\.\.1022"),
+    ([ROOM, "--goal", "3,3", "--schedule", "8:8"], "expected P1,P2"),
     ([ROOM, "--goal", "3,3", "--block", "6"], "--block '6': expected NxM"),
     ([ROOM, "--goal", "3,3", "--block", "0x4"], ">= 1"),
+    ([ROOM, "--goal", "3,3", "--block", "100000x6"], "above 4096"),
     ([ROOM, "--goal", "3,3", "--iters", "0"], "--iters 0"),
     ([ROOM, "--goal", "3,3", "--iters", "many"], "--iters 'many'"),
 ])
