@@ -662,3 +662,154 @@ def ascent_reaches(h, goals, cells=None):
 
 
 __all__ += ["ASCENT_MOVES", "ascent_next", "Trajectory", "trajectory", "ascent_reaches"]
+
+
+# --- schedule exploration (benches: the choices the paper leaves open, 4.5) -
+#
+# plan() is the planner as the RTL runs it.  plan_explore() runs the same
+# algorithm with the schedule choices section 4.5 leaves open, for the
+# benches: the block order and skipping still blocks.  With its defaults it
+# is plan() exactly (same values, sweeps, iterations and cycles: tested), and
+# from below every variant ends in the same field (the least fixed point of
+# the floored map: tb/harmonic/test_model_blocks_bound.py); only the cost
+# differs.
+#
+# order:  "raster" (plan's: row-major), "serpentine" (row-major, every other
+#         block row reversed), "alternate" (raster, reversed on every other
+#         sweep), "goal" (blocks by their BFS distance to the nearest goal,
+#         nearest first: the values flow outward from the goals).
+# skip:   a block is visited in a sweep only while "dirty": all blocks are
+#         dirty at the start of a level; a visit that changes the block makes
+#         dirty the neighbouring blocks whose facing border row/column changed,
+#         and the block itself if it used up its I iterations.  A skipped
+#         block costs SKIP_CYCLES (the Control module's decision cycle); the
+#         level's update phase ends when no block is dirty, which is again a
+#         fixed point of the whole map (every block stable against its
+#         neighbours' current values).  Hardware cost: one dirty bit per block.
+
+SKIP_CYCLES = 1
+
+
+def plan_explore(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), order="raster", skip=False):
+    """:func:`plan` (without events) with a block ``order`` and optional
+    skipping of still blocks; returns a :class:`PlanResult` (``skipped``
+    visits are counted in ``levels``)."""
+    n, m = _check_block(block)
+    iters = int(iters)
+    if iters < 1:
+        raise ValueError(f"iters={iters}: at least 1 iteration per block")
+    if order not in ("raster", "serpentine", "alternate", "goal"):
+        raise ValueError(f"order {order!r}: raster, serpentine, alternate or goal")
+    sched = _schedule(schedule)
+    obstacle = np.asarray(obstacle, dtype=bool)
+    H, W = obstacle.shape
+    obst = pad_to_blocks(obstacle, (n, m))
+    goal = _goal_mask(goals, obst.shape)
+    if not goal.any() or (goal & obst).any():
+        raise ValueError("needs at least one goal, none on an obstacle")
+    reach = reachable(obst, goal)
+    unreachable = ~obst & ~reach
+    const = obst | goal | unreachable
+    rows, cols = obst.shape
+    BR, BC = rows // n, cols // m
+    B = BR * BC
+    raster = [(br, bc) for br in range(BR) for bc in range(BC)]
+    if order == "serpentine":
+        base = [(br, bc if br % 2 == 0 else BC - 1 - bc) for br, bc in raster]
+    elif order == "goal":
+        dist = np.full(obst.shape, np.inf)
+        queue = deque(map(tuple, np.argwhere(goal)))
+        for g in queue:
+            dist[g] = 0
+        while queue:
+            r, c = queue.popleft()
+            for rr, cc in ((r - 1, c), (r, c + 1), (r, c - 1), (r + 1, c)):
+                if 0 <= rr < rows and 0 <= cc < cols and not obst[rr, cc] and dist[rr, cc] == np.inf:
+                    dist[rr, cc] = dist[r, c] + 1
+                    queue.append((rr, cc))
+        base = sorted(raster, key=lambda b: (dist[b[0] * n:b[0] * n + n, b[1] * m:b[1] * m + m].min(), b))
+    else:
+        base = raster
+
+    dtype = np.int64 if sched[-1] <= _INT64_P_MAX else object
+    p = sched[0]
+    pad = np.zeros((rows + 2, cols + 2), dtype=dtype)
+    hv = pad[1:-1, 1:-1]
+    hv[goal] = one(p)
+    res = PlanResult(h=None, const=None, p=p, converged=False, maxima=0,
+                     unreachable=unreachable[:H, :W], block=(n, m), blocks=(BR, BC))
+
+    def visit(br, bc):
+        """Up to I iterations; returns (counted i, stable, changed edges N, E, W, S)."""
+        r0, c0 = br * n, bc * m
+        fixed = const[r0:r0 + n, c0:c0 + m]
+        before = hv[r0:r0 + n, c0:c0 + m].copy()
+        for i in range(1, iters + 1):
+            old = hv[r0:r0 + n, c0:c0 + m]
+            s = (pad[r0:r0 + n, c0 + 1:c0 + m + 1] + pad[r0 + 2:r0 + n + 2, c0 + 1:c0 + m + 1]
+                 + pad[r0 + 1:r0 + n + 1, c0:c0 + m] + pad[r0 + 1:r0 + n + 1, c0 + 2:c0 + m + 2])
+            new = np.where(fixed, old, s >> 2)
+            if (new == old).all():
+                stable = True
+                break
+            hv[r0:r0 + n, c0:c0 + m] = new
+        else:
+            i, stable = iters, False
+        after = hv[r0:r0 + n, c0:c0 + m]
+        edges = (not (after[0] == before[0]).all(), not (after[:, -1] == before[:, -1]).all(),
+                 not (after[:, 0] == before[:, 0]).all(), not (after[-1] == before[-1]).all())
+        return i, stable, edges
+
+    cycles = RUN_OVERHEAD
+    while True:
+        level = {"p": p, "sweeps": 0, "block_iterations": 0, "maxima": None, "skipped": 0}
+        dirty = {b: True for b in raster}
+        while True:                                   # update sweeps
+            blocks = base[::-1] if order == "alternate" and level["sweeps"] % 2 else base
+            changed = False
+            for br, bc in blocks:
+                if skip and not dirty[(br, bc)]:
+                    cycles += SKIP_CYCLES
+                    level["skipped"] += 1
+                    continue
+                dirty[(br, bc)] = False
+                i, stable, edges = visit(br, bc)
+                res.block_iterations += i
+                level["block_iterations"] += i
+                cycles += visit_cycles(min(i + 1, iters) if stable else iters, p)
+                if i > 1 or not stable:
+                    changed = True
+                    dirty[(br, bc)] = not stable
+                    for (dr, dc), moved in zip(((-1, 0), (0, 1), (0, -1), (1, 0)), edges):
+                        if moved and (br + dr, bc + dc) in dirty:
+                            dirty[(br + dr, bc + dc)] = True
+            res.sweeps += 1
+            level["sweeps"] += 1
+            if not (any(dirty.values()) if skip else changed):
+                break
+        cycles += B * visit_cycles(1, p)              # check pass
+        res.check_iterations += B
+        nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
+        maxima = int(local_max(hv, const, nb).sum())
+        level["maxima"] = maxima
+        res.levels.append(level)
+        if maxima == 0:
+            res.converged = True
+            break
+        later = [q for q in sched if q > p]
+        if not later:
+            break
+        pad <<= later[0] - p
+        p = later[0]
+    res.p = p
+    res.maxima = maxima
+    res.cycles = cycles
+    res.node_updates = res.block_iterations * n * m
+    res.padded_h = np.array(hv, dtype=object)
+    res.padded_const = const.copy()
+    res.h = res.padded_h[:H, :W].copy()
+    res.const = const[:H, :W].copy()
+    return res
+
+
+__all__ += ["SKIP_CYCLES", "plan_explore"]

@@ -6,8 +6,8 @@
 
 MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free) or
 an image (.pgm/.png: dark = obstacle).  Cells are ROW,COL from the top left,
-0-based.  The map is cut into blocks of NxM nodes (default: the whole map as
-one block); a size that is not a multiple of the block is padded with
+0-based.  The map is cut into blocks of NxM nodes (default 6x12, I = 6: the
+defaults of models.harmonic.plan, the planner RTL's array); a size that is not a multiple of the block is padded with
 obstacles on the bottom and right, which changes nothing in the solution
 (outside the map already reads as an obstacle).
 
@@ -44,7 +44,7 @@ from .cli import CliError, check_cell, parse_cell
 
 ENGINES = ("model", "icarus", "verilator")
 DEFAULT_SCHEDULE = "16:16:256"
-DEFAULT_ITERS = 8
+MAX_BLOCK_SIDE = 4096   # the map is padded to whole blocks: keep that bounded
 P_LIMIT = 1022          # the deepest word (p+2 bits) a 1024-deep node RAM holds
 
 
@@ -54,9 +54,10 @@ def add_arguments(parser):
                         help="goal cell (repeat for several goals; at least one)")
     parser.add_argument("--start", action="append", default=[], metavar="R,C",
                         help="start cell of a trajectory (repeatable)")
-    parser.add_argument("--block", metavar="NxM", help="block size in nodes (default: the whole map)")
-    parser.add_argument("--iters", type=str, default=str(DEFAULT_ITERS), metavar="I",
-                        help=f"iterations per block visit at most (default {DEFAULT_ITERS})")
+    parser.add_argument("--block", metavar="NxM",
+                        help="block size in nodes (default: the planner RTL's, models.harmonic.plan's default)")
+    parser.add_argument("--iters", default=None, metavar="I",
+                        help="iterations per block visit at most (default: plan's default)")
     parser.add_argument("--schedule", default=None, metavar="P1,P2,...|P1:STEP:PMAX",
                         help=f"precisions, increasing (default {DEFAULT_SCHEDULE})")
     parser.add_argument("--engine", choices=ENGINES, default="model",
@@ -80,6 +81,8 @@ def parse_schedule(text, limit=P_LIMIT):
                 raise CliError(f"--schedule {text!r}: STEP must be >= 1")
             if last < first:
                 raise CliError(f"--schedule {text!r}: PMAX {last} is below P1 {first}")
+            if first < 2 or last > limit:
+                raise CliError(f"--schedule {text!r}: precisions must lie in 2..{limit}")
             ps = list(range(first, last + 1, step))
         else:
             ps = [int(x) for x in text.split(",")]
@@ -89,14 +92,14 @@ def parse_schedule(text, limit=P_LIMIT):
         raise CliError(f"--schedule {text!r}: no precision")
     if any(b <= a for a, b in zip(ps, ps[1:])):
         raise CliError(f"--schedule {text!r}: precisions must increase")
-    if ps[0] < 1 or ps[-1] > limit:
-        raise CliError(f"--schedule {text!r}: precisions must lie in 1..{limit}")
+    if ps[0] < 2 or ps[-1] > limit:
+        raise CliError(f"--schedule {text!r}: precisions must lie in 2..{limit}")
     return ps
 
 
-def parse_block(text, shape):
+def parse_block(text, default):
     if text is None:
-        return tuple(shape)
+        return tuple(default)
     parts = text.lower().split("x")
     try:
         if len(parts) != 2:
@@ -106,6 +109,8 @@ def parse_block(text, shape):
         raise CliError(f"--block {text!r}: expected NxM (two positive integers, e.g. 16x16)") from None
     if n < 1 or m < 1:
         raise CliError(f"--block {text!r}: both sides must be >= 1")
+    if n > MAX_BLOCK_SIDE or m > MAX_BLOCK_SIDE:
+        raise CliError(f"--block {text!r}: sides above {MAX_BLOCK_SIDE} are not supported")
     return n, m
 
 
@@ -125,15 +130,27 @@ def _progress(message):
     print(f"\r{message}", end="", file=sys.stderr, flush=True)
 
 
+def _plan_defaults():
+    """plan()'s own defaults (the RTL planner's block and I), so that the
+    command and the model agree without a second copy of the numbers."""
+    import inspect
+    from models.harmonic import plan
+    params = inspect.signature(plan).parameters
+    return tuple(params["block"].default), int(params["iters"].default)
+
+
 def run_engine(engine, obstacle, goals, block, iters, schedule):
-    """Plan on the padded map with the model or the RTL; returns a dict with
-    the PlanResult fields (h, const, p, converged, sweeps, block_iterations,
-    node_updates, cycles, levels)."""
+    """Plan with the model or the RTL; returns a dict with the PlanResult
+    fields (h and unreachable on the unpadded map)."""
+    keys = ("h", "p", "converged", "maxima", "unreachable", "sweeps", "block_iterations",
+            "check_iterations", "node_updates", "cycles", "levels")
     if engine == "model":
         from models.harmonic import plan
-        r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule))
-        return {k: getattr(r, k) for k in ("h", "const", "p", "converged", "sweeps", "block_iterations",
-                                           "node_updates", "cycles", "levels")}
+        try:
+            r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule))
+        except ValueError as e:
+            raise CliError(str(e)) from None
+        return {k: getattr(r, k) for k in keys}
     try:
         from tb.harmonic.planner_bench import run_planner_rtl
     except ImportError:
@@ -141,22 +158,24 @@ def run_engine(engine, obstacle, goals, block, iters, schedule):
                        "tb/harmonic/planner_bench.py is not in this checkout); use --engine model") from None
     try:
         out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine, progress=_progress)
+    except ValueError as e:
+        raise CliError(f"--engine {engine}: {e}") from None
     finally:
         print(file=sys.stderr)
-    return dict(out)
+    return {k: (out.get(k) if isinstance(out, dict) else getattr(out, k)) for k in keys}
 
 
 def plan_map(grid, goals, starts, block, iters, schedule, engine="model"):
     """The whole command without I/O: returns the JSON-ready dict and the
-    padded field (for the plot)."""
+    field (h at precision p, unpadded map)."""
     from models.harmonic import ascent_next, pad_to_blocks, reachable, trajectory
 
     height, width = grid.shape
     padded = pad_to_blocks(grid, block)
-    reach = reachable(padded, goals)
-    res = run_engine(engine, padded, goals, block, iters, schedule)
-    h, p = res["h"], res["p"]
-    goal_mask = np.zeros(padded.shape, dtype=bool)
+    reach = reachable(grid, goals)
+    res = run_engine(engine, grid, goals, block, iters, schedule)
+    h, p = np.asarray(res["h"], dtype=object)[:height, :width], int(res["p"])
+    goal_mask = np.zeros(grid.shape, dtype=bool)
     for g in goals:
         goal_mask[g] = True
     nxt = ascent_next(h)
@@ -165,18 +184,19 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model"):
         tr = trajectory(h, goal_mask, s, nxt=nxt).as_dict()
         tr["reachable"] = bool(reach[s])
         trajectories.append(tr)
-    unreachable = np.argwhere(~padded & ~reach)
-    unreachable = [[int(r), int(c)] for r, c in unreachable if r < height and c < width]
+    unreachable = [[int(r), int(c)] for r, c in np.argwhere(~grid & ~reach)]
     unit = 1 << p                  # int / int is correctly rounded at any p
-    potential = [[int(v) / unit for v in row[:width]] for row in h[:height]]
+    potential = [[int(v) / unit for v in row] for row in h]
     return {
-        "height": height, "width": width, "engine": engine, "precision": int(p),
+        "height": height, "width": width, "engine": engine, "precision": p,
         "converged": bool(res["converged"]), "sweeps": int(res["sweeps"]),
         "block_iterations": int(res["block_iterations"]), "node_updates": int(res["node_updates"]),
-        "cycles": int(res["cycles"]), "block": list(block), "iters": iters, "schedule": list(schedule),
-        "padded": list(padded.shape), "levels": _levels_json(res.get("levels", [])),
+        "cycles": int(res["cycles"]), "maxima": int(res["maxima"]),
+        "check_iterations": int(res["check_iterations"]),
+        "block": list(block), "iters": iters, "schedule": list(schedule),
+        "padded": list(padded.shape), "levels": _levels_json(res.get("levels") or []),
         "potential": potential, "unreachable": unreachable, "trajectories": trajectories,
-    }, (padded, h, p)
+    }, (h, p)
 
 
 def _levels_json(levels):
@@ -227,8 +247,9 @@ def run(args):
         raise CliError("no goal: give at least one --goal R,C")
     goals = [check_cell(grid, parse_cell(g, "--goal"), "goal") for g in args.goal]
     starts = [check_cell(grid, parse_cell(s, "--start"), "start") for s in args.start]
-    block = parse_block(args.block, grid.shape)
-    iters = parse_iters(args.iters)
+    default_block, default_iters = _plan_defaults()
+    block = parse_block(args.block, default_block)
+    iters = parse_iters(args.iters) if args.iters is not None else default_iters
     schedule = parse_schedule(args.schedule or DEFAULT_SCHEDULE)
 
     t0 = time.time()
@@ -239,8 +260,10 @@ def run(args):
         f"{path.name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), block "
         f"{block[0]}x{block[1]} (padded to {result['padded'][0]}x{result['padded'][1]}), I = {iters}, "
         f"engine {args.engine}",
-        f"precision {result['precision']} ({'converged: no local maximum' if result['converged'] else 'NOT converged: local maxima remain'}"
-        f" after schedule {','.join(map(str, schedule))}); {result['sweeps']} sweeps, "
+        f"precision {result['precision']} ("
+        + ("converged: no local maximum" if result["converged"]
+           else f"NOT converged: {result['maxima']} local maxima left at the schedule's end")
+        + f"; levels p = {','.join(str(lv['p']) for lv in result['levels'])}); {result['sweeps']} sweeps, "
         f"{result['block_iterations']} block iterations, {result['node_updates']} node updates, "
         f"{result['cycles']} cycles ({seconds:.1f} s)",
     ]

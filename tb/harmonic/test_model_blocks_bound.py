@@ -160,3 +160,28 @@ def test_padding_changes_nothing():
     a = plan(ob, goals, block=(13, 17), iters=10**6, schedule=(16, 32))
     b = plan(ob, goals, block=(5, 7), iters=2, schedule=(16, 32))
     assert b.padded_h.shape == (15, 21) and (a.h == b.h).all() and a.p == b.p
+
+
+@pytest.mark.parametrize("block,iters", [((3, 6), 2), ((4, 4), 1), ((5, 7), 4)])
+def test_plan_explore_defaults_are_plan(block, iters):
+    """plan_explore (the benches' schedule variants) with its defaults is
+    plan() counter for counter; every order, with and without skipping still
+    blocks, ends in the same fixed point (part 2 above)."""
+    from models.harmonic import plan_explore
+    ob, goals = _random(13, 17, 22, 0.15)
+    sched = (8, 16, 24)
+    a = plan(ob, goals, block=block, iters=iters, schedule=sched)
+    b = plan_explore(ob, goals, block=block, iters=iters, schedule=sched)
+    for k in ("p", "converged", "maxima", "sweeps", "block_iterations", "check_iterations",
+              "node_updates", "cycles"):
+        assert getattr(a, k) == getattr(b, k), k
+    assert (a.padded_h == b.padded_h).all()
+    cycles = set()
+    for order in ("raster", "serpentine", "alternate", "goal"):
+        for skip in (False, True):
+            c = plan_explore(ob, goals, block=block, iters=iters, schedule=sched, order=order, skip=skip)
+            assert (c.padded_h == a.padded_h).all() and c.p == a.p, (order, skip)
+            _, _, stable, _ = step(c.padded_h, c.padded_const, c.p, neighbours(c.padded_h))
+            assert stable.all()
+            cycles.add(c.cycles)
+    assert len(cycles) > 2, "the variants must differ in cost"
