@@ -33,10 +33,8 @@ import json
 import os
 import sys
 import time
-from collections import deque
 from pathlib import Path
 
-import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
@@ -44,43 +42,6 @@ if str(ROOT) not in sys.path:
 
 from sim.cli import CliError  # noqa: E402
 from sim.mapfile import MapFormatError, load_map, load_scenarios  # noqa: E402
-
-MOVES = ((-1, 0), (0, 1), (0, -1), (1, 0))
-
-
-# -- kept for scripts/bench.py (harmonic benchmark), which imports them from here
-def bfs(free, source):
-    """4-connected BFS distances from ``source`` (-1 where unreachable)."""
-    dist = -np.ones(free.shape, dtype=int)
-    dist[source] = 0
-    queue = deque([source])
-    while queue:
-        r, c = queue.popleft()
-        for dr, dc in MOVES:
-            rr, cc = r + dr, c + dc
-            if 0 <= rr < free.shape[0] and 0 <= cc < free.shape[1] and free[rr, cc] and dist[rr, cc] < 0:
-                dist[rr, cc] = dist[r, c] + 1
-                queue.append((rr, cc))
-    return dist
-
-
-def plan(obstacle, goal, p0, p_step, p_max):
-    """Increasing-precision relaxation with models.harmonic.relax; returns (h, const, p, levels)."""
-    from models.harmonic import local_max, neighbours, one, relax
-    const = obstacle.copy()
-    const[goal] = True
-    h = np.zeros(obstacle.shape, dtype=object)
-    h[goal] = one(p0)
-    p, levels = p0, []
-    while True:
-        h, iterations = relax(h, const, p)
-        maxima = int(local_max(h, const, neighbours(h)).sum())
-        levels.append({"p": p, "iterations": iterations, "local_maxima": maxima})
-        if maxima == 0 or p + p_step > p_max:
-            return h, const, p, levels
-        h = h * (1 << p_step)
-        p += p_step
-
 
 def _mm(v):
     return "   n/a" if v is None else f"{v * 1e3:6.1f}"

@@ -65,7 +65,7 @@ def _ints(text, what, n=None):
 
 
 def plan_harmonic(obstacle, start, goal, args):
-    from models.harmonic import one, plan, reachable, trajectory
+    from models.harmonic import plan, reachable, trajectory
     if not reachable(obstacle, [goal])[start]:
         raise CliError(f"goal {goal} cannot be reached from start {start}")
     schedule = _ints(args.schedule, "--schedule")
