@@ -31,6 +31,7 @@ map's 5 m it may touch a wall: reported, not counted.)
 import argparse
 import json
 import os
+import textwrap
 import sys
 import time
 from pathlib import Path
@@ -102,7 +103,7 @@ def main(argv=None):
             name = f"navigate_{planner}" + ("_slip" if slip else "") + ".png"
             title = f"{Path(args.map).name}, slip {slip}, DFLC {engine}: {summary_line(result)}"
             plot_navigation(out / name, obstacle, field, label, cells, poly, result,
-                            "\n".join([title[:115], title[115:]]) if len(title) > 115 else title)
+                            textwrap.fill(title, 115))
             result["plot"] = name
             runs.append((planner, slip, result))
 

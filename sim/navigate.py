@@ -20,6 +20,7 @@ the goal was reached without collision, 1 otherwise, 2 on bad input.
 
 import json
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -204,5 +205,5 @@ def run(args):
     if args.plot:
         title = f"{Path(args.map).name}: {summary_line(result)}"
         plot_navigation(args.plot, obstacle, field, label, cells, poly, result,
-                        "\n".join([title[:110], title[110:]]) if len(title) > 110 else title)
+                        textwrap.fill(title, 110))
     return 0 if result["reached_goal"] and result["collisions"] == 0 else 1
