@@ -62,7 +62,8 @@ import numpy as np
 from .robot import KHEPERA_II, Robot, wheel_speeds
 from .swam import Swam
 
-__all__ = ["TrackerParams", "canonical_inputs", "ClosedLoop", "distance_to_chain", "run_model", "track_chains"]
+__all__ = ["TrackerParams", "canonical_inputs", "ClosedLoop", "distance_to_chain", "fired_rules", "run_model",
+           "track_chains"]
 
 
 @dataclass(frozen=True)
@@ -136,7 +137,8 @@ class ClosedLoop:
         self.max_steps = max_steps or int(3 * (total + 4 * d0 + 0.5)
                                           / (params.speed * self.robot.params.period)) + 400
         self.steps = 0
-        self.log = {k: [] for k in ("true", "odometry", "y_code", "zero", "kappa_p", "phi", "chain", "approach")}
+        self.log = {k: [] for k in ("true", "odometry", "codes", "y_code", "zero", "kappa_p", "phi", "chain",
+                                        "approach")}
         self._approaching = self.approach > 0
         self._qc = None
 
@@ -182,7 +184,9 @@ class ClosedLoop:
         self._phi = phi
         row = [0.0, 0.0]
         row[self.order[0]], row[self.order[1]] = phi
-        return np.asarray(self.dflc.encode(np.array([row])))[0]
+        codes = np.asarray(self.dflc.encode(np.array([row])))[0]
+        self.log["codes"].append([int(c) for c in codes])
+        return codes
 
     def advance(self, y_code, zero=False):
         """Apply the DFLC's output code: Ω, eq. 14, one robot period."""
@@ -227,10 +231,19 @@ class ClosedLoop:
             "final_true_pose": [float(v) for v in self.robot.true_pose],
             "final_odometry": [float(v) for v in self.robot.pose],
             "curvature_codes": list(self.log["y_code"]),
+            "input_codes": list(self.log["codes"][:self.steps]),
             "curvature": [float(k) for k in self.log["kappa_p"]],
             "pose": true.tolist(),
             "odometry": odo.tolist(),
         }
+
+
+def fired_rules(dflc, input_codes):
+    """Indices of the rules that fired (weight > 0) on any of ``input_codes`` (section 4's rule reduction)."""
+    if not len(input_codes):
+        return set()
+    rule, w, _, _ = dflc.combos(np.asarray(input_codes, dtype=np.int64))
+    return {int(r) for r in np.unique(rule[w > 0])}
 
 
 def run_model(loop, memo=None):

@@ -101,3 +101,16 @@ def test_slip_drift(dflc):
 def test_params_checked(dflc):
     with pytest.raises(ValueError, match="lookahead must be > 0"):
         TrackerParams(lookahead=0)
+
+
+def test_fired_rules(dflc):
+    """The rule count of the demo's summary: exact at MF peaks, and a strict subset of Table 1 in a run."""
+    from models.tracker import fired_rules
+    assert len(fired_rules(dflc, dflc.encode([[0.0, 0.0]]))) == 1            # both inputs on a peak
+    assert len(fired_rules(dflc, dflc.encode([[22.5, 0.0]]))) == 2           # one between two MFs
+    assert len(fired_rules(dflc, dflc.encode([[22.5, -22.5]]))) == 4
+    r = run_model(ClosedLoop(CURVE, dflc, start=(0.02, -0.04, math.radians(60))))
+    assert len(r["input_codes"]) == r["steps"]
+    fired = fired_rules(dflc, r["input_codes"])
+    print(f"{len(fired)} of 81 rules fired")
+    assert 4 <= len(fired) < 40          # section 4: the fixed look-ahead keeps (φ1, φ2) in a strip
