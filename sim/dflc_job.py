@@ -13,15 +13,14 @@ from pathlib import Path
 
 import cocotb
 
-from hdl.dflc.top import config_for
+from hdl.dflc.top import config_for, split_params
 from tb.dflc.dflc_bench import DflcStream
 
 
 @cocotb.test()
 async def dflc_job(dut):
     job = json.loads(Path(os.environ["DFLC_JOB"]).read_text())
-    params = dict(job["params"])
-    params.pop("par", None)
+    params, _, _ = split_params(job["params"])
     bench = DflcStream(dut, config_for(**params))
     await bench.start()
     out = await bench.run(job["codes"])

@@ -12,12 +12,16 @@ from .mf_gen import MfGen, bits_for
 from .rule_sel import RuleSel
 from .tnorm import Tnorm
 
-__all__ = ["DflcCore", "latency"]
+__all__ = ["DflcCore", "latency", "CPR_KEYS"]
 
 
-def latency(config, parallel=False):
-    """Cycles from the input handshake to ``o_valid``: 2^n + 8 (9 parallel)."""
-    return (1 if parallel else 1 << config.n) + 8
+CPR_KEYS = ("cpr_mf", "cpr_mult", "cpr_div")
+
+
+def latency(config, parallel=False, cpr_mf=0, cpr_mult=0, cpr_div=0):
+    """Cycles from the input handshake to ``o_valid``: 2^n + 8 (9 parallel),
+    plus the extra pipeline registers."""
+    return (1 if parallel else 1 << config.n) + 8 + cpr_mf + cpr_mult + cpr_div
 
 
 class DflcCore(wiring.Component):
@@ -28,6 +32,12 @@ class DflcCore(wiring.Component):
     .fll file): ip_no = n (1..4), ip_sz, MF_ip_no (per input), dy_ip,
     MF_op_no, MF_op_sz, op_sz, sel_op, div_type.  ``parallel`` (beyond the
     paper) evaluates the 2^n active rules at once: one sample per clock.
+    Component pipeline registers (Table 2 CPR generics, each 0 .. 4 extra
+    register stages, each adding one cycle of latency): ``cpr_mf`` after the
+    MF generators' multiply-add (cpr3, trap_gen_p), ``cpr_mult`` after the
+    w*c multiplier (cpr6, mult), ``cpr_div`` inside the divider (cpr9,
+    div_array: the restoring array is cut into cpr_div + 1 groups of rows).
+    The paper's other CPR/PSR positions are fixed here (see the table).
 
     Pipeline (Fig. 8; sample accepted at cycle t, P = 2^n, combination k):
 
@@ -61,8 +71,12 @@ class DflcCore(wiring.Component):
         ``o_y`` is then the configuration's ``zero_code``.
     """
 
-    def __init__(self, config, parallel=False):
+    def __init__(self, config, parallel=False, cpr_mf=0, cpr_mult=0, cpr_div=0):
         c = config
+        for name, v in (("cpr_mf", cpr_mf), ("cpr_mult", cpr_mult), ("cpr_div", cpr_div)):
+            if not isinstance(v, int) or not 0 <= v <= 4:
+                raise ValueError(f"{name} = {v!r}: extra pipeline registers must be 0 .. 4")
+        self.cpr = {"cpr_mf": cpr_mf, "cpr_mult": cpr_mult, "cpr_div": cpr_div}
         if not 1 <= c.n <= 4:
             raise ValueError(f"ip_no = {c.n}: must be 1 to 4")
         if any(k < 2 for k in c.mf_ip_no):
@@ -88,7 +102,7 @@ class DflcCore(wiring.Component):
 
         gens = []
         for j, spec in enumerate(c.inputs):
-            g = MfGen(spec, c.ip_sz, c.dy_ip)
+            g = MfGen(spec, c.ip_sz, c.dy_ip, cpr=self.cpr["cpr_mf"])
             m.submodules[f"mf_gen{j}"] = g
             m.d.comb += [g.x.eq(self.i_codes[j]), g.v_in.eq(accept)]
             gens.append(g)
@@ -135,6 +149,15 @@ class DflcCore(wiring.Component):
                 v_m, first_m, last_m = flags
 
         in_w = (self.sw_w, self.swc_w) if self.parallel else (c.dy_ip, c.dy_ip + c.mf_op_sz)
+        # CPR after the multiplier: delay the products and their flags alike.
+        for d in range(self.cpr["cpr_mult"]):
+            sigs = w_m_all + wc_m_all + [v_m, first_m, last_m]
+            nxt = [Signal.like(sg, name=f"{sg.name}_d{d}") for sg in sigs]
+            m.d.sync += [a.eq(b) for a, b in zip(nxt, sigs)]
+            K2 = len(w_m_all)
+            w_m_all, wc_m_all = nxt[:K2], nxt[K2:2 * K2]
+            v_m, first_m, last_m = nxt[2 * K2:]
+
         m.submodules.integrator = integ = Integrator(*in_w, self.sw_w, self.swc_w)
         if self.parallel:   # adder tree: the whole sample in one cycle
             m.d.comb += [integ.w.eq(sum(w_m_all)), integ.wc.eq(sum(wc_m_all))]
@@ -142,7 +165,7 @@ class DflcCore(wiring.Component):
             m.d.comb += [integ.w.eq(w_m_all[0]), integ.wc.eq(wc_m_all[0])]
         m.d.comb += [integ.valid.eq(v_m), integ.first.eq(first_m), integ.last.eq(last_m)]
 
-        m.submodules.divider = div = Divider(c, self.sw_w, self.swc_w)
+        m.submodules.divider = div = Divider(c, self.sw_w, self.swc_w, cpr=self.cpr["cpr_div"])
         m.d.comb += [div.sw.eq(integ.sw), div.swc.eq(integ.swc), div.v_in.eq(integ.done),
                      self.o_valid.eq(div.v_out), self.o_y.eq(div.y), self.o_zero.eq(div.zero)]
         return m

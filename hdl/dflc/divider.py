@@ -21,9 +21,10 @@ class Divider(wiring.Component):
     stages computing ``floor((2^(f+1) Swc + Sw) / (2 Sw))``.  Both are exactly
     ``models.dflc.Dflc.divide``.  ``Sw = 0`` gives ``zero_code`` and ``zero``.
 
-    Timing: ``v_in`` with the sums at t; ``y``, ``zero`` and ``v_out`` at t+3
-    for both types (lut: ROM read, multiply, round; array: register, array,
-    select).
+    Timing: ``v_in`` with the sums at t; ``y``, ``zero`` and ``v_out`` at
+    t + 3 + cpr for both types (lut: ROM read, multiply, cpr registers, round;
+    array: register, the array in cpr + 1 register-separated groups of rows,
+    select).  ``cpr`` (Table 2 cpr9_no, div_array) = 0 .. 4 extra registers.
 
     Ports
     -----
@@ -31,10 +32,13 @@ class Divider(wiring.Component):
     y : Out(op_sz), zero : Out(1), v_out : Out(1)
     """
 
-    def __init__(self, config, sw_w, swc_w):
+    def __init__(self, config, sw_w, swc_w, cpr=0):
         if config.div_type not in DIV_TYPES:
             raise ValueError(f"div_type = {config.div_type!r}: expected one of {DIV_TYPES}")
-        self.config, self.sw_w, self.swc_w = config, sw_w, swc_w
+        if not isinstance(cpr, int) or not 0 <= cpr <= min(4, config.op_sz - 1):
+            raise ValueError(f"cpr_div = {cpr!r}: extra divider pipeline registers must be 0 .. "
+                             f"{min(4, config.op_sz - 1)}")
+        self.config, self.sw_w, self.swc_w, self.cpr = config, sw_w, swc_w, cpr
         super().__init__({"sw": In(sw_w), "swc": In(swc_w), "v_in": In(1),
                           "y": Out(config.op_sz), "zero": Out(1), "v_out": Out(1)})
 
@@ -42,13 +46,17 @@ class Divider(wiring.Component):
         m = Module()
         c = self.config
         f = c.frac
-        v1, v2 = Signal(), Signal()
-        m.d.sync += [v1.eq(self.v_in), v2.eq(v1), self.v_out.eq(v2)]
+        # valid chain: v_in, v1, v2 (+ cpr), then v_out
+        vs = [self.v_in]
+        for k in range(2 + self.cpr):
+            v = Signal(name=f"v{k + 1}")
+            m.d.sync += v.eq(vs[-1])
+            vs.append(v)
+        m.d.sync += self.v_out.eq(vs[-1])
+        v1, v_last = vs[1], vs[-1]
         sw1, swc1 = Signal(self.sw_w), Signal(self.swc_w)
         with m.If(self.v_in):
             m.d.sync += [sw1.eq(self.sw), swc1.eq(self.swc)]
-        z2 = Signal()
-        q2 = Signal(c.op_sz)
         if c.div_type == "lut":
             r = c.recip_bits
             init = [0] + [c.recip(s) for s in range(1, c.s_max + 1)]
@@ -56,27 +64,44 @@ class Divider(wiring.Component):
             rp = rom.read_port()
             m.d.comb += rp.addr.eq(self.sw)              # R arrives with sw1, swc1
             prod = Signal(self.swc_w + f + r + 1)
+            z = Signal()
             with m.If(v1):
-                m.d.sync += [prod.eq((swc1 << f) * rp.data), z2.eq(sw1 == 0)]
-            m.d.comb += q2.eq((prod + (1 << (r - 1))) >> r)
+                m.d.sync += [prod.eq((swc1 << f) * rp.data), z.eq(sw1 == 0)]
+            for k in range(self.cpr):                    # CPR: registers after the multiplier
+                prod_d, z_d = Signal.like(prod, name=f"prod_d{k}"), Signal(name=f"z_d{k}")
+                m.d.sync += [prod_d.eq(prod), z_d.eq(z)]
+                prod, z = prod_d, z_d
+            q = Signal(c.op_sz)
+            m.d.comb += q.eq((prod + (1 << (r - 1))) >> r)
         else:
             num = Signal(self.swc_w + f + 2)
             den = Signal(self.sw_w + 1)
             m.d.comb += [num.eq((swc1 << (f + 1)) + sw1), den.eq(sw1 << 1)]
-            rem = num
-            bits = []
-            for i in reversed(range(c.op_sz)):       # restoring array, MSB first
-                trial = Signal(max(len(num), len(den) + i) + 1, name=f"trial{i}")
-                nrem = Signal(len(num), name=f"rem{i}")
-                m.d.comb += trial.eq(rem - (den << i))
-                ok = ~trial[-1]
-                m.d.comb += nrem.eq(Mux(ok, trial, rem))
-                bits.append(ok)
-                rem = nrem
-            q1 = Signal(c.op_sz)
-            m.d.comb += q1.eq(sum(b << i for b, i in zip(bits, reversed(range(c.op_sz)))))
-            with m.If(v1):
-                m.d.sync += [q2.eq(q1), z2.eq(sw1 == 0)]
-        with m.If(v2):
-            m.d.sync += [self.y.eq(Mux(z2, c.zero_code, q2)), self.zero.eq(z2)]
+            z = Signal()
+            m.d.comb += z.eq(sw1 == 0)
+            rem, q = num, Signal(c.op_sz, name="q_in")
+            m.d.comb += q.eq(0)
+            # Restoring array, MSB first, cut into cpr + 1 groups of rows with
+            # registers between them (CPR), the last group registered at v2.
+            rows = list(reversed(range(c.op_sz)))
+            groups = [rows[len(rows) * g // (self.cpr + 1): len(rows) * (g + 1) // (self.cpr + 1)]
+                      for g in range(self.cpr + 1)]
+            for g, group in enumerate(groups):
+                bits = []
+                for i in group:
+                    trial = Signal(max(len(num), len(den) + i) + 1, name=f"trial{i}")
+                    nrem = Signal(len(num), name=f"rem{i}")
+                    m.d.comb += trial.eq(rem - (den << i))
+                    ok = ~trial[-1]
+                    m.d.comb += nrem.eq(Mux(ok, trial, rem))
+                    bits.append((ok, i))
+                    rem = nrem
+                nq = Signal(c.op_sz, name=f"q{g}")
+                m.d.comb += nq.eq(q | sum(b << i for b, i in bits))
+                rq, rr, rd, rz = (Signal(c.op_sz, name=f"q_r{g}"), Signal(len(num), name=f"rem_r{g}"),
+                                  Signal(len(den), name=f"den_r{g}"), Signal(name=f"z_r{g}"))
+                m.d.sync += [rq.eq(nq), rr.eq(rem), rd.eq(den), rz.eq(z)]
+                q, rem, den, z = rq, rr, rd, rz
+        with m.If(v_last):
+            m.d.sync += [self.y.eq(Mux(z, c.zero_code, q)), self.zero.eq(z)]
         return m

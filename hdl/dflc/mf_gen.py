@@ -38,6 +38,9 @@ class MfGen(wiring.Component):
     t+2     ``base``, ``mu0``, ``mu1`` registered, ``v_out`` high for 1 cycle
     ======  ==================================================================
 
+    ``cpr`` (Table 2 cpr3_no, trap_gen_p) = 0 .. 4 extra registers after the
+    multiply-add delay all outputs (and ``v_out``) by as many cycles.
+
     Ports
     -----
     x : In(ip_sz)          input code
@@ -47,8 +50,10 @@ class MfGen(wiring.Component):
     v_out : Out(1)         new degrees this cycle
     """
 
-    def __init__(self, spec, ip_sz, dy_ip):
-        self.spec, self.ip_sz, self.dy_ip = spec, ip_sz, dy_ip
+    def __init__(self, spec, ip_sz, dy_ip, cpr=0):
+        if not isinstance(cpr, int) or not 0 <= cpr <= 4:
+            raise ValueError(f"cpr_mf = {cpr!r}: extra MF generator pipeline registers must be 0 .. 4")
+        self.spec, self.ip_sz, self.dy_ip, self.cpr = spec, ip_sz, dy_ip, cpr
         if len(spec.seg_start) < 1 or spec.seg_start[0] != 0:
             raise ValueError(f"input {spec.name}: segment table must start at code 0")
         self.base_w = bits_for(len(spec.mfs) - 2)
@@ -68,7 +73,7 @@ class MfGen(wiring.Component):
         p_w = max(abs(a) * top + abs(b) for a, b in zip(ms, bs)).bit_length() + 1
 
         # Stage 1: which segment (thermometer count of the boundaries passed).
-        seg = Signal(range(nseg))
+        seg = Signal(range(max(nseg, 2)))      # >= 1 bit: no zero-width wire for one segment
         m.d.comb += seg.eq(sum((self.x >= s).as_unsigned() for s in spec.seg_start[1:])
                            if nseg > 1 else 0)
         # Tables padded to a power of two (the last segment repeated) so that
@@ -92,11 +97,21 @@ class MfGen(wiring.Component):
             m.d.sync += [b1[k].eq(t_b[k][seg]) for k in (0, 1)]
 
         # Stage 2: mu = (x * M + B) >> shift (exact by construction, see above).
-        m.d.sync += self.v_out.eq(v1)
+        v2 = Signal()
+        base2, mu2 = Signal(self.base_w), [Signal(self.dy_ip, name=f"mu{k}_2") for k in (0, 1)]
+        m.d.sync += v2.eq(v1)
         with m.If(v1):
-            m.d.sync += self.base.eq(base1)
-            for k, mu in enumerate((self.mu0, self.mu1)):
+            m.d.sync += base2.eq(base1)
+            for k in (0, 1):
                 p = Signal(signed(p_w), name=f"p{k}")
                 m.d.comb += p.eq(x1 * m1[k] + b1[k])
-                m.d.sync += mu.eq(p[spec.shift:spec.shift + self.dy_ip])
+                m.d.sync += mu2[k].eq(p[spec.shift:spec.shift + self.dy_ip])
+        # CPR: plain delay registers (the held stage-2 value passes unchanged).
+        outs = [v2, base2, *mu2]
+        for k in range(self.cpr):
+            nxt = [Signal.like(o, name=f"{o.name}_d{k}") for o in outs]
+            m.d.sync += [a.eq(b) for a, b in zip(nxt, outs)]
+            outs = nxt
+        m.d.comb += [self.v_out.eq(outs[0]), self.base.eq(outs[1]), self.mu0.eq(outs[2]),
+                     self.mu1.eq(outs[3])]
         return m

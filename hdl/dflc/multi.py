@@ -4,21 +4,25 @@ from amaranth.hdl import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import Flow
 
-from .top import DflcStream, config_for
+from .top import DflcStream, config_for, split_params
 
 __all__ = ["DflcMulti", "SETS"]
 
 # Named sets of configurations; each key prefixes its instance's ports
 # (``t1_i_stream__valid`` ...).  "regress" covers, between them, the four
-# antecedent operators, both dividers, n = 1, 2 and 3, fewer and unequal MF
-# counts, trapezoids with gaps, missing rules and the parallel option.
+# antecedent operators, both dividers, n = 1, 2, 3 and 4, fewer and unequal MF
+# counts, trapezoids with gaps, missing rules, the parallel option and the
+# CPR pipeline registers (with the default instance at the paper's setting).
 SETS = {
     "regress": {
         "t1": {"fll": "table1"},                                  # Tables 2-3: min, LUT, n=2, 9x9
-        "n3": {"fll": "n3_prod", "div": "array"},                 # prod, array, n=3, 5/3/4 MFs
-        "tr": {"fll": "trap_max", "par": 1},                      # max, LUT, trapezoids, parallel
-        "or": {"fll": "mf5_or", "div": "array", "par": 1},        # probor, array, 5/4 MFs, parallel
-        "n1": {"fll": "n1"},                                      # n=1, LUT, sequential
+        "n3": {"fll": "n3_prod", "div": "array",                  # prod, array, n=3, 5/3/4 MFs,
+               "cpr_mult": 1, "cpr_div": 3},                      #   pipelined array
+        "tr": {"fll": "trap_max", "par": 1, "cpr_mf": 2},         # max, LUT, trapezoids, parallel
+        "or": {"fll": "mf5_or", "div": "array", "par": 1,         # probor, array, 5/4 MFs, parallel,
+               "cpr_div": 2},                                     #   pipelined array
+        "n1": {"fll": "n1", "cpr_div": 1},                        # n=1, LUT, sequential
+        "n4": {"fll": "n4", "cpr_mf": 1},                         # n=4, 16 rules per sample
     },
 }
 
@@ -39,9 +43,8 @@ class DflcMulti(wiring.Component):
         self.tops = {}
         members = {}
         for key, params in SETS[set].items():
-            p = dict(params)
-            par = bool(p.pop("par", 0))
-            top = DflcStream(config_for(**p), parallel=par)
+            p, par, cpr = split_params(params)
+            top = DflcStream(config_for(**p), parallel=par, cpr=cpr)
             self.tops[key] = top
             for name, member in top.signature.members.items():
                 members[f"{key}_{name}"] = member

@@ -10,10 +10,10 @@ from amaranth.lib.wiring import In, Out
 
 from models.dflc import load_fll
 
-from .core import DflcCore, latency
+from .core import CPR_KEYS, DflcCore, latency
 from .mf_gen import bits_for
 
-__all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth"]
+__all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth", "split_params"]
 
 ROOT = Path(__file__).resolve().parents[2]
 # models/: the shipped controllers; tb/dflc/fll/: test fixtures;
@@ -41,14 +41,22 @@ def config_for(fll="table1", ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div="lut"
                     div_type=div, sel_op=op)
 
 
-def fifo_depth(config, parallel):
+def fifo_depth(config, parallel, **cpr):
     p = 1 if parallel else 1 << config.n
-    return -(-latency(config, parallel) // p) + 2
+    return -(-latency(config, parallel, **cpr) // p) + 2
 
 
-def stream_latency(config, parallel=False):
+def stream_latency(config, parallel=False, **cpr):
     """Cycles from the i_stream handshake to o_stream.valid (empty output FIFO)."""
-    return latency(config, parallel) + 1
+    return latency(config, parallel, **cpr) + 1
+
+
+def split_params(params):
+    """Top parameters -> (config_for kwargs, parallel, cpr kwargs)."""
+    p = dict(params)
+    par = bool(p.pop("par", 0))
+    cpr = {k: p.pop(k) for k in CPR_KEYS if k in p}
+    return p, par, cpr
 
 
 class DflcStream(wiring.Component):
@@ -69,18 +77,21 @@ class DflcStream(wiring.Component):
 
     Keyword parameters (``hdl.emit`` TOPS ``dflc_stream``): ``fll`` (stem or
     path), ``ip_sz``, ``dy_ip``, ``mf_op_sz``, ``op_sz``, ``div`` (lut /
-    array), ``op`` (override sel_op), ``par`` (1: parallel option).
+    array), ``op`` (override sel_op), ``par`` (1: parallel option),
+    ``cpr_mf``, ``cpr_mult``, ``cpr_div`` (extra pipeline registers, see
+    :class:`core.DflcCore`).
     """
 
-    def __init__(self, config=None, parallel=False, **kw):
+    def __init__(self, config=None, parallel=False, cpr=None, **kw):
         if config is None:
-            par = kw.pop("par", 0)
-            parallel = parallel or bool(par)
+            kw, par, cpr_kw = split_params(kw)
+            parallel = parallel or par
+            cpr = {**cpr_kw, **(cpr or {})}
             config = config_for(**kw)
         elif kw:
             raise TypeError(f"unexpected parameters {sorted(kw)} with an explicit config")
-        self.config, self.parallel = config, bool(parallel)
-        self.depth = fifo_depth(config, self.parallel)
+        self.config, self.parallel, self.cpr = config, bool(parallel), dict(cpr or {})
+        self.depth = fifo_depth(config, self.parallel, **self.cpr)
         c = config
         super().__init__({
             "i_stream": In(stream.Signature(data.ArrayLayout(c.ip_sz, c.n))),
@@ -90,7 +101,7 @@ class DflcStream(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         c = self.config
-        m.submodules.core = core = DflcCore(c, self.parallel)
+        m.submodules.core = core = DflcCore(c, self.parallel, **self.cpr)
         m.submodules.fifo = fifo = SyncFIFO(width=c.op_sz + 1, depth=self.depth)
         inflight = Signal(range(self.depth + 1))
         room = Signal()

@@ -5,7 +5,7 @@ Shared by the regression (tb/dflc/test_dflc_stream.py), ``python -m sim dflc
 its closed loop inside the simulator::
 
     from dflc_bench import DflcStream
-    bench = DflcStream(dut, config)           # config: models.dflc.DflcConfig
+    bench = DflcStream(dut, config)           # config: models.dflc.DflcConfig (None: Table 1)
     await bench.start()                       # clock + synchronous reset
     y, zero = await bench.infer([c1, c2])     # one sample through the top
     outs = await bench.run(code_rows)         # many, pipelined, in order
@@ -155,7 +155,10 @@ class DflcStream:
     ``out_cycles`` hold the cycle of every input / output handshake.
     """
 
-    def __init__(self, dut, config, prefix=""):
+    def __init__(self, dut, config=None, prefix=""):
+        if config is None:                      # the default controller (Table 1, Table 2 widths)
+            from hdl.dflc.top import config_for
+            config = config_for()
         self.dut, self.config = dut, config
         self.mask = (1 << config.op_sz) - 1
         self.i_name, self.o_name = f"{prefix}i_stream", f"{prefix}o_stream"

@@ -64,12 +64,12 @@ def test_bad_csv(tmp_path, text, match):
                                div="lut", json=None, surface=None))
 
 
-def test_errors_are_one_line(tmp_path):
+def test_errors_are_one_line(tmp_path, capsys):
     csv = write(tmp_path, "in.csv", "a,b\n1,2\n")
     gauss = write(tmp_path, "g.fll", (FIXTURES / "n1.fll").read_text().replace(
         "term: t1 Triangle 0.125 0.375 0.500", "term: t1 Gaussian 0.375 0.1"))
     junk = write(tmp_path, "junk.fll", "this is not FLL\n")
-    for args, match in [
+    cases = [
         (("--input", csv), "unknown variable 'a'"),
         (("--fll", gauss, "--input", csv), "term t1 is Gaussian"),
         (("--fll", junk, "--input", csv), "junk.fll"),
@@ -77,11 +77,17 @@ def test_errors_are_one_line(tmp_path):
         (("--input", tmp_path / "none.csv"), "cannot read"),
         (("--fll", FIXTURES / "n3_prod.fll", "--input", write(tmp_path, "c.csv", "a,b,c\n1,0,2\n"),
           "--surface", tmp_path / "x.png"), "2-input"),
-    ]:
-        r = cli(*args)
-        assert r.returncode == 2, (args, r.stderr)
-        assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
-        assert __import__("re").search(match, r.stderr), (match, r.stderr)
+    ]
+    for k, (args, match) in enumerate(cases):
+        if k < 2:      # as a user runs it: a subprocess
+            r = cli(*args)
+            code, err = r.returncode, r.stderr
+        else:
+            code = main(["dflc", *map(str, args)])
+            err = capsys.readouterr().err
+        assert code == 2, (args, err)
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+        assert __import__("re").search(match, err), (match, err)
 
 
 def test_icarus_engine_matches_model(tmp_path):

@@ -44,8 +44,9 @@ def sweep_codes(model, grid=256, extra=()):
         for s in spec.seg_start:
             pts |= {s - 1, s, s + 1}
         axes.append(sorted(v for v in pts if 0 <= v <= top))
-    if len(axes) > 2:        # keep 3-input sweeps moderate
-        axes = [a[:: max(1, len(a) // 48)] + [a[-1]] for a in axes]
+    if len(axes) > 2:        # keep 3- and 4-input sweeps moderate
+        per = {3: 48, 4: 12}[len(axes)]
+        axes = [a[:: max(1, len(a) // per)] + [a[-1]] for a in axes]
     return np.array(list(itertools.product(*axes)), dtype=np.int64)
 
 
@@ -193,7 +194,8 @@ def test_lut_divider_error():
     (DEFAULT_FLL, {"ip_sz": 10, "dy_ip": 6, "mf_op_sz": 8, "op_sz": 10}),
     (FIXTURES / "n3_prod.fll", {}),
     (FIXTURES / "n1.fll", {"div_type": "array"}),
-], ids=["table1", "table1-array", "table1-narrow", "n3_prod", "n1"])
+    (FIXTURES / "n4.fll", {}),
+], ids=["table1", "table1-array", "table1-narrow", "n3_prod", "n1", "n4"])
 def test_model_vs_pyfuzzylite(path, widths):
     m = Dflc.from_fll(path, **widths)
     codes = sweep_codes(m)
