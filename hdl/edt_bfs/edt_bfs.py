@@ -9,6 +9,8 @@ from models.edt_bfs import OFFSETS
 from .array import EdtArray, default_path
 from .cell import cell_widths
 
+STATES = ("IDLE", "LOAD", "EDT", "CFR", "BFS", "PATH", "DUMP")
+
 __all__ = ["EdtBfs", "image_layout", "command_layout", "result_layout"]
 
 
@@ -140,67 +142,70 @@ class EdtBfs(wiring.Component):
             next_row = Mux(hit, row + dr, next_row) if dr else next_row
             next_col = Mux(hit, col + dc, next_col) if dc else next_col
 
-        with m.FSM() as fsm:
-            with m.State("IDLE"):
-                with m.If(self.c_stream.valid):
-                    cmd = self.c_stream.payload
-                    m.d.sync += [
-                        dfar.eq(cmd.dfar), start_row.eq(cmd.start_row),
-                        start_col.eq(cmd.start_col), want_path.eq(cmd.path),
-                        self.start_err.eq((cmd.start_row >= h) | (cmd.start_col >= wd)),
-                        self.path_found.eq(0), count.eq(0), it_edt.eq(0), it_bfs.eq(0),
-                    ]
-                    m.next = "LOAD"
-            with m.State("LOAD"):
-                # Row-wise load pipeline: one column per accepted beat.
-                with m.If(self.i_stream.valid):
-                    m.d.sync += count.eq(count + 1)
-                    with m.If(count == wd - 1):
-                        m.d.sync += k.eq(1)
-                        m.next = "EDT"
-            with m.State("EDT"):
-                # Mode 1 (step 2): iteration k, until one sets no done flag.
-                m.d.sync += it_edt.eq(k)
-                with m.If(arr.changed):
-                    m.d.sync += k.eq(k + 1)
-                with m.Else():
-                    m.next = "CFR"
-            with m.State("CFR"):
-                # Mode 2 (step 3): one cycle.
-                m.d.sync += [kb.eq(1), row.eq(start_row), col.eq(start_col)]
-                m.next = "BFS"
-            with m.State("BFS"):
-                # Mode 3 (step 4), until one iteration visits nothing.  The
-                # read-out address holds the start: its visited flag decides
-                # the path read-out in the last iteration.
-                m.d.sync += it_bfs.eq(kb)
-                with m.If(arr.changed):
-                    m.d.sync += kb.eq(kb + 1)
-                with m.Elif(want_path & ~self.start_err & arr.rd_visited):
-                    m.d.sync += self.path_found.eq(1)
-                    m.next = "PATH"
-                with m.Else():
+        # The state register: if/elif on its value rather than m.FSM, whose
+        # case statement without default Verilator -Wall rejects.
+        state = Signal(range(len(STATES)))
+        ongoing = {name: state == n for n, name in enumerate(STATES)}
+        with m.If(ongoing["IDLE"]):
+            with m.If(self.c_stream.valid):
+                cmd = self.c_stream.payload
+                m.d.sync += [
+                    dfar.eq(cmd.dfar), start_row.eq(cmd.start_row),
+                    start_col.eq(cmd.start_col), want_path.eq(cmd.path),
+                    self.start_err.eq((cmd.start_row >= h) | (cmd.start_col >= wd)),
+                    self.path_found.eq(0), count.eq(0), it_edt.eq(0), it_bfs.eq(0),
+                ]
+                m.d.sync += state.eq(STATES.index("LOAD"))
+        with m.Elif(ongoing["LOAD"]):
+            # Row-wise load pipeline: one column per accepted beat.
+            with m.If(self.i_stream.valid):
+                m.d.sync += count.eq(count + 1)
+                with m.If(count == wd - 1):
+                    m.d.sync += k.eq(1)
+                    m.d.sync += state.eq(STATES.index("EDT"))
+        with m.Elif(ongoing["EDT"]):
+            # Mode 1 (step 2): iteration k, until one sets no done flag.
+            m.d.sync += it_edt.eq(k)
+            with m.If(arr.changed):
+                m.d.sync += k.eq(k + 1)
+            with m.Else():
+                m.d.sync += state.eq(STATES.index("CFR"))
+        with m.Elif(ongoing["CFR"]):
+            # Mode 2 (step 3): one cycle.
+            m.d.sync += [kb.eq(1), row.eq(start_row), col.eq(start_col)]
+            m.d.sync += state.eq(STATES.index("BFS"))
+        with m.Elif(ongoing["BFS"]):
+            # Mode 3 (step 4), until one iteration visits nothing.  The
+            # read-out address holds the start: its visited flag decides
+            # the path read-out in the last iteration.
+            m.d.sync += it_bfs.eq(kb)
+            with m.If(arr.changed):
+                m.d.sync += kb.eq(kb + 1)
+            with m.Elif(want_path & ~self.start_err & arr.rd_visited):
+                m.d.sync += self.path_found.eq(1)
+                m.d.sync += state.eq(STATES.index("PATH"))
+            with m.Else():
+                m.d.sync += [row.eq(0), col.eq(0)]
+                m.d.sync += state.eq(STATES.index("DUMP"))
+        with m.Elif(ongoing["PATH"]):
+            # Step 5: the parent chain from the start, one pixel per beat.
+            with m.If(self.o_stream.ready):
+                with m.If(arr.rd_parent == 0):
                     m.d.sync += [row.eq(0), col.eq(0)]
-                    m.next = "DUMP"
-            with m.State("PATH"):
-                # Step 5: the parent chain from the start, one pixel per beat.
-                with m.If(self.o_stream.ready):
-                    with m.If(arr.rd_parent == 0):
-                        m.d.sync += [row.eq(0), col.eq(0)]
-                        m.next = "DUMP"
-                    with m.Else():
-                        m.d.sync += [row.eq(next_row), col.eq(next_col)]
-            with m.State("DUMP"):
-                with m.If(self.o_stream.ready):
-                    with m.If(last_cell):
-                        m.next = "IDLE"
-                    with m.Elif(col == wd - 1):
-                        m.d.sync += [row.eq(row + 1), col.eq(0)]
-                    with m.Else():
-                        m.d.sync += col.eq(col + 1)
+                    m.d.sync += state.eq(STATES.index("DUMP"))
+                with m.Else():
+                    m.d.sync += [row.eq(next_row), col.eq(next_col)]
+        with m.Elif(ongoing["DUMP"]):
+            with m.If(self.o_stream.ready):
+                with m.If(last_cell):
+                    m.d.sync += state.eq(STATES.index("IDLE"))
+                with m.Elif(col == wd - 1):
+                    m.d.sync += [row.eq(row + 1), col.eq(0)]
+                with m.Else():
+                    m.d.sync += col.eq(col + 1)
 
-        idle, load = fsm.ongoing("IDLE"), fsm.ongoing("LOAD")
-        path, dump = fsm.ongoing("PATH"), fsm.ongoing("DUMP")
+        idle, load = ongoing["IDLE"], ongoing["LOAD"]
+        path, dump = ongoing["PATH"], ongoing["DUMP"]
         m.d.comb += [
             self.c_stream.ready.eq(idle),
             self.busy.eq(~idle),
@@ -208,9 +213,9 @@ class EdtBfs(wiring.Component):
             arr.shift.eq(load & self.i_stream.valid),
             arr.in_obst.eq(self.i_stream.payload.obst),
             arr.in_goal.eq(self.i_stream.payload.goal),
-            arr.step_edt.eq(fsm.ongoing("EDT")),
-            arr.step_cfr.eq(fsm.ongoing("CFR")),
-            arr.step_bfs.eq(fsm.ongoing("BFS")),
+            arr.step_edt.eq(ongoing["EDT"]),
+            arr.step_cfr.eq(ongoing["CFR"]),
+            arr.step_bfs.eq(ongoing["BFS"]),
             self.o_stream.valid.eq(path | dump),
             payload.cell.eq(dump),
             payload.last.eq(dump & last_cell),
