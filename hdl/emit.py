@@ -18,6 +18,8 @@ from amaranth.back import verilog  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
+from .harmonic.planner import Planner  # noqa: E402
+from .harmonic.block import Block  # noqa: E402
 
 __all__ = ["TOPS", "DEFAULT_SETS", "top_name", "emit"]
 
@@ -26,6 +28,8 @@ TOPS = {
     "harmonic_node": Node,
     "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
+    "harmonic_block": lambda n, m, br=1, bc=1, p_max=30, depth=1024: Block(n, m, (br, bc), p_max, depth),
+    "harmonic_planner": lambda n, m, br, bc, p_max, depth: Planner(n, m, (br, bc), p_max, depth),
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).
@@ -34,6 +38,8 @@ DEFAULT_SETS = [
     ("harmonic_counters", {"p_max": 1022}),
     ("harmonic_cluster", {"depth": 1024}),
     ("harmonic_cluster", {"depth": 1024, "p_max": 255}),
+    ("harmonic_block", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024}),
+    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}),
 ]
 
 _SHORT = {"p_max": "pmax"}
