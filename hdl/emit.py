@@ -24,6 +24,8 @@ from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
+from .harmonic.planner import Planner  # noqa: E402
+from .harmonic.block import Block  # noqa: E402
 
 __all__ = ["TOPS", "DEFAULT_SETS", "top_name", "emit"]
 
@@ -42,6 +44,8 @@ TOPS = {
     "edt_cell": EdtCell,
     "edt_array": EdtArray,
     "edt_bfs": EdtBfs,
+    "harmonic_block": lambda n, m, br=1, bc=1, p_max=30, depth=1024: Block(n, m, (br, bc), p_max, depth),
+    "harmonic_planner": lambda n, m, br, bc, p_max, depth: Planner(n, m, (br, bc), p_max, depth),
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).
@@ -56,6 +60,8 @@ DEFAULT_SETS = [
     ("edt_cell", {"height": 32, "width": 32}),
     ("edt_bfs", {"height": 16, "width": 16}),
     ("edt_bfs", {"height": 32, "width": 32}),
+    ("harmonic_block", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024}),
+    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}),
 ]
 
 _SHORT = {"p_max": "pmax", "fll": ""}

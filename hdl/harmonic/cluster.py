@@ -58,6 +58,19 @@ class Cluster(wiring.Component):
     Sel : In(18), Sat : In(1)
         Saturation orders (paper's Sel/Sat), one Sel bit per node, honoured in
         update iterations.  Sampled at ``take``.
+    clear : In(1)
+        Clear iteration (with ``enable``): the nodes' adders see 0 from the
+        iteration's bit 0 on (the ``ph0`` input mask held over the whole
+        iteration), so every free node writes 0, constants keep their words
+        and Sel/Sat still apply.  Sampled at ``take`` (and used in that very
+        cycle, when bit 0 enters the adders).  The block's Control module
+        restarts the free nodes from 0 this way after a dynamic order.
+    base : In(range(depth))
+        Word base of the block being computed (block b at b*(p_max+2)): added
+        to the three address counters while iterating.  Hold it while busy.
+    w_addr : Out(range(depth)); w_data : Out(18); w_en : Out(1)
+        The RAM write port (address, the nodes' ``w`` bits, enable), for the
+        border storage that mirrors the block's edge nodes.
     h_N_in, h_S_in : In(6); h_E_in, h_W_in : In(3)
         Neighbours' words outside the cluster, LSB first (same timing as
         ``h``: bit of address ``cntR`` one cycle later).
@@ -103,6 +116,11 @@ class Cluster(wiring.Component):
             "enable": In(1),
             "Sel": In(NODES),
             "Sat": In(1),
+            "clear": In(1),
+            "base": In(range(depth)),
+            "w_addr": Out(range(depth)),
+            "w_data": Out(NODES),
+            "w_en": Out(1),
             "h_N_in": In(COLS), "h_S_in": In(COLS),
             "h_E_in": In(ROWS), "h_W_in": In(ROWS),
             "m_N_in": In(COLS), "m_S_in": In(COLS),
@@ -142,6 +160,7 @@ class Cluster(wiring.Component):
         last_upd = Signal()
         sel_r = Signal(NODES)
         sat_r = Signal()
+        clr_r = Signal()        # the current write window belongs to a clear iteration
 
         p_ok = self.p >= 2
         if (1 << len(self.p)) - 1 > self.p_max:     # p's port can exceed p_max
@@ -163,10 +182,11 @@ class Cluster(wiring.Component):
         ]
         with m.If(start):
             m.d.comb += cnt.p.eq(self.p)            # the lead-in state depends on p
-            m.d.sync += [win.eq(0), upd.eq(0)]
+            m.d.sync += [win.eq(0), upd.eq(0), clr_r.eq(0)]
         with m.Elif(self.take):
             m.d.sync += [
                 win.eq(self.run), upd.eq(self.run & self.enable),
+                clr_r.eq(self.run & self.enable & self.clear),
                 last_win.eq(win), last_upd.eq(upd),
                 sel_r.eq(self.Sel), sat_r.eq(self.Sat),
             ]
@@ -187,12 +207,19 @@ class Cluster(wiring.Component):
         ]
         with m.If(running):
             m.d.comb += [
-                port_a.addr.eq(cnt.cntR),
-                port_b.addr.eq(cnt.r_cnt),
+                port_a.addr.eq(self.base + cnt.cntR),
+                port_b.addr.eq(self.base + cnt.r_cnt),
                 port_w.en.eq(write),
             ]
             with m.If(write):
-                m.d.comb += port_b.addr.eq(cnt.cntW)
+                m.d.comb += port_b.addr.eq(self.base + cnt.cntW)
+        m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(port_w.en)]
+
+        # Clear iteration: mask the adders' inputs from bit 0 (cycle 1, the
+        # take cycle itself) to the iteration's last bit; cycle 0 is masked
+        # anyway.  The previous iteration's top bits (written at cycles 0
+        # and 1) come from carries already registered, so they are intact.
+        mask = cnt.ph0 | (self.take & self.run & self.enable & self.clear) | (clr_r & ~cnt.ph1)
 
         # The 3x6 node grid: each node streams its word from the RAM and
         # passes it on to its neighbours; edge nodes take the edge inputs.
@@ -205,7 +232,7 @@ class Cluster(wiring.Component):
                 m.d.comb += [
                     node.h.eq(port_a.data[i]),
                     node.hm.eq(port_b.data[i]),
-                    node.ph0.eq(cnt.ph0),
+                    node.ph0.eq(mask),
                     node.ph1.eq(cnt.ph1),
                     node.ph2.eq(cnt.ph2),
                     node.enable.eq(upd),

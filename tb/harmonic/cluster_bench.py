@@ -55,7 +55,7 @@ class ClusterBench:
             "W": [SerialWord(ring[r + 1, 0], True, p) for r in range(ROWS)],
             "E": [SerialWord(ring[r + 1, COLS + 1], True, p) for r in range(ROWS)],
         }
-        for port in ("run", "enable", "Sel", "Sat", "host_we", "p"):
+        for port in ("run", "enable", "Sel", "Sat", "host_we", "p", "clear", "base"):
             getattr(dut, port).value = 0
 
     async def host_write(self, words, base=0):

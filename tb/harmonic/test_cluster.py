@@ -176,7 +176,7 @@ async def cluster_increasing_precision(dut):
 async def cluster_refuses_bad_precision(dut):
     """p < 2 or p > p_max: no start, p_err raised; a good p starts and clears it."""
     await start(dut)
-    for port in ("enable", "Sel", "Sat", "host_we"):
+    for port in ("enable", "Sel", "Sat", "host_we", "clear", "base"):
         getattr(dut, port).value = 0
     too_big = [(P_MAX + 1, False)] if P_MAX + 1 < 1 << P_MAX.bit_length() else []
     for p, ok in [(1, False), (0, False), *too_big, (P_MAX, True), (2, True)]:

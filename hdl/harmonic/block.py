@@ -1,0 +1,177 @@
+"""An n x m block of 3x6 clusters with its border nodes (paper 000, 5.1, 5.4)."""
+
+from amaranth.hdl import Cat, Module, Signal
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from .border import Border
+from .cluster import COLS, NODES, ROWS, Cluster
+
+__all__ = ["Block"]
+
+
+class Block(wiring.Component):
+    """n x m node modules as (n/3) x (m/6) clusters, time-multiplexed over the
+    B = BR x BC blocks of the map, surrounded by :class:`Border` nodes.
+
+    RAM layout: every cluster RAM holds, for every block b, its 18 nodes'
+    words at base ``b * (p_max + 2)`` (flag, then value bits MSB first, one
+    bit per address: :func:`models.harmonic.ram_image`), so a precision
+    increase only appends LSB addresses, which were zeroed at load.  A map
+    that does not fit, B * (p_max + 2) > depth, is refused at elaboration.
+
+    All clusters run in lockstep on the same commands (see
+    :class:`~hdl.harmonic.cluster.Cluster` for the iteration timing); the
+    block ANDs their Stable flags (the Early module of Fig. 8) and ORs their
+    Maximum flags (Cvg).  Cluster (i, j) covers rows 3i..3i+2 and columns
+    6j..6j+5 of the block; node (row, col) is bit 6*(row%3) + col%6 of its
+    cluster's word.
+
+    Parameters
+    ----------
+    n, m : int
+        Block size, n a multiple of 3, m a multiple of 6.
+    blocks : (BR, BC)
+        Blocks of the map (row-major order, b = br*BC + bc).
+    p_max : int
+        Largest precision (stride p_max + 2 words per block).
+    depth : int
+        Words per cluster RAM (1024: the paper's 1Kx18 block RAM).
+
+    Ports
+    -----
+    run, p, enable, clear, Sat : In
+        The clusters' commands (sampled at ``take``; ``p`` at start).
+    sel, sel_row, sel_col : In
+        Sel of the single node (sel_row, sel_col), when ``sel`` is high.
+    br, bc : In
+        The block being computed (hold during the visit).
+    take, done, checked, busy : Out(1)
+        Cluster 0's strobes (all clusters are in lockstep).
+    all_stable, any_max : Out(1)
+        Early (AND of every node's Stable) and Cvg (OR of the Maximum flags).
+    host_addr : In(range(depth)); host_cluster : In; host_wdata : In(18)
+    host_we : In(1); host_rdata : Out(18)
+        Idle RAM access to cluster ``host_cluster`` (read data one cycle
+        later); a write also updates the border storage of the edge nodes.
+    """
+
+    def __init__(self, n, m, blocks=(1, 1), p_max=30, depth=1024):
+        if not isinstance(n, int) or n < ROWS or n % ROWS:
+            raise ValueError(f"block rows n={n!r}: must be a positive multiple of {ROWS}")
+        if not isinstance(m, int) or m < COLS or m % COLS:
+            raise ValueError(f"block columns m={m!r}: must be a positive multiple of {COLS}")
+        BR, BC = blocks
+        if not (isinstance(BR, int) and isinstance(BC, int) and BR >= 1 and BC >= 1):
+            raise ValueError(f"blocks={blocks!r}: must be (BR, BC), both >= 1")
+        if not isinstance(p_max, int) or p_max < 2:
+            raise ValueError(f"precision p_max={p_max!r} is not supported: p must be at least 2")
+        stride = p_max + 2
+        if BR * BC * stride > depth:
+            raise ValueError(
+                f"a map of {BR}x{BC} = {BR * BC} blocks at p_max={p_max} needs "
+                f"{BR * BC} * (p_max+2) = {BR * BC * stride} words per cluster RAM, "
+                f"but the RAM depth is {depth}")
+        self.n, self.m, self.BR, self.BC = n, m, BR, BC
+        self.p_max, self.depth, self.stride = p_max, depth, stride
+        self.CR, self.CC = n // ROWS, m // COLS
+        super().__init__({
+            "run": In(1), "p": In(range(p_max + 1)), "enable": In(1), "clear": In(1),
+            "Sat": In(1), "sel": In(1), "sel_row": In(range(n)), "sel_col": In(range(m)),
+            "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
+            "take": Out(1), "done": Out(1), "checked": Out(1), "busy": Out(1),
+            "all_stable": Out(1), "any_max": Out(1),
+            "host_addr": In(range(depth)), "host_cluster": In(range(max(self.CR * self.CC, 2))),
+            "host_wdata": In(NODES), "host_we": In(1), "host_rdata": Out(NODES),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        n, mm, CR, CC, S = self.n, self.m, self.CR, self.CC, self.stride
+        m.submodules.border = border = Border(n, mm, (self.BR, self.BC), S)
+        cl = [[Cluster(depth=self.depth, p_max=self.p_max) for _ in range(CC)] for _ in range(CR)]
+        base = Signal(range(self.depth))
+        m.d.comb += base.eq((self.br * self.BC + self.bc) * S)
+
+        def bit(r, c):
+            return COLS * r + c
+
+        stables, maxes = [], []
+        for i in range(CR):
+            for j in range(CC):
+                c = cl[i][j]
+                k = i * CC + j
+                m.submodules[f"cluster_{i}_{j}"] = c
+                sel = Signal(NODES, name=f"sel_{i}_{j}")
+                for r in range(ROWS):
+                    for q in range(COLS):
+                        m.d.comb += sel[bit(r, q)].eq(
+                            self.sel & (self.sel_row == ROWS * i + r) & (self.sel_col == COLS * j + q))
+                m.d.comb += [
+                    c.run.eq(self.run), c.p.eq(self.p), c.enable.eq(self.enable),
+                    c.clear.eq(self.clear), c.Sat.eq(self.Sat), c.Sel.eq(sel), c.base.eq(base),
+                    c.host_addr.eq(self.host_addr), c.host_wdata.eq(self.host_wdata),
+                    c.host_we.eq(self.host_we & (self.host_cluster == k)),
+                ]
+                with m.If(self.host_cluster == k):
+                    m.d.comb += self.host_rdata.eq(c.host_rdata)
+                stables.append(c.all_stable)
+                maxes.append(c.any_max)
+                # Neighbours: the adjacent cluster's edge nodes, or the border.
+                for stream, src in (("h", "h"), ("m", "hm")):
+                    north = (Cat(getattr(cl[i - 1][j], src)[bit(ROWS - 1, q)] for q in range(COLS)) if i
+                             else getattr(border, f"{stream}_N")[COLS * j:COLS * (j + 1)])
+                    south = (Cat(getattr(cl[i + 1][j], src)[bit(0, q)] for q in range(COLS)) if i < CR - 1
+                             else getattr(border, f"{stream}_S")[COLS * j:COLS * (j + 1)])
+                    west = (Cat(getattr(cl[i][j - 1], src)[bit(r, COLS - 1)] for r in range(ROWS)) if j
+                            else getattr(border, f"{stream}_W")[ROWS * i:ROWS * (i + 1)])
+                    east = (Cat(getattr(cl[i][j + 1], src)[bit(r, 0)] for r in range(ROWS)) if j < CC - 1
+                            else getattr(border, f"{stream}_E")[ROWS * i:ROWS * (i + 1)])
+                    m.d.comb += [
+                        getattr(c, f"{stream}_N_in").eq(north), getattr(c, f"{stream}_S_in").eq(south),
+                        getattr(c, f"{stream}_W_in").eq(west), getattr(c, f"{stream}_E_in").eq(east),
+                    ]
+
+        c0 = cl[0][0]
+        m.d.comb += [
+            self.take.eq(c0.take), self.done.eq(c0.done), self.checked.eq(c0.checked),
+            self.busy.eq(c0.busy),
+            self.all_stable.eq(Cat(*stables).all()), self.any_max.eq(Cat(*maxes).any()),
+            border.br.eq(self.br), border.bc.eq(self.bc),
+            border.cntR.eq(c0.cntR), border.r_cnt.eq(c0.r_cnt),
+        ]
+
+        # Border storage writes: the edge nodes' bits of the clusters' write
+        # port while iterating (all clusters write the same address), or of
+        # the host word for the one cluster the host writes.
+        host = ~c0.busy
+        m.d.comb += border.w_addr.eq(c0.w_addr)
+        with m.If(host):
+            m.d.comb += border.w_addr.eq(self.host_addr)
+        for j in range(CC):
+            for side, i, r, sl in (("top", 0, 0, slice(COLS * j, COLS * (j + 1))),
+                                   ("bottom", CR - 1, ROWS - 1, slice(COLS * j, COLS * (j + 1)))):
+                c = cl[i][j]
+                k = i * CC + j
+                data = Cat(c.w_data[bit(r, q)] for q in range(COLS))
+                hdata = Cat(self.host_wdata[bit(r, q)] for q in range(COLS))
+                en = getattr(border, f"en_{side}")[sl]
+                d = getattr(border, f"w_{side}")[sl]
+                with m.If(host):
+                    m.d.comb += [d.eq(hdata), en.eq(Cat([self.host_we & (self.host_cluster == k)] * COLS))]
+                with m.Else():
+                    m.d.comb += [d.eq(data), en.eq(Cat([c.w_en] * COLS))]
+        for i in range(CR):
+            for side, j, q, sl in (("left", 0, 0, slice(ROWS * i, ROWS * (i + 1))),
+                                   ("right", CC - 1, COLS - 1, slice(ROWS * i, ROWS * (i + 1)))):
+                c = cl[i][j]
+                k = i * CC + j
+                data = Cat(c.w_data[bit(r, q)] for r in range(ROWS))
+                hdata = Cat(self.host_wdata[bit(r, q)] for r in range(ROWS))
+                en = getattr(border, f"en_{side}")[sl]
+                d = getattr(border, f"w_{side}")[sl]
+                with m.If(host):
+                    m.d.comb += [d.eq(hdata), en.eq(Cat([self.host_we & (self.host_cluster == k)] * ROWS))]
+                with m.Else():
+                    m.d.comb += [d.eq(data), en.eq(Cat([c.w_en] * ROWS))]
+        return m

@@ -1,0 +1,366 @@
+"""The harmonic planner top: block, border nodes, Control and Decision
+behind one host interface of valid/ready streams (paper 000, section 5)."""
+
+from amaranth.hdl import Cat, Const, Module, Signal, signed
+from amaranth.lib import data, enum, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from .block import Block
+from .cluster import COLS, ROWS
+from .controller import Controller
+from .decision import Decision
+
+__all__ = ["Planner", "Op", "Code", "command_layout", "response_layout"]
+
+
+class Op(enum.Enum, shape=3):
+    LOAD = 0        # write one cluster's constant flags and goals of one block
+    SET = 1         # dynamic obstacle (flag 0) / goal (flag 1) at (B, X, Y)
+    START = 2       # run the planner: p1, step, p_last, iters
+    STATUS = 3      # converged, precision, counters
+    READ = 4        # a node's stored word: constant flag and value
+    DIRECTION = 5   # the Decision module at (B, X, Y)
+
+
+class Code(enum.Enum, shape=3):
+    OK = 0
+    BAD_NODE = 1        # block, row or column outside the map
+    NO_GOAL = 2         # START with no goal loaded
+    BAD_PRECISION = 3   # p1 < 2, p_last > p_max, p1 > p_last, or step 0 with p1 < p_last
+    BUSY = 4            # LOAD / START / READ / DIRECTION while a run or a clear pass is on
+    BAD_OP = 5          # op 6 or 7
+    BAD_ITERS = 6       # START with iters = 0
+
+
+def _pw(p_max):
+    return (p_max + 1).bit_length()        # p_max + 1 fits: a too-high precision is sayable
+
+
+def command_layout(blocks, n, m, p_max):
+    BR, BC = blocks
+    pw = _pw(p_max)
+    return data.StructLayout({
+        "op": Op,
+        "block": (BR * BC).bit_length(), "row": n.bit_length(), "col": m.bit_length(),
+        "flag": 1,              # SET: Sat; LOAD: 1 = first load of a new map (has_goal restarts)
+        "flags": 18,            # LOAD: constant nodes (obstacles and goals) of the cluster
+        "goals": 18,            # LOAD: goal nodes (value 1.0)
+        "p1": pw, "step": pw, "p_last": pw, "iters": 8,
+    })
+
+
+def response_layout(p_max):
+    pw = _pw(p_max)
+    return data.StructLayout({
+        "code": Code, "op": Op, "busy": 1, "converged": 1, "p": pw,
+        "const": 1, "value": p_max + 1,
+        "triangle": 2, "g_row": signed(p_max + 2), "g_col": signed(p_max + 2),
+        "sweeps": 32, "block_iterations": 32, "check_iterations": 32, "clear_passes": 32,
+        "cycles": 48,
+    })
+
+
+class Planner(wiring.Component):
+    """Harmonic planner: a map of BR x BC blocks of n x m nodes.
+
+    Host interface: one command stream in, one response stream out
+    (amaranth.lib.stream, valid/ready).  Every command gets exactly one
+    response, in order; a command is accepted only when the previous
+    response has been taken.  Response fields not named below are 0, except
+    ``busy``, ``converged``, ``p`` and the counters, which every response
+    carries (the STATUS fields).
+
+    =========  ===============================================================
+    op         fields used / response
+    =========  ===============================================================
+    LOAD       block, row, col (any node of the cluster), flags, goals, flag:
+               writes the cluster's words of that block: constant flags,
+               goals' integer bit, every other address 0 (p_max+2 cycles),
+               and the border storage.  flag = 1 starts a new map (the goal
+               record restarts).  BUSY while a run or clear pass is on.
+    SET        block, row, col, flag (Sat): node becomes an obstacle (0) or a
+               goal (1); every free node restarts from 0 (a clear pass: see
+               :class:`~hdl.harmonic.controller.Controller`).  While idle it
+               runs at once; during a run it waits for the end of the pass.
+               Only one order waits: a second one is not accepted (no ready)
+               until the first is taken.  Response OK when taken.
+    START      p1, step, p_last, iters: precisions p1, p1+step, ... <= p_last;
+               I = iters.  Response at once; poll STATUS for the end.
+    STATUS     busy, converged, p, sweeps, block_iterations,
+               check_iterations, clear_passes, cycles.
+    READ       block, row, col: ``const`` and ``value`` at the current p.
+    DIRECTION  block, row, col: ``triangle`` (0 NE, 1 ES, 2 SW, 3 WN) and the
+               gradient (g_row, g_col) of :func:`models.harmonic.decision`.
+    =========  ===============================================================
+
+    Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
+    (START before any goal was loaded or set), BAD_PRECISION (p1 < 2,
+    p_last > p_max, p1 > p_last, or step = 0 with p1 < p_last), BAD_ITERS
+    (iters = 0), BUSY (LOAD, START, READ, DIRECTION during a run or a
+    clear pass), BAD_OP.  A refused command changes nothing.
+
+    Parameters
+    ----------
+    n, m : int
+        Block size (multiples of 3 and 6).
+    blocks : (BR, BC)
+        The map: BR*n rows, BC*m columns (pad it with obstacles).
+    p_max : int
+        Largest precision.
+    depth : int
+        Words per cluster RAM; needs BR*BC*(p_max+2) <= depth.
+    """
+
+    def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024):
+        self.block = Block(n, m, blocks, p_max, depth)      # checks the parameters
+        self.n, self.m, self.BR, self.BC = n, m, *blocks
+        self.p_max, self.depth = p_max, depth
+        self.cmd_layout = command_layout(blocks, n, m, p_max)
+        self.resp_layout = response_layout(p_max)
+        super().__init__({
+            "i_stream": In(stream.Signature(self.cmd_layout)),
+            "o_stream": Out(stream.Signature(self.resp_layout)),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        n, mm, BR, BC, p_max = self.n, self.m, self.BR, self.BC, self.p_max
+        S, CC = p_max + 2, mm // COLS
+        B = BR * BC
+        m.submodules.block = blk = self.block
+        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max)
+        m.submodules.decision = dec = Decision(p_max)
+        for name in ("run", "p", "enable", "clear", "sel", "sel_row", "sel_col", "br", "bc"):
+            m.d.comb += getattr(blk, name).eq(getattr(ctl, f"blk_{name}"))
+        m.d.comb += [
+            blk.Sat.eq(ctl.blk_sat),
+            ctl.blk_take.eq(blk.take), ctl.blk_done.eq(blk.done), ctl.blk_busy.eq(blk.busy),
+            ctl.blk_all_stable.eq(blk.all_stable), ctl.blk_any_max.eq(blk.any_max),
+        ]
+
+        cmd = self.i_stream.payload
+        resp = self.o_stream.payload
+        c = Signal(self.cmd_layout)             # the command being executed
+        has_goal = Signal()
+
+        # (block, row, col) -> block row/column, cluster, bit: constant tables.
+        def locate(block, row, col, prefix):
+            # Arithmetic by constants: continuous assignments, defined from time 0.
+            tbr, tbc = Signal(range(max(BR, 2)), name=f"{prefix}_br"), Signal(range(max(BC, 2)), name=f"{prefix}_bc")
+            ci = Signal(range(max(CC * (n // ROWS), 2)), name=f"{prefix}_ci")
+            bit = Signal(range(18), name=f"{prefix}_bit")
+            m.d.comb += [
+                tbr.eq(block // BC), tbc.eq(block % BC),
+                ci.eq((row // ROWS) * CC + col // COLS),
+                bit.eq((row % ROWS) * COLS + col % COLS),
+            ]
+            return tbr, tbc, ci, bit
+
+        in_map = (cmd.block < B) & (cmd.row < n) & (cmd.col < mm)
+        c_br, c_bc, c_ci, c_bit = locate(c.block, c.row, c.col, "c")
+
+        # Status fields ride on every response.
+        def respond(code, op):
+            m.d.sync += [
+                self.o_stream.valid.eq(1), resp.code.eq(code), resp.op.eq(op),
+                resp.busy.eq(ctl.busy), resp.converged.eq(ctl.converged), resp.p.eq(ctl.p),
+                resp.sweeps.eq(ctl.sweeps), resp.block_iterations.eq(ctl.block_iterations),
+                resp.check_iterations.eq(ctl.check_iterations),
+                resp.clear_passes.eq(ctl.clear_passes), resp.cycles.eq(ctl.cycles),
+            ]
+        with m.If(self.o_stream.valid & self.o_stream.ready):
+            m.d.sync += self.o_stream.valid.eq(0)
+
+        # Serial read of one node word through the host port (p+2 addresses,
+        # data one cycle after its address): flag, then value MSB first.
+        rd_go, rd_done = Signal(), Signal()
+        rd_base = Signal(range(self.depth))
+        rd_ci, rd_bit = Signal.like(c_ci), Signal.like(c_bit)
+        rd_j = Signal(range(S + 2))
+        rd_val, rd_const = Signal(p_max + 1), Signal()
+        rd_busy = Signal()
+        with m.If(rd_go):
+            m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0)]
+        with m.Elif(rd_busy):
+            m.d.comb += [blk.host_addr.eq(rd_base + rd_j), blk.host_cluster.eq(rd_ci)]
+            m.d.sync += rd_j.eq(rd_j + 1)
+            got = blk.host_rdata.bit_select(rd_bit, 1)
+            with m.If(rd_j == 1):
+                m.d.sync += rd_const.eq(got)
+            with m.Elif(rd_j > 1):
+                m.d.sync += rd_val.eq(Cat(got, rd_val[:-1]))
+            with m.If(rd_j == ctl.p + 2):
+                m.d.sync += rd_busy.eq(0)
+                m.d.comb += rd_done.eq(1)
+
+        # DIRECTION: the centre, then N, E, S, W (0 outside the map).
+        q = Signal(3)
+        vals = [Signal(p_max + 1, name=f"dir_{s}") for s in ("c", "N", "E", "S", "W")]
+        t_blk, t_row, t_col, t_in = Signal.like(c.block), Signal.like(c.row), Signal.like(c.col), Signal()
+        m.d.comb += [t_blk.eq(c.block), t_row.eq(c.row), t_col.eq(c.col), t_in.eq(1)]
+        with m.Switch(q):
+            with m.Case(1):     # N
+                with m.If(c.row != 0):
+                    m.d.comb += t_row.eq(c.row - 1)
+                with m.Elif(c_br != 0):
+                    m.d.comb += [t_blk.eq(c.block - BC), t_row.eq(n - 1)]
+                with m.Else():
+                    m.d.comb += t_in.eq(0)
+            with m.Case(2):     # E
+                with m.If(c.col != mm - 1):
+                    m.d.comb += t_col.eq(c.col + 1)
+                with m.Elif(c_bc != BC - 1):
+                    m.d.comb += [t_blk.eq(c.block + 1), t_col.eq(0)]
+                with m.Else():
+                    m.d.comb += t_in.eq(0)
+            with m.Case(3):     # S
+                with m.If(c.row != n - 1):
+                    m.d.comb += t_row.eq(c.row + 1)
+                with m.Elif(c_br != BR - 1):
+                    m.d.comb += [t_blk.eq(c.block + BC), t_row.eq(0)]
+                with m.Else():
+                    m.d.comb += t_in.eq(0)
+            with m.Case(4):     # W
+                with m.If(c.col != 0):
+                    m.d.comb += t_col.eq(c.col - 1)
+                with m.Elif(c_bc != 0):
+                    m.d.comb += [t_blk.eq(c.block - 1), t_col.eq(mm - 1)]
+                with m.Else():
+                    m.d.comb += t_in.eq(0)
+        _, _, t_ci, t_bit = locate(t_blk, t_row, t_col, "t")
+        m.d.comb += [dec.h.eq(vals[0]), dec.h_N.eq(vals[1]), dec.h_E.eq(vals[2]),
+                     dec.h_S.eq(vals[3]), dec.h_W.eq(vals[4])]
+
+        load_a = Signal(range(S + 1))
+        p_bad = Signal()
+        m.d.comb += p_bad.eq((cmd.p1 < 2) | (cmd.p_last > p_max) | (cmd.p1 > cmd.p_last)
+                             | ((cmd.step == 0) & (cmd.p1 != cmd.p_last)))
+
+        accept = Signal()
+        start_ok = Signal()
+        with m.FSM() as fsm:
+            with m.State("IDLE"):
+                with m.If(accept):
+                    m.d.sync += c.eq(cmd)
+                    with m.Switch(cmd.op):
+                        with m.Case(Op.LOAD):
+                            with m.If(~in_map):
+                                respond(Code.BAD_NODE, cmd.op)
+                            with m.Elif(ctl.busy):
+                                respond(Code.BUSY, cmd.op)
+                            with m.Else():
+                                m.d.sync += load_a.eq(0)
+                                with m.If(cmd.flag):
+                                    m.d.sync += has_goal.eq(cmd.goals != 0)
+                                with m.Else():
+                                    m.d.sync += has_goal.eq(has_goal | (cmd.goals != 0))
+                                m.next = "LOAD"
+                        with m.Case(Op.SET):
+                            with m.If(~in_map):
+                                respond(Code.BAD_NODE, cmd.op)
+                            with m.Else():
+                                m.next = "SET"
+                        with m.Case(Op.START):
+                            with m.If(ctl.busy):
+                                respond(Code.BUSY, cmd.op)
+                            with m.Elif(p_bad):
+                                respond(Code.BAD_PRECISION, cmd.op)
+                            with m.Elif(cmd.iters == 0):
+                                respond(Code.BAD_ITERS, cmd.op)
+                            with m.Elif(~has_goal):
+                                respond(Code.NO_GOAL, cmd.op)
+                            with m.Else():
+                                m.next = "STARTED"
+                        with m.Case(Op.STATUS):
+                            respond(Code.OK, cmd.op)
+                        with m.Case(Op.READ, Op.DIRECTION):
+                            with m.If(~in_map):
+                                respond(Code.BAD_NODE, cmd.op)
+                            with m.Elif(ctl.busy):
+                                respond(Code.BUSY, cmd.op)
+                            with m.Else():
+                                m.d.sync += q.eq(0)
+                                m.next = "FETCH"
+                        with m.Default():
+                            respond(Code.BAD_OP, cmd.op)
+            with m.State("STARTED"):        # the response shows the run begun
+                respond(Code.OK, Op.START)
+                m.next = "IDLE"
+            with m.State("LOAD"):
+                base = Signal(range(self.depth))
+                m.d.comb += [
+                    base.eq((c_br * BC + c_bc) * S),
+                    blk.host_addr.eq(base + load_a), blk.host_cluster.eq(c_ci),
+                ]
+                with m.If(load_a == 0):
+                    m.d.comb += blk.host_wdata.eq(c.flags | c.goals)
+                with m.Elif(load_a == 1):
+                    m.d.comb += blk.host_wdata.eq(c.goals)
+                m.d.sync += load_a.eq(load_a + 1)
+                with m.If(load_a == S - 1):
+                    respond(Code.OK, Op.LOAD)
+                    m.next = "IDLE"
+            with m.State("SET"):
+                with m.If(ctl.order_ready):
+                    with m.If(c.flag):
+                        m.d.sync += has_goal.eq(1)
+                    m.next = "SET_RESP"
+            with m.State("SET_RESP"):
+                respond(Code.OK, Op.SET)
+                m.next = "IDLE"
+            with m.State("FETCH"):          # READ: q = 0 only; DIRECTION: q = 0 .. 4
+                with m.If(t_in):
+                    m.d.sync += [rd_base.eq(t_blk * S if B > 1 else 0), rd_ci.eq(t_ci), rd_bit.eq(t_bit)]
+                    m.next = "FETCH_WAIT"
+                with m.Else():
+                    with m.Switch(q):
+                        for i in range(1, 5):
+                            with m.Case(i):
+                                m.d.sync += vals[i].eq(0)
+                    m.d.sync += q.eq(q + 1)
+                    with m.If(q == 4):
+                        m.next = "DECIDE_GO"
+            with m.State("FETCH_WAIT"):
+                with m.If(rd_done):
+                    with m.Switch(q):
+                        for i in range(5):
+                            with m.Case(i):
+                                m.d.sync += vals[i].eq(Cat(blk.host_rdata.bit_select(rd_bit, 1), rd_val[:-1]))
+                    with m.If(c.op == Op.READ):
+                        m.next = "READ_RESP"
+                    with m.Elif(q == 4):
+                        m.next = "DECIDE_GO"
+                    with m.Else():
+                        m.d.sync += q.eq(q + 1)
+                        m.next = "FETCH"
+            with m.State("READ_RESP"):
+                respond(Code.OK, Op.READ)
+                m.d.sync += [resp.value.eq(vals[0]), resp.const.eq(rd_const)]
+                m.next = "IDLE"
+            with m.State("DECIDE_GO"):
+                m.next = "DECIDE"
+            with m.State("DECIDE"):
+                with m.If(dec.done):
+                    respond(Code.OK, Op.DIRECTION)
+                    m.d.sync += [resp.value.eq(vals[0]), resp.triangle.eq(dec.triangle),
+                                 resp.g_row.eq(dec.g_row), resp.g_col.eq(dec.g_col)]
+                    m.next = "IDLE"
+        # Strobes and enables as plain expressions of the state (continuous
+        # assignments in the Verilog: defined from time 0 on every simulator).
+        m.d.comb += [
+            self.i_stream.ready.eq(fsm.ongoing("IDLE") & ~self.o_stream.valid),
+            accept.eq(fsm.ongoing("IDLE") & self.i_stream.valid & ~self.o_stream.valid),
+            start_ok.eq(accept & (cmd.op == Op.START) & ~ctl.busy & ~p_bad & (cmd.iters != 0) & has_goal),
+            ctl.start.eq(start_ok), ctl.p1.eq(cmd.p1), ctl.step.eq(cmd.step),
+            ctl.p_last.eq(cmd.p_last), ctl.iters.eq(cmd.iters),
+            ctl.order.eq(fsm.ongoing("SET")), ctl.o_br.eq(c_br), ctl.o_bc.eq(c_bc),
+            ctl.o_row.eq(c.row), ctl.o_col.eq(c.col), ctl.o_sat.eq(c.flag),
+            blk.host_we.eq(fsm.ongoing("LOAD")),
+            dec.start.eq(fsm.ongoing("DECIDE_GO")),
+            rd_go.eq(fsm.ongoing("FETCH") & t_in),
+        ]
+        # Responses without a value: clear the data fields.
+        with m.If(self.i_stream.valid & self.i_stream.ready):
+            m.d.sync += [resp.value.eq(0), resp.const.eq(0), resp.triangle.eq(0),
+                         resp.g_row.eq(0), resp.g_col.eq(0)]
+        return m

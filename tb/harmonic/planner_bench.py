@@ -1,0 +1,205 @@
+"""Drive the harmonic Planner RTL in simulation through its host streams.
+
+Shared by the planner regression (tb/harmonic/test_planner.py), the cocotb
+job tb/harmonic/planner_job.py and, through :func:`run_planner_rtl`, the
+command line (``python -m sim harmonic --rtl``).
+
+* :class:`PlannerBench`: pack / unpack commands and responses by the
+  planner's struct layouts, one command -> one response, map loading, a run
+  to the end, reading every node back.
+* :func:`planner_params`: the block / RAM parameters for a map.
+* :func:`run_planner_rtl`: a whole map through cocotb (a JSON job file, as
+  sim/demo.py runs sim/cluster_window.py), returning the fields of
+  :class:`models.harmonic.PlanResult`.
+"""
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from hdl.harmonic.cluster import COLS, ROWS
+from hdl.harmonic.planner import Code, Op, command_layout, response_layout
+from models.harmonic import pad_to_blocks, reachable
+
+__all__ = ["PlannerBench", "planner_params", "run_planner_rtl", "Op", "Code"]
+
+POLL = 128          # cycles between STATUS polls while a run is on
+
+
+def _fields(layout):
+    return {name: (f.offset, f.width) for name, f in layout}
+
+
+class PlannerBench:
+    def __init__(self, dut, n, m, blocks, p_max):
+        self.dut, self.n, self.m = dut, n, m
+        self.BR, self.BC = blocks
+        self.p_max = p_max
+        self.cmd_f = _fields(command_layout(blocks, n, m, p_max))
+        self.resp_f = _fields(response_layout(p_max))
+        self.commands = 0
+        dut.i_stream__valid.value = 0
+        dut.o_stream__ready.value = 1
+
+    def pack(self, **fields):
+        word = 0
+        for name, value in fields.items():
+            off, width = self.cmd_f[name]
+            word |= (int(value) & ((1 << width) - 1)) << off
+        return word
+
+    def unpack(self, word):
+        out = {}
+        for name, (off, width) in self.resp_f.items():
+            v = (word >> off) & ((1 << width) - 1)
+            if name in ("g_row", "g_col") and v >> (width - 1):
+                v -= 1 << width
+            out[name] = v
+        out["code"] = Code(out["code"])
+        out["op"] = Op(out["op"])
+        return out
+
+    async def command(self, op, **fields):
+        """Send one command (from a falling edge); return its response."""
+        from cocotb.triggers import FallingEdge
+        d = self.dut
+        d.i_stream__payload.value = self.pack(op=int(op.value), **fields)
+        d.i_stream__valid.value = 1
+        while not int(d.i_stream__ready.value):
+            await FallingEdge(d.clk)
+        await FallingEdge(d.clk)            # taken at the rising edge in between
+        d.i_stream__valid.value = 0
+        while not int(d.o_stream__valid.value):
+            await FallingEdge(d.clk)
+        resp = self.unpack(int(d.o_stream__payload.value))
+        await FallingEdge(d.clk)            # ready is held high: taken
+        self.commands += 1
+        assert resp["op"] == op, f"response to {op} says {resp['op']}"
+        return resp
+
+    def locate(self, r, c):
+        """Map cell (r, c) -> (block, row, col)."""
+        return (r // self.n) * self.BC + c // self.m, r % self.n, c % self.m
+
+    async def load_map(self, obstacle, goal):
+        """LOAD every cluster of every block (padded map: BR*n x BC*m)."""
+        first = 1
+        for b in range(self.BR * self.BC):
+            r0, c0 = (b // self.BC) * self.n, (b % self.BC) * self.m
+            for i in range(self.n // ROWS):
+                for j in range(self.m // COLS):
+                    rs = slice(r0 + ROWS * i, r0 + ROWS * (i + 1))
+                    cs = slice(c0 + COLS * j, c0 + COLS * (j + 1))
+                    flags = _mask(obstacle[rs, cs] | goal[rs, cs])
+                    goals = _mask(goal[rs, cs])
+                    resp = await self.command(Op.LOAD, block=b, row=ROWS * i, col=COLS * j,
+                                              flags=flags, goals=goals, flag=first)
+                    assert resp["code"] == Code.OK, resp["code"]
+                    first = 0
+
+    async def start(self, schedule, iters):
+        p1, step, p_last = arithmetic(schedule)
+        return await self.command(Op.START, p1=p1, step=step, p_last=p_last, iters=iters)
+
+    async def wait_idle(self, poll=POLL, limit=10**8, progress=None):
+        from cocotb.triggers import ClockCycles, FallingEdge
+        waited = 0
+        while True:
+            st = await self.command(Op.STATUS)
+            if not st["busy"]:
+                return st
+            if progress:
+                progress(st)
+            await ClockCycles(self.dut.clk, poll)
+            await FallingEdge(self.dut.clk)
+            waited += poll
+            assert waited < limit, "the planner did not finish"
+
+    async def read_all(self, shape):
+        h = np.zeros(shape, dtype=object)
+        const = np.zeros(shape, dtype=bool)
+        for r in range(shape[0]):
+            for c in range(shape[1]):
+                b, x, y = self.locate(r, c)
+                resp = await self.command(Op.READ, block=b, row=x, col=y)
+                assert resp["code"] == Code.OK, resp["code"]
+                h[r, c], const[r, c] = resp["value"], bool(resp["const"])
+        return h, const
+
+
+def _mask(flags):
+    return sum(int(bool(v)) << i for i, v in enumerate(np.ravel(flags)))
+
+
+def arithmetic(schedule):
+    """(p1, step, p_last) of an arithmetic schedule; the RTL runs no other."""
+    sched = [int(p) for p in schedule]
+    step = sched[1] - sched[0] if len(sched) > 1 else 0
+    if any(b - a != step for a, b in zip(sched, sched[1:])):
+        raise ValueError(f"schedule {tuple(sched)}: the planner RTL runs arithmetic schedules only "
+                         "(p1, p1+step, ..., p_last)")
+    return sched[0], step, sched[-1]
+
+
+def planner_params(shape, block=(6, 12), p_max=30, depth=None):
+    """Planner parameters for a map of ``shape``: the padded map's block
+    grid, the RAM depth (the smallest power of two >= B*(p_max+2), at least
+    the paper's 1024 if that suffices)."""
+    n, m = block
+    BR, BC = -(-shape[0] // n), -(-shape[1] // m)
+    need = BR * BC * (p_max + 2)
+    if depth is None:
+        depth = 1 << max(need - 1, 1).bit_length()
+    return {"n": n, "m": m, "br": BR, "bc": BC, "p_max": p_max, "depth": depth}
+
+
+def run_planner_rtl(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), sim="icarus",
+                    progress=None, work=None, events=()):
+    """Run the Planner RTL on a whole map through cocotb; return a dict with
+    the fields of :class:`models.harmonic.PlanResult` (h, const, p,
+    converged, sweeps, block_iterations, check_iterations, clear_passes,
+    node_updates, cycles, unreachable) and ``params`` (the RTL parameters).
+
+    Unreachable free cells are walled off (loaded as obstacles) like the
+    model does.  ``events``: ``(s, (r, c), kind)`` as in
+    :func:`models.harmonic.plan`; s = 0 is sent while idle before START, s >= 1
+    during pass s-1 (the bench watches the pass count).  ``progress(status)``
+    is called from the job's STATUS polls (through the job's log, after the
+    run, when the simulator runs in a subprocess: it gets the last status).
+    """
+    from tb.runner import run
+    obstacle = np.asarray(obstacle, dtype=bool)
+    H, W = obstacle.shape
+    p1, step, p_last = arithmetic(schedule)
+    params = planner_params(obstacle.shape, block, p_max=p_last)
+    padded = pad_to_blocks(obstacle, block)
+    goal = np.zeros(padded.shape, dtype=bool)
+    for r, c in goals:
+        goal[r, c] = True
+    unreachable = ~padded & ~reachable(padded, goal)
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(work or tmp)
+        job, result = work / "planner_job.json", work / "planner_result.json"
+        job.write_text(json.dumps({
+            "params": params, "obstacle": (padded | unreachable).tolist(), "goal": goal.tolist(),
+            "schedule": [p1, step, p_last], "iters": int(iters),
+            "events": [[int(s), [int(r), int(c)], str(k)] for s, (r, c), k in events],
+        }))
+        run("harmonic_planner", params, sim, "tb.harmonic.planner_job",
+            env={"PLANNER_JOB": job, "PLANNER_RESULT": result}, log_file=work / "sim.log")
+        out = json.loads(result.read_text())
+    h = np.array([[int(v) for v in row] for row in out["h"]], dtype=object)
+    res = dict(out["status"])
+    res.update(h=h[:H, :W], const=np.array(out["const"], dtype=bool)[:H, :W],
+               padded_h=h, unreachable=unreachable[:H, :W], params=params,
+               node_updates=res["block_iterations"] * block[0] * block[1])
+    if progress:
+        progress(out["status"])
+    return res
+
+
+def job_env():
+    return os.environ.get("PLANNER_JOB"), os.environ.get("PLANNER_RESULT")

@@ -1,0 +1,255 @@
+# amaranth: UnusedElaboratable=no
+"""The whole harmonic Planner RTL against models.harmonic.plan, bit-exact.
+
+One build per parameter set (B = BR x BC blocks of n x m nodes); the cocotb
+tests drive only the host streams (tb/harmonic/planner_bench.py):
+
+* planner_maps: a corridor, a spiral and a random map: LOAD, START, poll
+  STATUS to the end, READ every node: every stored value and constant flag
+  equals the model's, and so do the final precision, converged, sweeps,
+  block iterations, check iterations and the cycle count.  Then DIRECTION
+  at corners, edges, block corners and random cells equals
+  models.harmonic.decision (outside the map reads 0: the border nodes at the
+  map's edge).
+* planner_dynamic: an obstacle added during a run (taken at the end of the
+  pass the model's event names; the SET response's counters prove which),
+  then an obstacle added after convergence (SET while idle, START): values,
+  counters and cycles equal the model's.
+* planner_bad_commands: a node outside the map (LOAD, SET, READ, DIRECTION),
+  START with no goal, bad precisions, zero iterations, unknown ops, LOAD /
+  READ / DIRECTION / START during a run: each gets its error code, and the
+  run that follows still equals the model bit for bit (nothing corrupted).
+"""
+
+import json
+import os
+import random
+
+import cocotb
+import numpy as np
+import pytest
+
+from models.harmonic import decision, plan
+from tb.harmonic.planner_bench import Code, Op, PlannerBench
+from tb.harmonic.planner_job import set_order, wait_pass
+from tb.harmonic.planner_maps import MAPS, random_map
+from tb.harmonic.serial import start
+from tb.runner import SIMULATORS, run
+
+SETS = {
+    # 3x3 blocks of one cluster: every border kind (B+-1, B+-k, the map edge)
+    "b3x6": dict(n=3, m=6, br=3, bc=3, p_max=16, depth=256),
+    # 2x2 blocks of 6x12 nodes (4 clusters each)
+    "b6x12": dict(n=6, m=12, br=2, bc=2, p_max=12, depth=64),
+}
+# (map, schedule, I) per parameter set; schedules arithmetic, p <= p_max
+RUNS = {
+    "b3x6": [("corridor", (6, 12), 4), ("spiral", (6, 12), 2), ("random", (8, 16), 3)],
+    "b6x12": [("corridor", (6, 12), 3), ("spiral", (6, 12), 4), ("random", (4, 8, 12), 2)],
+}
+PARAMS = json.loads(os.environ.get("PLANNER_PARAMS", json.dumps(SETS["b3x6"])))
+SET_NAME = os.environ.get("PLANNER_SET", "b3x6")
+
+
+def _bench(dut):
+    P = PARAMS
+    return PlannerBench(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"])
+
+
+def _shape():
+    return PARAMS["br"] * PARAMS["n"], PARAMS["bc"] * PARAMS["m"]
+
+
+def _padded(ob, goals):
+    goal = np.zeros(ob.shape, dtype=bool)
+    for r, c in goals:
+        goal[r, c] = True
+    return goal
+
+
+async def _run(bench, ob, goals, sched, iters, events=()):
+    """Model and RTL on one map; compare everything; return the model result."""
+    P = PARAMS
+    res = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched, events=events)
+    load = ob | res.unreachable
+    await bench.load_map(load, _padded(ob, goals))
+    for s, (r, c), kind in [e for e in events if e[0] == 0]:
+        await set_order(bench, r, c, kind)
+    await bench.wait_idle(poll=16)
+    st = await bench.start(sched, iters)
+    assert st["code"] == Code.OK, st["code"]
+    for s, (r, c), kind in [e for e in events if e[0] > 0]:
+        await wait_pass(bench, s - 1)
+        await set_order(bench, r, c, kind, during=s - 1)
+    st = await bench.wait_idle()
+    h, const = await bench.read_all(ob.shape)
+    bad = np.argwhere((h != res.padded_h) | (const != res.padded_const))
+    assert not len(bad), (f"{len(bad)} nodes differ, first {tuple(bad[0])}: RTL {h[tuple(bad[0])]} "
+                          f"model {res.padded_h[tuple(bad[0])]}\nRTL\n{h}\nmodel\n{res.padded_h}")
+    got = {k: int(st[k]) for k in ("p", "converged", "sweeps", "block_iterations",
+                                   "check_iterations", "clear_passes", "cycles")}
+    want = {"p": res.p, "converged": int(res.converged), "sweeps": res.sweeps,
+            "block_iterations": res.block_iterations, "check_iterations": res.check_iterations,
+            "clear_passes": res.clear_passes, "cycles": res.cycles}
+    assert got == want, f"status {got}\nmodel  {want}"
+    return res, h
+
+
+@cocotb.test()
+async def planner_maps(dut):
+    await start(dut)
+    bench = _bench(dut)
+    rng = random.Random(cocotb.RANDOM_SEED)
+    rows, cols = _shape()
+    compared = 0
+    for name, sched, iters in RUNS[SET_NAME]:
+        ob, goals = MAPS[name](rows, cols, cocotb.RANDOM_SEED % 1000)
+        res, h = await _run(bench, ob, goals, sched, iters)
+        compared += h.size
+        dut._log.info(f"{name} {rows}x{cols}, {sched}, I={iters}: p={res.p} converged={res.converged} "
+                      f"sweeps={res.sweeps} block_iterations={res.block_iterations} "
+                      f"cycles={res.cycles}: all {h.size} nodes equal")
+        # Decision at the map's corners and edges (the border reads 0 there),
+        # at block corners (neighbours in other blocks) and at random cells.
+        n, m = PARAMS["n"], PARAMS["m"]
+        cells = {(0, 0), (0, cols - 1), (rows - 1, 0), (rows - 1, cols - 1), (0, cols // 2),
+                 (rows // 2, 0), (n - 1, m - 1), (n, m), (n - 1, m), (n, m - 1)}
+        cells |= {(rng.randrange(rows), rng.randrange(cols)) for _ in range(6)}
+        for r, c in sorted(cells):
+            b, x, y = bench.locate(r, c)
+            resp = await bench.command(Op.DIRECTION, block=b, row=x, col=y)
+            t, (gr, gc) = decision(res.padded_h, r, c)
+            assert resp["code"] == Code.OK
+            got = (resp["triangle"], resp["g_row"], resp["g_col"], resp["value"])
+            assert got == (t, gr, gc, res.padded_h[r, c]), f"{name} ({r}, {c}): RTL {got} model {(t, gr, gc)}"
+            compared += 1
+    assert compared > 3 * rows * cols
+
+
+@cocotb.test()
+async def planner_dynamic(dut):
+    await start(dut)
+    bench = _bench(dut)
+    rows, cols = _shape()
+    P = PARAMS
+    sched, iters = (6, 12), 3
+    ob, goals = random_map(rows, cols, 7, density=0.1)
+    base = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched)
+    free = np.argwhere(~ob & ~base.unreachable & ~_padded(ob, goals))
+    passes = base.sweeps + base.check_iterations // (P["br"] * P["bc"])
+    s = min(3, passes - 1)
+    cell = tuple(int(x) for x in free[len(free) // 3])
+    res, _ = await _run(bench, ob, goals, sched, iters, events=[(s, cell, "obstacle")])
+    assert res.events_applied == 1 and res.clear_passes == 1
+    dut._log.info(f"obstacle at {cell} taken at the end of pass {s - 1}: equal, {res.cycles} cycles")
+    # After the run: an obstacle while idle, then a new run.
+    ob2 = ob.copy()
+    ob2[cell] = True
+    cell2 = tuple(int(x) for x in free[2 * len(free) // 3])
+    res2, _ = await _run(bench, ob2, goals, sched, iters, events=[(0, cell2, "obstacle")])
+    assert res2.events_applied == 1
+    dut._log.info(f"obstacle at {cell2} after the run: equal, {res2.cycles} cycles")
+
+
+@cocotb.test()
+async def planner_bad_commands(dut):
+    await start(dut)
+    bench = _bench(dut)
+    P = PARAMS
+    B, n, m, p_max = P["br"] * P["bc"], P["n"], P["m"], P["p_max"]
+    checked = 0
+
+    async def expect(code, op, **f):
+        nonlocal checked
+        resp = await bench.command(op, **f)
+        assert resp["code"] == code, f"{op} {f}: {resp['code']}, expected {code}"
+        checked += 1
+        return resp
+
+    await expect(Code.NO_GOAL, Op.START, p1=4, step=4, p_last=8, iters=2)
+    for op in (Op.LOAD, Op.SET, Op.READ, Op.DIRECTION):
+        for where in ({"block": B}, {"row": n}, {"col": m}):
+            await expect(Code.BAD_NODE, op, **{"block": 0, "row": 0, "col": 0, **where})
+    dut.i_stream__valid.value = 0
+    for raw in (6, 7):      # ops the layout can carry but the planner does not know
+        d = bench.dut
+        word = bench.pack(block=0) | raw
+        d.i_stream__payload.value = word
+        d.i_stream__valid.value = 1
+        from cocotb.triggers import FallingEdge
+        while not int(d.i_stream__ready.value):
+            await FallingEdge(d.clk)
+        await FallingEdge(d.clk)
+        d.i_stream__valid.value = 0
+        while not int(d.o_stream__valid.value):
+            await FallingEdge(d.clk)
+        word = int(d.o_stream__payload.value)
+        await FallingEdge(d.clk)
+        assert word & 7 == Code.BAD_OP.value and (word >> 3) & 7 == raw
+        checked += 1
+    rows, cols = _shape()
+    ob, goals = random_map(rows, cols, 3)
+    sched, iters = (4, 8), 2
+    res = plan(ob, goals, block=(n, m), iters=iters, schedule=sched)
+    await bench.load_map(ob | res.unreachable, _padded(ob, goals))
+    for f in ({"p1": 1, "step": 1, "p_last": 8}, {"p1": 4, "step": 4, "p_last": p_max + 1},
+              {"p1": 8, "step": 4, "p_last": 4}, {"p1": 4, "step": 0, "p_last": 8}):
+        await expect(Code.BAD_PRECISION, Op.START, iters=2, **f)
+    await expect(Code.BAD_ITERS, Op.START, p1=4, step=4, p_last=8, iters=0)
+    await expect(Code.OK, Op.START, p1=4, step=4, p_last=8, iters=iters)
+    await expect(Code.BUSY, Op.LOAD, block=0, row=0, col=0, flags=(1 << 18) - 1)
+    await expect(Code.BUSY, Op.READ, block=0, row=0, col=0)
+    await expect(Code.BUSY, Op.DIRECTION, block=0, row=0, col=0)
+    await expect(Code.BUSY, Op.START, p1=4, step=4, p_last=8, iters=2)
+    await expect(Code.BAD_NODE, Op.SET, block=B, row=0, col=0)
+    st = await bench.wait_idle()
+    h, const = await bench.read_all(ob.shape)
+    assert (h == res.padded_h).all() and (const == res.padded_const).all(), "a refused command changed the map"
+    assert (st["cycles"], st["sweeps"], st["p"]) == (res.cycles, res.sweeps, res.p)
+    dut._log.info(f"{checked} refused commands, each with its code; the run after them is exact")
+
+
+@pytest.mark.parametrize("sim", SIMULATORS)
+@pytest.mark.parametrize("name", SETS)
+def test_planner(sim, name):
+    if name == "b6x12" and sim == "icarus":
+        pytest.skip("6x12 blocks: Verilator only (Icarus runs ~200 cycles/s on 72 nodes)")
+    run("harmonic_planner", SETS[name], sim, "test_planner",
+        env={"PLANNER_PARAMS": json.dumps(SETS[name]), "PLANNER_SET": name})
+
+
+# --- elaboration (no simulation) ---
+
+def test_block_elaborates_paper_sizes():
+    """36x66 (paper 5.4: the XC2V6000 grid, 4 blocks at p = 254) and 48x96
+    (Table 3) blocks elaborate: the block level (all clusters instantiated and
+    wired, border and Early/Cvg trees) and one of its clusters.  A full
+    recursive elaboration of 4608 nodes takes minutes: `make verilog` /
+    scripts/synth.py cover emission at the tested sizes."""
+    from hdl.harmonic.block import Block
+    for n, m, blocks in ((36, 66, (2, 2)), (48, 96, (1, 1))):
+        blk = Block(n, m, blocks, p_max=254, depth=1024)
+        mod = blk.elaborate(None)
+        assert (blk.CR, blk.CC) == (n // 3, m // 6)
+        names = list(mod._named_submodules)
+        assert sum(str(k).startswith("cluster_") for k in names) == (n // 3) * (m // 6)
+        sub = mod._named_submodules["cluster_0_0"][0]
+        sub.elaborate(None)
+
+
+@pytest.mark.parametrize("kwargs,message", [
+    (dict(n=6, m=12, blocks=(5, 4), p_max=62, depth=1024),
+     "20 blocks at p_max=62 needs 20 \\* \\(p_max\\+2\\) = 1280 words per cluster RAM, but the RAM depth is 1024"),
+    (dict(n=4, m=12), "block rows n=4: must be a positive multiple of 3"),
+    (dict(n=6, m=10), "block columns m=10: must be a positive multiple of 6"),
+    (dict(n=6, m=12, p_max=1), "p_max=1 is not supported"),
+])
+def test_block_refuses(kwargs, message):
+    from hdl.harmonic.block import Block
+    with pytest.raises(ValueError, match=message):
+        Block(**kwargs)
+
+
+def test_block_fits_exactly():
+    from hdl.harmonic.block import Block
+    assert Block(6, 12, (4, 4), p_max=62, depth=1024).stride == 64      # 16 * 64 = 1024
