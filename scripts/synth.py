@@ -50,6 +50,11 @@ NODES = 18
 TOPS = [  # (name, params, paper FF / LUT4 / MHz)
     ("harmonic_node", {}, "11 / 22 / 361 (Table 1)"),
     ("harmonic_cluster", {"depth": 1024}, "198 / 398 / 300 (Table 2, without RAM)"),
+    # EDT/BFS (paper 004): Table II gives 1188 gates for "BFS and NNT" and
+    # Table I 232 MHz; hdl/edt_bfs/README.md compares.  The 16x16 array is
+    # left out: yosys 0.23 needs about 6 minutes for the 8x8 one already.
+    ("edt_cell", {"height": 16, "width": 16}, "1188 gates / - / 232 (Tables I-II, per cell?)"),
+    ("edt_array", {"height": 8, "width": 8}, "- (64 cells)"),
 ]
 DFLC_TOPS = [  # (name, params, paper figures), Spartan-3, paper 003 section 7
     ("dflc_core", {"fll": "table1"},

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from models.edt_bfs import EdtBfsResult, plan_path
+from models.edt_bfs import plan_path
 
 from .cli import CliError, check_cell, parse_cell
 from .mapfile import load_grid

@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from models.edt_bfs import OFFSETS, widths
 
-__all__ = ["EdtCell", "CellRegs", "cell_logic", "cell_widths"]
+__all__ = ["EdtCell", "cell_widths"]
 
 MAX_SIDE = 256      # elaboration limit: the read-out and the widths are sized for it
 
@@ -102,50 +102,26 @@ class EdtCell(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        regs = CellRegs(self.w, self)
-        nbs = {i: CellRegs.of_ports(self, i) for i in range(1, 9)}
+        regs = _View(**{f: getattr(self, f) for f in
+                        ("done", "delta", "dx", "dy", "visited", "di", "cfr", "parent")})
+        nbs = {i: _View(**{f: getattr(self, f"n{i}_{f}") for f in ("done", "delta", "dx", "dy", "visited")})
+               for i in range(1, 9)}
         ctl = {n: getattr(self, n) for n in ("shift", "step_edt", "step_cfr", "step_bfs", "k", "dfar")}
         m.d.comb += self.changed.eq(cell_logic(m, self.w, ctl, regs, nbs))
         return m
 
 
-class CellRegs:
-    """The registers of one cell (or a neighbour's view of them)."""
+class _View:
+    """Named access to a cell's registers, or to a neighbour's through the n{i}_* ports."""
 
-    FIELDS = ("done", "delta", "dx", "dy", "visited", "di", "cfr", "parent")
-
-    def __init__(self, w, src=None, prefix=""):
-        if src is not None:
-            for f in self.FIELDS:
-                setattr(self, f, getattr(src, f))
-            return
-        self.done = Signal(name=f"{prefix}done")
-        self.delta = Signal(w["delta"], name=f"{prefix}delta")
-        self.dx = Signal(signed(w["dx"]), name=f"{prefix}dx")
-        self.dy = Signal(signed(w["dy"]), name=f"{prefix}dy")
-        self.visited = Signal(name=f"{prefix}visited")
-        self.di = Signal(w["di"], name=f"{prefix}di")
-        self.cfr = Signal(name=f"{prefix}cfr")
-        self.parent = Signal(4, name=f"{prefix}parent")
-
-    @classmethod
-    def of_ports(cls, cell, i):
-        obj = cls.__new__(cls)
-        for f in ("done", "delta", "dx", "dy", "visited"):
-            setattr(obj, f, getattr(cell, f"n{i}_{f}"))
-        return obj
-
-    @classmethod
-    def zero(cls):
-        obj = cls.__new__(cls)
-        obj.done = obj.visited = obj.delta = obj.dx = obj.dy = None
-        return obj
+    def __init__(self, **fields):
+        self.__dict__.update(fields)
 
 
-def cell_logic(m, w, ctl, regs, nbs, prefix=""):
+def cell_logic(m, w, ctl, regs, nbs):
     """Fig. 2's logic of one cell into module ``m``; returns its ``changed`` value.
 
-    ``regs``: the cell's registers (CellRegs); ``nbs[i]``: neighbour p_i's
+    ``regs``: the cell's registers; ``nbs[i]``: neighbour p_i's
     registers (the ports n{i}_*); ``ctl``: the broadcast controls.
     """
     cw = w["cand"]
@@ -153,13 +129,11 @@ def cell_logic(m, w, ctl, regs, nbs, prefix=""):
     # ADD-SUB and INC (eq. 1-3): candidate δ_i, Δx_i, Δy_i of each neighbour.
     cands = []
     for i in range(1, 9):
-        nb = nbs.get(i)
-        if nb is None:
-            continue
+        nb = nbs[i]
         sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
         big_x = (Cat(C(1, 1), nb.dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), nb.dx).as_signed()) if sr else 0
         big_y = (Cat(C(1, 1), nb.dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), nb.dy).as_signed()) if sc else 0
-        d = Signal(signed(cw), name=f"{prefix}delta_{i}")
+        d = Signal(signed(cw), name=f"delta_{i}")
         m.d.comb += d.eq(nb.delta - big_x - big_y)
         x = (nb.dx + sr) if sr else nb.dx                 # INC: Δx_i (eq. 1)
         y = (nb.dy + sc) if sc else nb.dy
@@ -167,20 +141,15 @@ def cell_logic(m, w, ctl, regs, nbs, prefix=""):
 
     # MAX: seven CMP-MUX in three levels.  A CMP-MUX keeps its left
     # (lower-indexed) set unless the right one is valid and strictly greater,
-    # so ties go to the smallest neighbour index.  Missing neighbours (array
-    # border) drop out of the tree.
+    # so ties go to the smallest neighbour index.
     def cmp_mux(a, b, name):
-        if a is None:
-            return b
-        if b is None:
-            return a
         va, da, xa, ya = a
         vb, db, xb, yb = b
-        sel = Signal(name=f"{prefix}sel_{name}")
-        v = Signal(name=f"{prefix}v_{name}")
-        d = Signal(signed(cw), name=f"{prefix}d_{name}")
-        x = Signal(signed(w["dx"]), name=f"{prefix}x_{name}")
-        y = Signal(signed(w["dy"]), name=f"{prefix}y_{name}")
+        sel = Signal(name=f"sel_{name}")
+        v = Signal(name=f"v_{name}")
+        d = Signal(signed(cw), name=f"d_{name}")
+        x = Signal(signed(w["dx"]), name=f"x_{name}")
+        y = Signal(signed(w["dy"]), name=f"y_{name}")
         m.d.comb += [
             sel.eq(vb & (~va | (db > da))),
             v.eq(va | vb),
@@ -189,24 +158,24 @@ def cell_logic(m, w, ctl, regs, nbs, prefix=""):
         return v, d, x, y
 
     by_index = {i: (v, d, x, y) for i, v, d, x, y in cands}
-    l1 = [cmp_mux(by_index.get(j), by_index.get(j + 1), f"{j}{j + 1}") for j in (1, 3, 5, 7)]
+    l1 = [cmp_mux(by_index[j], by_index[j + 1], f"{j}{j + 1}") for j in (1, 3, 5, 7)]
     l2 = [cmp_mux(l1[0], l1[1], "1234"), cmp_mux(l1[2], l1[3], "5678")]
     vm, dm, xm, ym = cmp_mux(l2[0], l2[1], "m")
 
     # +2k adder; its sign is the third enable condition.
-    dnew = Signal(signed(cw + 1), name=f"{prefix}dnew")
+    dnew = Signal(signed(cw + 1), name="dnew")
     k2 = Cat(C(0, 1), ctl["k"])
     m.d.comb += dnew.eq(dm + k2)
-    en_edt = Signal(name=f"{prefix}en_edt")
+    en_edt = Signal(name="en_edt")
     m.d.comb += en_edt.eq(ctl["step_edt"] & ~regs.done & vm & ~dnew[-1])
 
     # BFS: the smallest visited neighbour index (priority encoder).
-    vis = [(i, nbs[i].visited) for i in range(1, 9) if nbs.get(i) is not None]
+    vis = [(i, nbs[i].visited) for i in range(1, 9)]
     first = C(0, 4)
     for i, v in reversed(vis):
         first = Mux(v, i, first)
     any_v = Cat(*[v for _, v in vis]).any()
-    en_bfs = Signal(name=f"{prefix}en_bfs")
+    en_bfs = Signal(name="en_bfs")
     m.d.comb += en_bfs.eq(ctl["step_bfs"] & regs.cfr & ~regs.visited & any_v)
 
     cfr_new = ~regs.done | (regs.di > ctl["dfar"])

@@ -9,7 +9,8 @@ start equal to the goal; no path requested; a changed environment (a moved
 obstacle, loaded into the same array without reset); random stalls on the
 image source and back-pressure on the result stream; a reset in the middle
 of the EDT and of the read-out, after which the core is idle and the next
-job is exact.  Environment: EDT_SIZE (array side), EDT_JOBS (random jobs).
+job is exact; a start outside a 7x9 array (start_err).  Environment:
+EDT_SIZE (HxW), EDT_JOBS (random jobs).
 """
 
 import os
@@ -24,12 +25,12 @@ from images import FAMILIES, free_cells
 from models.edt_bfs import plan_path
 from tb.runner import SIMULATORS, run, seed_from_env
 
-SIZE = int(os.environ.get("EDT_SIZE", "8"))
+H, W = (int(v) for v in os.environ.get("EDT_SIZE", "8x8").split("x"))
 JOBS = int(os.environ.get("EDT_JOBS", "6"))
 
 
 async def _setup(dut):
-    drv = EdtBfsDriver(dut, SIZE, SIZE)
+    drv = EdtBfsDriver(dut, H, W)
     await drv.start()
     seed = seed_from_env()
     dut._log.info(f"seed {seed} (replay with SEED={seed})")
@@ -48,7 +49,7 @@ async def random_and_structured(dut):
     names = list(FAMILIES)
     compared = found = 0
     for n in range(JOBS):
-        img = FAMILIES[names[n % len(names)]](rng, SIZE, SIZE)
+        img = FAMILIES[names[n % len(names)]](rng, H, W)
         cells = free_cells(img, rng, 4)
         if len(cells) < 2:
             img[0, 0] = False
@@ -59,35 +60,35 @@ async def random_and_structured(dut):
         compared += c
         found += model.path_found
     dut._log.info(f"{JOBS} jobs, {compared} values compared, {found} paths")
-    assert compared >= JOBS * 7 * SIZE * SIZE and found >= 1
+    assert compared >= JOBS * 7 * H * W and (found >= 1 or JOBS < 4)
 
 
 @cocotb.test()
 async def edge_cases(dut):
     drv, rng = await _setup(dut)
-    n = SIZE
+    h, w = H, W
     jobs = 0
     # no obstacles: nothing reached, all cfr, one EDT iteration
-    img = np.zeros((n, n), dtype=bool)
-    _, m = await _check(drv, img, [(0, 0)], (n - 1, n - 1), 2)
+    img = np.zeros((h, w), dtype=bool)
+    _, m = await _check(drv, img, [(0, 0)], (h - 1, w - 1), 2)
     assert m.iterations_edt == 1 and m.path_found and (m.distance == -1).all()
     # a goal on an obstacle (dropped) and a second goal
-    img[n // 2, n // 2] = True
-    _, m = await _check(drv, img, [(n // 2, n // 2), (n - 1, 0)], (0, n - 1), 0)
-    assert m.path[-1] == (n - 1, 0)
+    img[h // 2, w // 2] = True
+    _, m = await _check(drv, img, [(h // 2, w // 2), (h - 1, 0)], (0, w - 1), 0)
+    assert m.path[-1] == (h - 1, 0)
     # only a goal on an obstacle: nothing visited, no path
-    _, m = await _check(drv, img, [(n // 2, n // 2)], (0, 0), 0)
+    _, m = await _check(drv, img, [(h // 2, w // 2)], (0, 0), 0)
     assert not m.path_found and m.iterations_bfs == 1
     # unreachable goal behind a wall
-    wall = np.zeros((n, n), dtype=bool)
-    wall[:, n // 2] = True
-    _, m = await _check(drv, wall, [(0, 0)], (n - 1, n - 1), 0)
+    wall = np.zeros((h, w), dtype=bool)
+    wall[:, w // 2] = True
+    _, m = await _check(drv, wall, [(0, 0)], (h - 1, w - 1), 0)
     assert not m.path_found
     # start equal to the goal
     _, m = await _check(drv, wall, [(1, 1)], (1, 1), 0)
     assert m.path == [(1, 1)]
     # start outside the cfr (next to the wall, dfar 1)
-    _, m = await _check(drv, wall, [(0, 0)], (3, n // 2 - 1), 1)
+    _, m = await _check(drv, wall, [(0, 0)], (3, w // 2 - 1), 1)
     assert not m.path_found
     # no path requested
     _, m = await _check(drv, wall, [(0, 0)], None, 0)
@@ -102,17 +103,17 @@ async def edge_cases(dut):
 async def changed_environment(dut):
     """A moved obstacle loaded into the same array: nothing left over from the old image."""
     drv, rng = await _setup(dut)
-    n = SIZE
-    img = np.zeros((n, n), dtype=bool)
-    img[2:4, 2:n - 2] = True
-    goals, start = [(n - 1, n - 1)], (0, 0)
+    h, w = H, W
+    img = np.zeros((h, w), dtype=bool)
+    img[2:4, 2:w - 2] = True
+    goals, start = [(h - 1, w - 1)], (0, 0)
     _, m1 = await _check(drv, img, goals, start, 1)
     moved = np.zeros_like(img)
-    moved[n - 4:n - 2, 2:n - 2] = True
+    moved[h - 3:h - 1, 2:w - 2] = True
     _, m2 = await _check(drv, moved, goals, start, 1)
     assert not np.array_equal(m1.distance, m2.distance)
     # and back, plus a different goal set
-    _, m3 = await _check(drv, img, [(n - 1, 0)], (0, n - 1), 0)
+    _, m3 = await _check(drv, img, [(h - 1, 0)], (0, w - 1), 0)
 
 
 @cocotb.test()
@@ -120,7 +121,7 @@ async def back_pressure(dut):
     """Random image stalls and result back-pressure: same results, more cycles."""
     drv, rng = await _setup(dut)
     for n in range(3):
-        img = FAMILIES["random"](rng, SIZE, SIZE, 0.15)
+        img = FAMILIES["random"](rng, H, W, 0.15)
         cells = free_cells(img, rng, 3)
         model = plan_path(img, cells[1:], cells[0], 0)
         got = await drv.job(img, cells[1:], cells[0], 0, rng=rng, p_valid=0.6, p_ready=0.4)
@@ -140,30 +141,60 @@ async def _idle_after_reset(drv):
 @cocotb.test()
 async def reset_mid_job(dut):
     drv, rng = await _setup(dut)
-    n = SIZE
-    img = FAMILIES["rooms"](rng, n, n)
-    cells = free_cells(img, rng, 2)
+    img = FAMILIES["rooms"](rng, H, W)
+    img[0, 0] = img[H - 1, W - 1] = False
+    cells = [(0, 0), (H - 1, W - 1)]
     # in the EDT (after the load), then in the middle of the read-out
-    for abort in (n + 3, n + 3 * n + n * n // 2):
+    for abort in (W + 3, W + 3 * W + H * W // 2):
         assert await drv.job(img, cells[1:], cells[0], 0, abort_after=abort) is None
         await _idle_after_reset(drv)
         await _check(drv, img, cells[1:], cells[0], 0)
 
 
+@cocotb.test()
+async def start_out_of_range(dut):
+    """A start outside the array (possible when a side is no power of two): start_err, no path."""
+    drv, rng = await _setup(dut)
+    rows, cols = 1 << drv.widths["row"], 1 << drv.widths["col"]
+    starts = [(r, 0) for r in range(H, rows)] + [(0, c) for c in range(W, cols)]
+    img = FAMILIES["random"](rng, H, W, 0.1)
+    goals = free_cells(img, rng, 2)
+    for start in starts:
+        got = await drv.job(img, goals, start, 0)
+        compare(got, plan_path(img, goals, None, 0))   # as without a start: no path beats
+        assert got["start_err"] == 1 and not got["path"]
+    # a valid start clears the flag
+    got = await drv.job(img, goals, goals[0], 0)
+    assert got["start_err"] == 0
+    dut._log.info(f"{len(starts)} out-of-range starts")
+    assert len(starts) > 0 or (H & (H - 1) == 0 and W & (W - 1) == 0)
+
+
 def _params(size):
-    return {"height": size, "width": size}
+    h, w = size
+    return {"height": h, "width": w}
 
 
-# 8x8 on both simulators, 16x16 on Icarus.  A Verilator build grows with the
-# cell count (about 100 kB of C++ per cell instance) and Icarus runs a 32x32
-# array at tens of ms per cycle, so 32x32 runs only with EDT_BIG=1
+# All five tests at 8x8 on both simulators and 16x16 on Icarus; two random
+# 32x32 jobs on Icarus.  A Verilator build grows with the cell count (about
+# 100 kB of C++ per cell instance) and Icarus runs a 32x32 array at about
+# 15 ms per cycle, so the rest of the large cases run only with EDT_BIG=1
 # (hdl/edt_bfs/README.md gives the measured times).
-CASES = [(sim, 8, 6) for sim in SIMULATORS] + [("icarus", 16, 4)]
-BIG = [("icarus", 32, 1), ("verilator", 16, 2)]
+# (sim, size, random jobs, cocotb test filter or None for all five tests)
+CASES = [(sim, (8, 8), 6, None) for sim in SIMULATORS] + [
+    ("icarus", (16, 16), 3, None), ("icarus", (7, 9), 3, None),      # 7x9: non-square, start_err
+    ("icarus", (32, 32), 1, "random_and_structured")]
+BIG = [("icarus", (32, 32), 3, None), ("verilator", (16, 16), 2, None),
+       ("verilator", (32, 32), 1, "random_and_structured")]
 
 
-@pytest.mark.parametrize("sim, size, jobs", CASES + BIG, ids=[f"{s}-{n}x{n}" for s, n, _ in CASES + BIG])
-def test_edt_bfs_core(sim, size, jobs):
-    if (sim, size, jobs) in BIG and os.environ.get("EDT_BIG") != "1":
+@pytest.mark.parametrize("sim, size, jobs, only", CASES + BIG,
+                         ids=[f"{s}-{n[0]}x{n[1]}{'-' + o if o else ''}{'-big' if c in BIG else ''}"
+                              for c in CASES + BIG for s, n, _, o in [c]])
+def test_edt_bfs_core(sim, size, jobs, only):
+    if (sim, size, jobs, only) in BIG and os.environ.get("EDT_BIG") != "1":
         pytest.skip("large array: set EDT_BIG=1")
-    run("edt_bfs", _params(size), sim, "test_edt_bfs_core", env={"EDT_SIZE": size, "EDT_JOBS": jobs})
+    env = {"EDT_SIZE": f"{size[0]}x{size[1]}", "EDT_JOBS": jobs}
+    if only:
+        env["COCOTB_TEST_FILTER"] = only
+    run("edt_bfs", _params(size), sim, "test_edt_bfs_core", env=env)

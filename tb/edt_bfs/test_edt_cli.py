@@ -13,6 +13,7 @@ from models.edt_bfs import plan_path
 from sim import edt as cmd
 from sim.cli import CliError, main
 from sim.mapfile import load_grid
+from tb.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 MAP = ROOT / "maps" / "room-32-32-4.map"
@@ -76,14 +77,15 @@ def test_errors_as_subprocess(tmp_path):
         assert len(res.stderr.strip().splitlines()) == 1
 
 
-def test_rtl_engine_icarus(tmp_path):
-    """The RTL engine on an 8x8 map (the core test's 8x8 build is reused)."""
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_rtl_engine(tmp_path, sim):
+    """The RTL engines on an 8x8 map (the core test's 8x8 builds are reused)."""
     txt = tmp_path / "m.txt"
     txt.write_text("........\n..##....\n..##....\n........\n.....#..\n........\n.#......\n........\n")
     out = tmp_path / "m.json"
     assert main(["edt", str(txt), "--dfar", "0", "--goal", "7,7", "--goal", "0,7", "--start", "7,0",
-                 "--engine", "icarus", "--json", str(out)]) == 0
+                 "--engine", sim, "--json", str(out)]) == 0
     data = json.loads(out.read_text())
     m = plan_path(load_grid(txt), [(7, 7), (0, 7)], (7, 0), 0)
-    assert data["rtl_matches_model"] and data["engine"] == "icarus"
+    assert data["rtl_matches_model"] and data["engine"] == sim
     assert data["path"] == [list(p) for p in m.path] and data["cycles"] == m.cycles
