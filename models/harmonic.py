@@ -539,3 +539,288 @@ def from_ram_image(words, p, shape):
             v = (v << 1) | ((words[off] >> i) & 1)
         h[i] = v
     return h.reshape(shape), const.reshape(shape)
+
+
+# --- trajectory: gradient ascent on a computed field (paper 2.2, 5.3) -------
+#
+# The paper's Decision module (5.3) picks a continuous direction from the
+# steepest of the four triangles around the robot's node.  A planner that
+# returns a *path of cells* needs the discrete version of that ascent: from a
+# cell, step to the 4-neighbour (N, E, W, S: the node's own neighbours, eq. 2)
+# with the largest value, provided it is strictly larger than the cell's own
+# value.  Ties go to the first of N, E, W, S in that order, so the path is a
+# function of the field alone.  4-connected on purpose: the field's
+# "no local maximum" property (the stop criterion of the planner, 4.1) is a
+# statement about 4-neighbours, and a diagonal step could cut between two
+# obstacle corners.
+#
+# Why this reaches a goal from every free cell of a converged field: converged
+# means no free cell is >= all of its 4 neighbours, so every free cell has a
+# strictly higher neighbour; that neighbour is not an obstacle (obstacles
+# hold 0 and no value is below 0) and not outside the grid (ignored), so it is
+# free or a goal.  Values strictly increase along the path, so no cell repeats
+# and the path ends, which can only happen on a constant node above every
+# free value: a goal.  The path has at most (free cells + 1) cells.
+
+ASCENT_MOVES = ((-1, 0), (0, 1), (0, -1), (1, 0))    # N, E, W, S: tie-break order
+
+
+def ascent_next(h):
+    """For every cell, the cell the steepest 4-neighbour ascent moves to.
+
+    Returns ``(rows, cols)`` integer arrays; a cell with no strictly higher
+    neighbour (a goal, an obstacle, a local maximum or plateau) maps to itself.
+    Ties between equal highest neighbours go to the first of N, E, W, S.
+    """
+    h = np.asarray(h, dtype=object)
+    rows, cols = h.shape
+    pad = np.full((rows + 2, cols + 2), -1, dtype=object)      # outside: never chosen
+    pad[1:-1, 1:-1] = h
+    best = h.copy()
+    rr, cc = np.indices((rows, cols))
+    nr, nc = rr.copy(), cc.copy()
+    for dr, dc in ASCENT_MOVES:
+        nb = pad[1 + dr:1 + dr + rows, 1 + dc:1 + dc + cols]
+        higher = np.asarray(nb > best, dtype=bool)              # strict: the first of a tie wins
+        best = np.where(higher, nb, best)
+        nr = np.where(higher, rr + dr, nr)
+        nc = np.where(higher, cc + dc, nc)
+    return nr, nc
+
+
+def _ascent_goals(goals, shape):
+    if isinstance(goals, np.ndarray) and goals.dtype == bool:
+        if goals.shape != shape:
+            raise ValueError(f"goal mask is {goals.shape}, the field is {shape}")
+        return goals
+    mask = np.zeros(shape, dtype=bool)
+    for r, c in goals:
+        mask[r, c] = True
+    return mask
+
+
+class Trajectory:
+    """A gradient-ascent path: ``start``, ``path`` (list of (r, c), the start
+    first), ``reached_goal`` (False: the ascent stopped on a local maximum or
+    plateau, e.g. a cell no goal can reach or a field computed with too little
+    precision)."""
+
+    __slots__ = ("start", "path", "reached_goal")
+
+    def __init__(self, start, path, reached_goal):
+        self.start, self.path, self.reached_goal = tuple(start), [tuple(c) for c in path], bool(reached_goal)
+
+    def as_dict(self):
+        return {"start": list(self.start), "path": [list(c) for c in self.path],
+                "reached_goal": self.reached_goal}
+
+    def __repr__(self):
+        return f"Trajectory(start={self.start}, steps={len(self.path) - 1}, reached_goal={self.reached_goal})"
+
+
+def trajectory(h, goals, start, nxt=None):
+    """Steepest 4-neighbour ascent of field ``h`` from ``start`` until a goal.
+
+    ``goals``: a bool mask or a list of (r, c).  ``nxt``: :func:`ascent_next`
+    of ``h`` when the caller already has it (many starts on one field).
+    Stops at a goal (``reached_goal`` True) or where no neighbour is strictly
+    higher (False).  The values along the path strictly increase, so it always
+    ends, after at most ``h.size`` steps.
+    """
+    h = np.asarray(h, dtype=object)
+    goal = _ascent_goals(goals, h.shape)
+    r, c = (int(x) for x in start)
+    if not (0 <= r < h.shape[0] and 0 <= c < h.shape[1]):
+        raise ValueError(f"start ({r}, {c}) outside the {h.shape[0]}x{h.shape[1]} field")
+    nr, nc = ascent_next(h) if nxt is None else nxt
+    path = [(r, c)]
+    while not goal[r, c]:
+        r2, c2 = int(nr[r, c]), int(nc[r, c])
+        if (r2, c2) == (r, c):
+            break
+        r, c = r2, c2
+        path.append((r, c))
+    return Trajectory(start, path, goal[r, c])
+
+
+def ascent_reaches(h, goals, cells=None):
+    """Bool array: True where the ascent from that cell ends on a goal.
+
+    Follows :func:`ascent_next` once for all cells (memoized along the paths),
+    so checking every free cell of a map costs one pass.  ``cells`` (bool
+    mask) limits the answer to those cells; the others are False.
+    """
+    h = np.asarray(h, dtype=object)
+    goal = _ascent_goals(goals, h.shape)
+    nr, nc = ascent_next(h)
+    rows, cols = h.shape
+    known = np.full(h.shape, -1, dtype=np.int8)          # -1 unknown, 0 no, 1 yes
+    known[goal] = 1
+    todo = np.argwhere(np.ones(h.shape, dtype=bool) if cells is None else cells)
+    for r0, c0 in todo:
+        chain, r, c = [], int(r0), int(c0)
+        while known[r, c] < 0:
+            chain.append((r, c))
+            r2, c2 = int(nr[r, c]), int(nc[r, c])
+            if (r2, c2) == (r, c):
+                known[r, c] = 0
+                break
+            r, c = r2, c2
+        for cell in chain:
+            known[cell] = known[r, c]
+    out = known == 1
+    return out if cells is None else out & cells
+
+
+__all__ += ["ASCENT_MOVES", "ascent_next", "Trajectory", "trajectory", "ascent_reaches"]
+
+
+# --- schedule exploration (benches: the choices the paper leaves open, 4.5) -
+#
+# plan() is the planner as the RTL runs it.  plan_explore() runs the same
+# algorithm with the schedule choices section 4.5 leaves open, for the
+# benches: the block order and skipping still blocks.  With its defaults it
+# is plan() exactly (same values, sweeps, iterations and cycles: tested), and
+# from below every variant ends in the same field (the least fixed point of
+# the floored map: tb/harmonic/test_model_blocks_bound.py); only the cost
+# differs.
+#
+# order:  "raster" (plan's: row-major), "serpentine" (row-major, every other
+#         block row reversed), "alternate" (raster, reversed on every other
+#         sweep), "goal" (blocks by their BFS distance to the nearest goal,
+#         nearest first: the values flow outward from the goals).
+# skip:   a block is visited in a sweep only while "dirty": all blocks are
+#         dirty at the start of a level; a visit that changes the block makes
+#         dirty the neighbouring blocks whose facing border row/column changed,
+#         and the block itself if it used up its I iterations.  A skipped
+#         block costs SKIP_CYCLES (the Control module's decision cycle); the
+#         level's update phase ends when no block is dirty, which is again a
+#         fixed point of the whole map (every block stable against its
+#         neighbours' current values).  Hardware cost: one dirty bit per block.
+
+SKIP_CYCLES = 1
+
+
+def plan_explore(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), order="raster", skip=False):
+    """:func:`plan` (without events) with a block ``order`` and optional
+    skipping of still blocks; returns a :class:`PlanResult` (``skipped``
+    visits are counted in ``levels``)."""
+    n, m = _check_block(block)
+    iters = int(iters)
+    if iters < 1:
+        raise ValueError(f"iters={iters}: at least 1 iteration per block")
+    if order not in ("raster", "serpentine", "alternate", "goal"):
+        raise ValueError(f"order {order!r}: raster, serpentine, alternate or goal")
+    sched = _schedule(schedule)
+    obstacle = np.asarray(obstacle, dtype=bool)
+    H, W = obstacle.shape
+    obst = pad_to_blocks(obstacle, (n, m))
+    goal = _goal_mask(goals, obst.shape)
+    if not goal.any() or (goal & obst).any():
+        raise ValueError("needs at least one goal, none on an obstacle")
+    reach = reachable(obst, goal)
+    unreachable = ~obst & ~reach
+    const = obst | goal | unreachable
+    rows, cols = obst.shape
+    BR, BC = rows // n, cols // m
+    B = BR * BC
+    raster = [(br, bc) for br in range(BR) for bc in range(BC)]
+    if order == "serpentine":
+        base = [(br, bc if br % 2 == 0 else BC - 1 - bc) for br, bc in raster]
+    elif order == "goal":
+        dist = np.full(obst.shape, np.inf)
+        queue = deque(map(tuple, np.argwhere(goal)))
+        for g in queue:
+            dist[g] = 0
+        while queue:
+            r, c = queue.popleft()
+            for rr, cc in ((r - 1, c), (r, c + 1), (r, c - 1), (r + 1, c)):
+                if 0 <= rr < rows and 0 <= cc < cols and not obst[rr, cc] and dist[rr, cc] == np.inf:
+                    dist[rr, cc] = dist[r, c] + 1
+                    queue.append((rr, cc))
+        base = sorted(raster, key=lambda b: (dist[b[0] * n:b[0] * n + n, b[1] * m:b[1] * m + m].min(), b))
+    else:
+        base = raster
+
+    dtype = np.int64 if sched[-1] <= _INT64_P_MAX else object
+    p = sched[0]
+    pad = np.zeros((rows + 2, cols + 2), dtype=dtype)
+    hv = pad[1:-1, 1:-1]
+    hv[goal] = one(p)
+    res = PlanResult(h=None, const=None, p=p, converged=False, maxima=0,
+                     unreachable=unreachable[:H, :W], block=(n, m), blocks=(BR, BC))
+
+    def visit(br, bc):
+        """Up to I iterations; returns (counted i, stable, changed edges N, E, W, S)."""
+        r0, c0 = br * n, bc * m
+        fixed = const[r0:r0 + n, c0:c0 + m]
+        before = hv[r0:r0 + n, c0:c0 + m].copy()
+        for i in range(1, iters + 1):
+            old = hv[r0:r0 + n, c0:c0 + m]
+            s = (pad[r0:r0 + n, c0 + 1:c0 + m + 1] + pad[r0 + 2:r0 + n + 2, c0 + 1:c0 + m + 1]
+                 + pad[r0 + 1:r0 + n + 1, c0:c0 + m] + pad[r0 + 1:r0 + n + 1, c0 + 2:c0 + m + 2])
+            new = np.where(fixed, old, s >> 2)
+            if (new == old).all():
+                stable = True
+                break
+            hv[r0:r0 + n, c0:c0 + m] = new
+        else:
+            i, stable = iters, False
+        after = hv[r0:r0 + n, c0:c0 + m]
+        edges = (not (after[0] == before[0]).all(), not (after[:, -1] == before[:, -1]).all(),
+                 not (after[:, 0] == before[:, 0]).all(), not (after[-1] == before[-1]).all())
+        return i, stable, edges
+
+    cycles = RUN_OVERHEAD
+    while True:
+        level = {"p": p, "sweeps": 0, "block_iterations": 0, "maxima": None, "skipped": 0}
+        dirty = {b: True for b in raster}
+        while True:                                   # update sweeps
+            blocks = base[::-1] if order == "alternate" and level["sweeps"] % 2 else base
+            changed = False
+            for br, bc in blocks:
+                if skip and not dirty[(br, bc)]:
+                    cycles += SKIP_CYCLES
+                    level["skipped"] += 1
+                    continue
+                dirty[(br, bc)] = False
+                i, stable, edges = visit(br, bc)
+                res.block_iterations += i
+                level["block_iterations"] += i
+                cycles += visit_cycles(min(i + 1, iters) if stable else iters, p)
+                if i > 1 or not stable:
+                    changed = True
+                    dirty[(br, bc)] = not stable
+                    for (dr, dc), moved in zip(((-1, 0), (0, 1), (0, -1), (1, 0)), edges):
+                        if moved and (br + dr, bc + dc) in dirty:
+                            dirty[(br + dr, bc + dc)] = True
+            res.sweeps += 1
+            level["sweeps"] += 1
+            if not (any(dirty.values()) if skip else changed):
+                break
+        cycles += B * visit_cycles(1, p)              # check pass
+        res.check_iterations += B
+        nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
+        maxima = int(local_max(hv, const, nb).sum())
+        level["maxima"] = maxima
+        res.levels.append(level)
+        if maxima == 0:
+            res.converged = True
+            break
+        later = [q for q in sched if q > p]
+        if not later:
+            break
+        pad <<= later[0] - p
+        p = later[0]
+    res.p = p
+    res.maxima = maxima
+    res.cycles = cycles
+    res.node_updates = res.block_iterations * n * m
+    res.padded_h = np.array(hv, dtype=object)
+    res.padded_const = const.copy()
+    res.h = res.padded_h[:H, :W].copy()
+    res.const = const[:H, :W].copy()
+    return res
+
+
+__all__ += ["SKIP_CYCLES", "plan_explore"]

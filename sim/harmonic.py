@@ -1,0 +1,292 @@
+"""Plan on a map with the harmonic planner (model or RTL) and follow the gradient.
+
+    python -m sim harmonic MAP --goal R,C [--goal R,C ...] [--start R,C ...]
+        [--block NxM] [--iters I] [--schedule P1,P2,... | P1:STEP:PMAX]
+        [--engine model|icarus|verilator] [--json OUT] [--plot OUT.png]
+
+MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free) or
+an image (.pgm/.png: dark = obstacle).  Cells are ROW,COL from the top left,
+0-based.  The map is cut into blocks of NxM nodes (default 6x12, I = 6: the
+defaults of models.harmonic.plan, the planner RTL's array); a size that is not a multiple of the block is padded with
+obstacles on the bottom and right, which changes nothing in the solution
+(outside the map already reads as an obstacle).
+
+The planner runs the paper's block-synchronous algorithm (section 4
+pseudo-code): up to I iterations per block while the block changes, sweeps
+over all blocks until none changes, then the next precision of the schedule
+while local maxima remain.  Schedule default 16:16:256 (p = 16, 32, ... 256);
+the RTL engines are limited to what the planner driver supports.  Free cells
+no goal can reach cannot get a gradient; they are reported ("unreachable")
+and left out of the convergence criterion.
+
+Trajectories: steepest 4-neighbour ascent from each --start (ties to the
+first of N, E, W, S) until a goal, on the final field.
+
+Output: a summary on stdout; --json writes height, width (of MAP, before
+padding), engine, precision, converged, sweeps, block_iterations,
+node_updates, cycles, potential (HxW floats, obstacles 0, goals 1),
+unreachable ([r, c] list), trajectories ([{start, path, reached_goal}]);
+--plot writes the map, the log-scale potential and the trajectories.
+
+Exit status: 0 planned, converged, every start reached a goal; 1 planned but
+not converged or a start did not reach a goal (e.g. no goal can reach it);
+2 bad input (one line on stderr).
+"""
+
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .cli import CliError, check_cell, parse_cell
+
+ENGINES = ("model", "icarus", "verilator")
+DEFAULT_SCHEDULE = "16:16:256"
+MAX_BLOCK_SIDE = 4096   # the map is padded to whole blocks: keep that bounded
+P_LIMIT = 1022          # the deepest word (p+2 bits) a 1024-deep node RAM holds
+
+
+def add_arguments(parser):
+    parser.add_argument("map", metavar="MAP", help="map file: .map, .txt, .pgm or .png")
+    parser.add_argument("--goal", action="append", default=[], metavar="R,C",
+                        help="goal cell (repeat for several goals; at least one)")
+    parser.add_argument("--start", action="append", default=[], metavar="R,C",
+                        help="start cell of a trajectory (repeatable)")
+    parser.add_argument("--block", metavar="NxM",
+                        help="block size in nodes (default: the planner RTL's, models.harmonic.plan's default)")
+    parser.add_argument("--iters", default=None, metavar="I",
+                        help="iterations per block visit at most (default: plan's default)")
+    parser.add_argument("--schedule", default=None, metavar="P1,P2,...|P1:STEP:PMAX",
+                        help=f"precisions, increasing (default {DEFAULT_SCHEDULE})")
+    parser.add_argument("--engine", choices=ENGINES, default="model",
+                        help="model (default), or the planner RTL on icarus / verilator")
+    parser.add_argument("--json", metavar="OUT", help="write the result as JSON")
+    parser.add_argument("--plot", metavar="OUT.png", help="plot map, potential (log scale) and trajectories")
+
+
+# --- argument parsing -------------------------------------------------------
+
+def parse_schedule(text, limit=P_LIMIT):
+    """``"P1,P2,..."`` or ``"P1:STEP:PMAX"`` -> strictly increasing list of precisions."""
+    text = text.strip()
+    try:
+        if ":" in text:
+            parts = [int(x) for x in text.split(":")]
+            if len(parts) != 3:
+                raise ValueError
+            first, step, last = parts
+            if step < 1:
+                raise CliError(f"--schedule {text!r}: STEP must be >= 1")
+            if last < first:
+                raise CliError(f"--schedule {text!r}: PMAX {last} is below P1 {first}")
+            if first < 2 or last > limit:
+                raise CliError(f"--schedule {text!r}: precisions must lie in 2..{limit}")
+            ps = list(range(first, last + 1, step))
+        else:
+            ps = [int(x) for x in text.split(",")]
+    except ValueError:
+        raise CliError(f"--schedule {text!r}: expected P1,P2,... or P1:STEP:PMAX (integers)") from None
+    if not ps:
+        raise CliError(f"--schedule {text!r}: no precision")
+    if any(b <= a for a, b in zip(ps, ps[1:])):
+        raise CliError(f"--schedule {text!r}: precisions must increase")
+    if ps[0] < 2 or ps[-1] > limit:
+        raise CliError(f"--schedule {text!r}: precisions must lie in 2..{limit}")
+    return ps
+
+
+def parse_block(text, default):
+    if text is None:
+        return tuple(default)
+    parts = text.lower().split("x")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        n, m = int(parts[0]), int(parts[1])
+    except ValueError:
+        raise CliError(f"--block {text!r}: expected NxM (two positive integers, e.g. 16x16)") from None
+    if n < 1 or m < 1:
+        raise CliError(f"--block {text!r}: both sides must be >= 1")
+    if n > MAX_BLOCK_SIDE or m > MAX_BLOCK_SIDE:
+        raise CliError(f"--block {text!r}: sides above {MAX_BLOCK_SIDE} are not supported")
+    return n, m
+
+
+def parse_iters(text):
+    try:
+        iters = int(text)
+    except ValueError:
+        raise CliError(f"--iters {text!r}: expected a positive integer") from None
+    if iters < 1:
+        raise CliError(f"--iters {iters}: must be >= 1")
+    return iters
+
+
+# --- running ----------------------------------------------------------------
+
+def _progress(message):
+    print(f"\r{message}", end="", file=sys.stderr, flush=True)
+
+
+def _plan_defaults():
+    """plan()'s own defaults (the RTL planner's block and I), so that the
+    command and the model agree without a second copy of the numbers."""
+    import inspect
+    from models.harmonic import plan
+    params = inspect.signature(plan).parameters
+    return tuple(params["block"].default), int(params["iters"].default)
+
+
+def run_engine(engine, obstacle, goals, block, iters, schedule):
+    """Plan with the model or the RTL; returns a dict with the PlanResult
+    fields (h and unreachable on the unpadded map)."""
+    keys = ("h", "p", "converged", "maxima", "unreachable", "sweeps", "block_iterations",
+            "check_iterations", "node_updates", "cycles", "levels")
+    if engine == "model":
+        from models.harmonic import plan
+        try:
+            r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule))
+        except ValueError as e:
+            raise CliError(str(e)) from None
+        return {k: getattr(r, k) for k in keys}
+    try:
+        from tb.harmonic.planner_bench import run_planner_rtl
+    except ImportError:
+        raise CliError(f"--engine {engine}: not available (the planner RTL driver "
+                       "tb/harmonic/planner_bench.py is not in this checkout); use --engine model") from None
+    try:
+        out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine, progress=_progress)
+    except ValueError as e:
+        raise CliError(f"--engine {engine}: {e}") from None
+    finally:
+        print(file=sys.stderr)
+    return {k: (out.get(k) if isinstance(out, dict) else getattr(out, k)) for k in keys}
+
+
+def plan_map(grid, goals, starts, block, iters, schedule, engine="model"):
+    """The whole command without I/O: returns the JSON-ready dict and the
+    field (h at precision p, unpadded map)."""
+    from models.harmonic import ascent_next, pad_to_blocks, reachable, trajectory
+
+    height, width = grid.shape
+    padded = pad_to_blocks(grid, block)
+    reach = reachable(grid, goals)
+    res = run_engine(engine, grid, goals, block, iters, schedule)
+    h, p = np.asarray(res["h"], dtype=object)[:height, :width], int(res["p"])
+    goal_mask = np.zeros(grid.shape, dtype=bool)
+    for g in goals:
+        goal_mask[g] = True
+    nxt = ascent_next(h)
+    trajectories = []
+    for s in starts:
+        tr = trajectory(h, goal_mask, s, nxt=nxt).as_dict()
+        tr["reachable"] = bool(reach[s])
+        trajectories.append(tr)
+    unreachable = [[int(r), int(c)] for r, c in np.argwhere(~grid & ~reach)]
+    unit = 1 << p                  # int / int is correctly rounded at any p
+    potential = [[int(v) / unit for v in row] for row in h]
+    return {
+        "height": height, "width": width, "engine": engine, "precision": p,
+        "converged": bool(res["converged"]), "sweeps": int(res["sweeps"]),
+        "block_iterations": int(res["block_iterations"]), "node_updates": int(res["node_updates"]),
+        "cycles": int(res["cycles"]), "maxima": int(res["maxima"]),
+        "check_iterations": int(res["check_iterations"]),
+        "block": list(block), "iters": iters, "schedule": list(schedule),
+        "padded": list(padded.shape), "levels": _levels_json(res.get("levels") or []),
+        "potential": potential, "unreachable": unreachable, "trajectories": trajectories,
+    }, (h, p)
+
+
+def _levels_json(levels):
+    out = []
+    for lv in levels:
+        d = lv if isinstance(lv, dict) else getattr(lv, "__dict__", {})
+        out.append({k: (int(v) if isinstance(v, (int, np.integer)) and not isinstance(v, bool) else v)
+                    for k, v in d.items() if isinstance(v, (int, float, bool, str, np.integer))})
+    return out
+
+
+def plot(path, grid, result, title):
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    pot = np.array(result["potential"], dtype=float)
+    floor = 2.0 ** -result["precision"]
+    field = np.where(grid, np.nan, np.log10(np.maximum(pot, max(floor, 1e-300))))
+    fig, axes = plt.subplots(1, 2, figsize=(12, 5.6))
+    axes[0].imshow(grid, cmap="gray_r", interpolation="nearest")
+    axes[0].set_title("map (black: obstacle)")
+    axes[1].set_facecolor("black")
+    im = axes[1].imshow(field, cmap="viridis", interpolation="nearest")
+    fig.colorbar(im, ax=axes[1], label="log10 potential (goal = 1)")
+    axes[1].set_title(f"potential, p = {result['precision']}")
+    for ax in axes:
+        goals = result["_goals"]
+        ax.plot([c for _, c in goals], [r for r, _ in goals], "*", color="red", ms=12)
+        for tr in result["trajectories"]:
+            pr, pc = np.array(tr["path"]).T
+            ax.plot(pc, pr, color="white" if ax is axes[1] else "tab:blue", lw=1.5)
+            ax.plot(pc[0], pr[0], "o", color="tab:orange" if tr["reached_goal"] else "tab:red")
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def run(args):
+    from .mapfile import load_grid
+
+    path = Path(args.map)
+    if not path.is_file():
+        raise CliError(f"{path}: no such map file")
+    grid = load_grid(path)
+    if not args.goal:
+        raise CliError("no goal: give at least one --goal R,C")
+    goals = [check_cell(grid, parse_cell(g, "--goal"), "goal") for g in args.goal]
+    starts = [check_cell(grid, parse_cell(s, "--start"), "start") for s in args.start]
+    default_block, default_iters = _plan_defaults()
+    block = parse_block(args.block, default_block)
+    iters = parse_iters(args.iters) if args.iters is not None else default_iters
+    schedule = parse_schedule(args.schedule or DEFAULT_SCHEDULE)
+
+    t0 = time.time()
+    result, _ = plan_map(grid, goals, starts, block, iters, schedule, args.engine)
+    seconds = time.time() - t0
+
+    lines = [
+        f"{path.name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), block "
+        f"{block[0]}x{block[1]} (padded to {result['padded'][0]}x{result['padded'][1]}), I = {iters}, "
+        f"engine {args.engine}",
+        f"precision {result['precision']} ("
+        + ("converged: no local maximum" if result["converged"]
+           else f"NOT converged: {result['maxima']} local maxima left at the schedule's end")
+        + f"; levels p = {','.join(str(lv['p']) for lv in result['levels'])}); {result['sweeps']} sweeps, "
+        f"{result['block_iterations']} block iterations, {result['node_updates']} node updates, "
+        f"{result['cycles']} cycles ({seconds:.1f} s)",
+    ]
+    if result["unreachable"]:
+        lines.append(f"{len(result['unreachable'])} free cell(s) no goal can reach (no gradient there)")
+    for tr in result["trajectories"]:
+        s = tuple(tr["start"])
+        if tr["reached_goal"]:
+            lines.append(f"start {s}: reaches goal {tuple(tr['path'][-1])} in {len(tr['path']) - 1} steps")
+        elif not tr["reachable"]:
+            lines.append(f"start {s}: no goal can reach this cell (walled off): no trajectory")
+        else:
+            lines.append(f"start {s}: STUCK at {tuple(tr['path'][-1])} after {len(tr['path']) - 1} steps "
+                         "(local maximum: more precision needed)")
+    if args.json:
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(result))
+        lines.append(f"wrote {args.json}")
+    if args.plot:
+        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
+        title = f"{path.name}: harmonic potential, p = {result['precision']}, engine {args.engine}"
+        plot(args.plot, grid, dict(result, _goals=goals), title)
+        lines.append(f"wrote {args.plot}")
+    print("\n".join(lines))
+    ok = result["converged"] and all(tr["reached_goal"] for tr in result["trajectories"])
+    return 0 if ok else 1

@@ -1,0 +1,45 @@
+"""cocotb job: the tracker's closed loop with the DFLC RTL inside the simulator.
+
+Reads a closed-loop job (chains, tracker parameters, start, slip, seed: see
+sim/tracking.py ``loop_job``) from the JSON file named by $TRACK_JOB, runs the
+loop of models/tracker.py with one inference per control period through the
+emitted DFLC stream top (tb/dflc/dflc_bench.py drives it), and writes the
+loop's result to $TRACK_RESULT.  It checks nothing itself: the callers compare
+the curvature codes with the golden model's run.
+"""
+
+import json
+import os
+from pathlib import Path
+
+import cocotb
+
+from hdl.dflc.top import config_for
+from models.dflc import Dflc
+from sim.tracking import loop_from_job
+from tb.dflc.dflc_bench import DflcStream
+
+DFLC_TOP = "dflc_stream"
+DFLC_PARAMS = {"fll": "table1"}      # the paper's Table 1 controller, Table 2 widths
+
+
+async def closed_loop(dut, job, prefix=""):
+    """Run the job's loop on the RTL; returns ClosedLoop.result().
+
+    ``prefix``: the Table 1 instance's port prefix in a multi-configuration
+    test top (hdl/dflc/multi.py, ``"t1_"``), "" for the plain top."""
+    config = config_for(**DFLC_PARAMS)
+    bench = DflcStream(dut, config, prefix=prefix)
+    await bench.start()
+    loop = loop_from_job(job, Dflc(config))
+    while (codes := loop.inputs()) is not None:
+        y, zero = await bench.infer([int(c) for c in codes])
+        loop.advance(y, zero)
+    return loop.result()
+
+
+@cocotb.test()
+async def track_rtl(dut):
+    job = json.loads(Path(os.environ["TRACK_JOB"]).read_text())
+    result = await closed_loop(dut, job)
+    Path(os.environ["TRACK_RESULT"]).write_text(json.dumps(result))

@@ -1,0 +1,207 @@
+"""``python -m sim harmonic``: results, the JSON contract, and every bad input.
+
+Most cases call ``sim.cli.main([...])`` in-process (fast); a few run the
+command as a subprocess to check the exit code and that no traceback leaks.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sim.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+ROOM = str(ROOT / "maps" / "room-32-32-4.map")
+KEYS = {"height", "width", "engine", "precision", "converged", "sweeps", "block_iterations",
+        "node_updates", "cycles", "potential", "unreachable", "trajectories"}
+
+# 7 x 13 (not a multiple of 6x12): a pocket at the right no goal reaches.
+ASCII = """\
+.............
+.#####.###...
+.#.......#...
+.#.###...####
+.#...#...#...
+.....#...#...
+.....#...#...
+"""
+
+
+def _run(args, capsys):
+    rc = main(["harmonic", *args])
+    out = capsys.readouterr()
+    assert "Traceback" not in out.err
+    return rc, out.out, out.err
+
+
+@pytest.fixture
+def ascii_map(tmp_path):
+    path = tmp_path / "grid.txt"
+    path.write_text(ASCII)
+    return path
+
+
+def test_json_contract_and_padding(ascii_map, tmp_path, capsys):
+    out = tmp_path / "r.json"
+    rc, text, _ = _run([str(ascii_map), "--goal", "0,0", "--start", "6,8", "--start", "2,2",
+                        "--block", "6x12", "--iters", "3", "--schedule", "8:8:64", "--json", str(out)], capsys)
+    assert rc == 0, text
+    r = json.loads(out.read_text())
+    assert KEYS <= set(r) and r["engine"] == "model"
+    assert (r["height"], r["width"]) == (7, 13) and r["padded"] == [12, 24]
+    pot = np.array(r["potential"])
+    assert pot.shape == (7, 13) and pot.min() >= 0 and pot.max() <= 1
+    grid = np.array([[ch == "#" for ch in row] for row in ASCII.splitlines()])
+    free = ~grid
+    free[0, 0] = False
+    assert (pot[grid] == 0).all() and pot[0, 0] == 1.0 and (pot[free] < 1).all()
+    assert r["converged"] and r["precision"] in (8, 16, 24, 32, 40, 48, 56, 64)
+    assert r["sweeps"] > 0 and r["block_iterations"] > 0 and r["cycles"] > 0
+    assert r["node_updates"] == r["block_iterations"] * 72
+    # the pocket right of column 9, rows 4..6, and the cells behind it
+    assert [4, 10] in r["unreachable"] and all(pot[rc_[0], rc_[1]] == 0 for rc_ in r["unreachable"])
+    t0, t1 = r["trajectories"]
+    assert t0["start"] == [6, 8] and t0["reached_goal"] and t0["path"][-1] == [0, 0]
+    assert t1["start"] == [2, 2] and t1["reached_goal"]
+    for t in (t0, t1):
+        values = [pot[r_, c_] for r_, c_ in t["path"]]
+        assert all(b > a for a, b in zip(values, values[1:]))
+        assert all(abs(r1 - r0) + abs(c1 - c0) == 1 for (r0, c0), (r1, c1) in zip(t["path"], t["path"][1:]))
+    assert "reaches goal (0, 0)" in text
+
+
+def test_same_field_any_block(ascii_map, tmp_path, capsys):
+    """The block schedule changes the cost, not the field (bound test, part 2)."""
+    fields = []
+    for block, iters in (("6x12", "6"), ("3x3", "1"), ("7x13", "100")):
+        out = tmp_path / f"{block}.json"
+        assert _run([str(ascii_map), "--goal", "0,0", "--block", block, "--iters", iters,
+                     "--schedule", "16,32,48", "--json", str(out)], capsys)[0] == 0
+        fields.append(json.loads(out.read_text()))
+    assert fields[0]["potential"] == fields[1]["potential"] == fields[2]["potential"]
+    assert len({f["cycles"] for f in fields}) == 3
+
+
+def test_image_map_and_plot(tmp_path, capsys):
+    from PIL import Image
+    grid = np.array([[ch == "#" for ch in row] for row in ASCII.splitlines()])
+    img = tmp_path / "grid.png"
+    Image.fromarray(np.where(grid, 0, 255).astype(np.uint8)).save(img)
+    pgm = tmp_path / "grid.pgm"
+    Image.fromarray(np.where(grid, 0, 255).astype(np.uint8)).save(pgm)
+    plot = tmp_path / "out" / "plot.png"
+    results = []
+    for path in (img, pgm):
+        out = tmp_path / (path.suffix[1:] + ".json")
+        extra = ["--plot", str(plot)] if path is img else []
+        rc, text, _ = _run([str(path), "--goal", "0,12", "--start", "6,0", "--schedule", "16:16:64",
+                            "--json", str(out), *extra], capsys)
+        assert rc == 0, text
+        results.append(json.loads(out.read_text()))
+    assert results[0]["potential"] == results[1]["potential"]
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and plot.stat().st_size > 10_000
+
+
+def test_unreachable_start_is_reported(ascii_map, tmp_path, capsys):
+    out = tmp_path / "r.json"
+    rc, text, err = _run([str(ascii_map), "--goal", "0,0", "--start", "5,11", "--start", "6,0",
+                          "--json", str(out)], capsys)
+    assert rc == 1 and err == ""
+    t = json.loads(out.read_text())["trajectories"]
+    assert t[0] == {"start": [5, 11], "path": [[5, 11]], "reached_goal": False, "reachable": False}
+    assert t[1]["reached_goal"]
+    assert "start (5, 11): no goal can reach this cell" in text
+
+
+def test_not_converged_is_reported(tmp_path, capsys):
+    from maps_small import corridor
+    grid, goals = corridor(30)
+    path = tmp_path / "corridor.txt"
+    path.write_text("\n".join("".join("#" if x else "." for x in row) for row in grid) + "\n")
+    out = tmp_path / "r.json"
+    rc, text, _ = _run([str(path), "--goal", "1,30", "--start", "1,1", "--schedule", "8,16",
+                        "--json", str(out)], capsys)
+    r = json.loads(out.read_text())
+    assert rc == 1 and not r["converged"] and r["precision"] == 16
+    assert not r["trajectories"][0]["reached_goal"] and "NOT converged" in text and "STUCK" in text
+
+
+BAD_MAP = "type octile\nheight 2\nwidth 3\nmap\n.@.\n.x.\n"
+
+
+@pytest.mark.parametrize("args,message", [
+    (["{missing}", "--goal", "0,0"], "no such map file"),
+    (["{bad_map}", "--goal", "0,0"], r"bad.map:6: unknown terrain 'x'"),
+    (["{bad_txt}", "--goal", "0,0"], r"bad.txt:2: row has 2 cells"),
+    (["{bad_png}", "--goal", "0,0"], "not a readable image"),
+    (["{bad_suffix}", "--goal", "0,0"], "unknown map format"),
+    ([ROOM], "no goal"),
+    ([ROOM, "--goal", "0,0"], r"goal \(0, 0\) is on an obstacle"),
+    ([ROOM, "--goal", "32,5"], r"goal \(32, 5\) is outside the 32x32 map"),
+    ([ROOM, "--goal=-1,5"], r"goal \(-1, 5\) is outside"),
+    ([ROOM, "--goal", "3;3"], "--goal '3;3': expected ROW,COL"),
+    ([ROOM, "--goal", "3,3", "--start", "0,0"], r"start \(0, 0\) is on an obstacle"),
+    ([ROOM, "--goal", "3,3", "--start", "3,40"], r"start \(3, 40\) is outside"),
+    ([ROOM, "--goal", "3,3", "--start", "x"], "--start 'x'"),
+    ([ROOM, "--goal", "3,3", "--schedule", "32,16"], "must increase"),
+    ([ROOM, "--goal", "3,3", "--schedule", "16,a"], "expected P1,P2"),
+    ([ROOM, "--goal", "3,3", "--schedule", "8:0:16"], "STEP must be >= 1"),
+    ([ROOM, "--goal", "3,3", "--schedule", "32:8:16"], "below P1"),
+    ([ROOM, "--goal", "3,3", "--schedule", "1,8"], r"2\.\.1022"),
+    ([ROOM, "--goal", "3,3", "--schedule", "16:16:2048"], r"2\.\.1022"),
+    ([ROOM, "--goal", "3,3", "--schedule", "2:1:99999999999"], r"2\.\.1022"),
+    ([ROOM, "--goal", "3,3", "--schedule", "8:8"], "expected P1,P2"),
+    ([ROOM, "--goal", "3,3", "--block", "6"], "--block '6': expected NxM"),
+    ([ROOM, "--goal", "3,3", "--block", "0x4"], ">= 1"),
+    ([ROOM, "--goal", "3,3", "--block", "100000x6"], "above 4096"),
+    ([ROOM, "--goal", "3,3", "--iters", "0"], "--iters 0"),
+    ([ROOM, "--goal", "3,3", "--iters", "many"], "--iters 'many'"),
+])
+def test_bad_input_is_one_line(tmp_path, capsys, args, message):
+    (tmp_path / "bad.map").write_text(BAD_MAP)
+    (tmp_path / "bad.txt").write_text("...\n..\n")
+    (tmp_path / "bad.png").write_bytes(b"not a png at all")
+    (tmp_path / "bad.xyz").write_text("...\n")
+    files = {"missing": tmp_path / "none.map", "bad_map": tmp_path / "bad.map", "bad_txt": tmp_path / "bad.txt",
+             "bad_png": tmp_path / "bad.png", "bad_suffix": tmp_path / "bad.xyz"}
+    args = [a.format(**files) for a in args]
+    rc, text, err = _run(args, capsys)
+    assert rc == 2 and text == ""
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("sim harmonic: error: "), err
+    import re
+    assert re.search(message, lines[0]), lines[0]
+
+
+def test_rtl_engine_without_driver(capsys):
+    try:
+        import tb.harmonic.planner_bench  # noqa: F401
+    except ImportError:
+        rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "icarus"], capsys)
+        assert rc == 2 and "not available" in err and len(err.strip().splitlines()) == 1
+    else:
+        pytest.skip("the planner RTL driver is present (tested in test_sim_harmonic_rtl)")
+
+
+def _sub(*args):
+    return subprocess.run([sys.executable, "-m", "sim", "harmonic", *args], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_subprocess_ok_and_errors(tmp_path):
+    ok = _sub(ROOM, "--goal", "30,31", "--start", "3,3", "--block", "16x16", "--iters", "4",
+              "--schedule", "16:16:128", "--json", str(tmp_path / "r.json"))
+    assert ok.returncode == 0 and "reaches goal (30, 31)" in ok.stdout, ok.stderr
+    assert json.loads((tmp_path / "r.json").read_text())["precision"] == 96
+    for args in ([ROOM, "--goal", "0,0"], ["nowhere.map", "--goal", "1,1"]):
+        bad = _sub(*args)
+        assert bad.returncode == 2 and "Traceback" not in bad.stderr
+        assert len(bad.stderr.strip().splitlines()) == 1, bad.stderr
+    # argparse's own usage errors: usage text, then the one error line
+    bad = _sub(ROOM, "--goal", "3,3", "--engine", "fpga")
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert "invalid choice: 'fpga'" in bad.stderr.strip().splitlines()[-1]
