@@ -156,13 +156,54 @@ def run_engine(engine, obstacle, goals, block, iters, schedule):
     except ImportError:
         raise CliError(f"--engine {engine}: not available (the planner RTL driver "
                        "tb/harmonic/planner_bench.py is not in this checkout); use --engine model") from None
+    ticker = _Ticker(f"planner RTL on {engine}")
     try:
-        out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine, progress=_progress)
+        out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine,
+                              progress=ticker.status)
     except ValueError as e:
         raise CliError(f"--engine {engine}: {e}") from None
     finally:
-        print(file=sys.stderr)
-    return {k: (out.get(k) if isinstance(out, dict) else getattr(out, k)) for k in keys}
+        ticker.stop()
+    res = {k: out.get(k) for k in keys}
+    # The RTL reports no per-level record and no maxima count (only
+    # converged): the maxima are counted on the field it read back.
+    res["levels"] = []
+    res["maxima"] = _maxima(obstacle, goals, block, out["padded_h"])
+    return res
+
+
+def _maxima(obstacle, goals, block, padded_h):
+    from models.harmonic import local_max, neighbours, pad_to_blocks, reachable
+    padded = pad_to_blocks(obstacle, block)
+    const = padded | ~reachable(padded, goals)
+    for g in goals:
+        const[g] = True
+    h = np.asarray(padded_h, dtype=object)
+    return int(local_max(h, const, neighbours(h)).sum())
+
+
+class _Ticker:
+    """A progress line on stderr while the simulator runs (it runs in a
+    subprocess: the line shows the elapsed time, then the final status)."""
+
+    def __init__(self, what):
+        import threading
+        self.what, self.t0, self.done = what, time.time(), threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        while not self.done.wait(1.0):
+            _progress(f"{self.what}: building / simulating, {time.time() - self.t0:.0f} s")
+
+    def status(self, st):
+        _progress(f"{self.what}: p = {st.get('p')}, {st.get('sweeps')} sweeps, "
+                  f"{st.get('cycles')} cycles, {time.time() - self.t0:.0f} s")
+
+    def stop(self):
+        self.done.set()
+        self.thread.join()
+        print(file=sys.stderr, flush=True)
 
 
 def plan_map(grid, goals, starts, block, iters, schedule, engine="model"):
@@ -263,7 +304,8 @@ def run(args):
         f"precision {result['precision']} ("
         + ("converged: no local maximum" if result["converged"]
            else f"NOT converged: {result['maxima']} local maxima left at the schedule's end")
-        + f"; levels p = {','.join(str(lv['p']) for lv in result['levels'])}); {result['sweeps']} sweeps, "
+        + (f"; levels p = {','.join(str(lv['p']) for lv in result['levels'])}" if result["levels"] else "")
+        + f"); {result['sweeps']} sweeps, "
         f"{result['block_iterations']} block iterations, {result['node_updates']} node updates, "
         f"{result['cycles']} cycles ({seconds:.1f} s)",
     ]
