@@ -255,10 +255,7 @@ def rtl_section(sim):
     except ImportError:
         return ["The planner RTL driver (tb/harmonic/planner_bench.py) is not in this checkout: not run.", ""]
     rng = np.random.default_rng(5)
-    if sim == "icarus":
-        shape, block, sched, iters = (8, 17), (3, 6), (8, 16), 3
-    else:
-        shape, block, sched, iters = (11, 23), (6, 12), (4, 8, 12), 2
+    shape, block, sched, iters = (8, 17), (3, 6), (8, 16), 3
     ob = rng.random(shape) < 0.2
     ob[0, :] = ob[:, 0] = False
     goals = [(0, 0)]

@@ -6,8 +6,8 @@
 
 MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free) or
 an image (.pgm/.png: dark = obstacle).  Cells are ROW,COL from the top left,
-0-based.  The map is cut into blocks of NxM nodes (default 6x12, I = 6: the
-defaults of models.harmonic.plan, the planner RTL's array); a size that is not a multiple of the block is padded with
+0-based.  The map is cut into blocks of NxM nodes (default 3x6, one cluster,
+and I = 6, plan()'s default; the RTL engines need multiples of 3x6); a size that is not a multiple of the block is padded with
 obstacles on the bottom and right, which changes nothing in the solution
 (outside the map already reads as an obstacle).
 
@@ -15,7 +15,8 @@ The planner runs the paper's block-synchronous algorithm (section 4
 pseudo-code): up to I iterations per block while the block changes, sweeps
 over all blocks until none changes, then the next precision of the schedule
 while local maxima remain.  Schedule default 16:16:256 (p = 16, 32, ... 256);
-the RTL engines are limited to what the planner driver supports.  Free cells
+the RTL engines run arithmetic schedules only (P1:STEP:PMAX) and simulate
+slowly (hundreds to thousands of cycles per second): use them on small maps.  Free cells
 no goal can reach cannot get a gradient; they are reported ("unreachable")
 and left out of the convergence criterion.
 
@@ -44,6 +45,7 @@ from .cli import CliError, check_cell, parse_cell
 
 ENGINES = ("model", "icarus", "verilator")
 DEFAULT_SCHEDULE = "16:16:256"
+DEFAULT_BLOCK = (3, 6)  # one cluster (hdl/harmonic/cluster.py ROWS x COLS)
 MAX_BLOCK_SIDE = 4096   # the map is padded to whole blocks: keep that bounded
 P_LIMIT = 1022          # the deepest word (p+2 bits) a 1024-deep node RAM holds
 
@@ -55,7 +57,7 @@ def add_arguments(parser):
     parser.add_argument("--start", action="append", default=[], metavar="R,C",
                         help="start cell of a trajectory (repeatable)")
     parser.add_argument("--block", metavar="NxM",
-                        help="block size in nodes (default: the planner RTL's, models.harmonic.plan's default)")
+                        help="block size in nodes (default 3x6: one cluster; the RTL needs multiples of 3x6)")
     parser.add_argument("--iters", default=None, metavar="I",
                         help="iterations per block visit at most (default: plan's default)")
     parser.add_argument("--schedule", default=None, metavar="P1,P2,...|P1:STEP:PMAX",
@@ -131,12 +133,13 @@ def _progress(message):
 
 
 def _plan_defaults():
-    """plan()'s own defaults (the RTL planner's block and I), so that the
-    command and the model agree without a second copy of the numbers."""
+    """The block and I used when the command line gives none: one 3x6 cluster
+    (the block the planner RTL regression runs, so that --engine icarus /
+    verilator builds in seconds; the same default for the model, so every
+    engine gives the same JSON), and plan()'s own I."""
     import inspect
     from models.harmonic import plan
-    params = inspect.signature(plan).parameters
-    return tuple(params["block"].default), int(params["iters"].default)
+    return DEFAULT_BLOCK, int(inspect.signature(plan).parameters["iters"].default)
 
 
 def run_engine(engine, obstacle, goals, block, iters, schedule):

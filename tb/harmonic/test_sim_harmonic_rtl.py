@@ -2,9 +2,9 @@
 the command line gives the model's JSON (values, counters, cycles,
 trajectories), on a map that needs padding.
 
-The parameter sets are the planner regression's (tb/harmonic/test_planner.py:
-3x6 blocks at p_max 16 on Icarus, 6x12 blocks at p_max 12 on Verilator), so
-the builds are shared with it.
+The parameters are the planner regression's "b3x6" set (tb/harmonic/
+test_planner.py: 3x3 blocks of 3x6 nodes, p_max 16, RAM depth 256), so the
+builds are shared with it on both simulators.
 """
 
 import json
@@ -16,10 +16,10 @@ from sim.cli import main
 from tb.runner import SIMULATORS
 
 # (map shape before padding, block, schedule, I): the padded map is the
-# regression's 3x3 blocks of 3x6 / 2x2 blocks of 6x12.
+# regression's 3x3 blocks of 3x6 at p_max 16.
 CASES = {
     "icarus": ((8, 17), "3x6", "8,16", "3"),
-    "verilator": ((11, 23), "6x12", "4:4:12", "2"),
+    "verilator": ((8, 17), "3x6", "4:4:16", "2"),
 }
 
 
