@@ -137,32 +137,43 @@ def relax(h, const, p, ring=None, max_iter=1_000_000):
 
 # --- the block-synchronous planner (section 4 pseudo-code, 3.3, 4.5, 5.1) ---
 #
-# Timing of the Control module (hdl/harmonic/controller.py), in clock cycles.
-# A block visit runs K iterations of p+2 cycles on the block's clusters:
+# Timing of the Control module (hdl/harmonic/controller.py), in clock cycles,
+# measured on the RTL and asserted by tb/harmonic/test_planner.py.  A block
+# visit running K iterations of p+2 cycles takes K*(p+2) + VISIT_OVERHEAD:
 #
-#   =====================  ==================================================
-#   phase                  cycles
-#   =====================  ==================================================
-#   block visit            K*(p+2) + VISIT_OVERHEAD: one start-request cycle,
-#                          the clusters' lead-in cycle, K iterations, the two
-#                          cycles in which the last iteration's top bits are
-#                          written and its flags come, one decision cycle
-#                          (next block / pass / level), one cycle spare
-#   update visit, K        K = min(i + 1, I) when iteration i (1-based) was
-#                          the first stable one, else K = I.  The flags of an
-#                          iteration come at cycle 2 of the next one, after
-#                          that one's command was taken, so an early stop
-#                          always costs one confirmation iteration; it reads
-#                          the same words and borders, so it changes nothing
-#                          and is not counted in ``block_iterations``
-#   check visit            K = 1 (one check iteration: Maximum flags)
-#   clear visit            K = 1 (free nodes written 0, Sel/Sat applied)
-#   run                    RUN_OVERHEAD: the START command's cycle is not
-#                          counted, the last decision cycle is
-#   dynamic order          SET_OVERHEAD + a clear pass (B clear visits)
-#   precision change       0: the new LSB addresses were zeroed at load and
-#                          the MSB-first layout keeps the stored bits in place
-#   =====================  ==================================================
+#   ==================  ======================================================
+#   cycle of a visit    what happens
+#   ==================  ======================================================
+#   t                   VSTART: the clusters get ``run`` (start request)
+#   t+1                 the clusters' lead-in (first addresses presented)
+#   t+2 .. t+1+K(p+2)   K iterations (update, check or clear)
+#   +1, +2              cycles 0 and 1 of the stop iteration: the last
+#                       iteration's top two bits are written (the write runs
+#                       two bit positions behind the read, eq. 2's /4)
+#   t+4+K(p+2)          the last iteration's Stable / Maximum flags
+#   t+5+K(p+2)          VEND: next block, pass, precision or end decided
+#   ==================  ======================================================
+#
+#   ==================  ======================================================
+#   phase               cycles
+#   ==================  ======================================================
+#   update visit        K = min(i + 1, I) if iteration i (1-based) was the
+#                       first stable one, else K = I.  The flags of an
+#                       iteration come at cycle 2 of the next one, after that
+#                       one's command was taken at its cycle 1, so an early
+#                       stop costs one confirmation iteration; it reads the
+#                       same words and borders, so it changes nothing, and it
+#                       is not counted in ``block_iterations``
+#   check visit         K = 1 (one check iteration: the Maximum flags)
+#   clear visit         K = 1 (free nodes write 0, Sel/Sat of the order)
+#   pass / level        0: decided in the last visit's VEND cycle; a precision
+#                       change moves no data (MSB-first words, LSB addresses
+#                       zeroed at load)
+#   run                 RUN_OVERHEAD: START's own cycle is not counted, the
+#                       last VEND is
+#   dynamic order       SET_OVERHEAD + one clear pass (B clear visits); an
+#                       order sent while idle runs outside any run
+#   ==================  ======================================================
 
 VISIT_OVERHEAD = 6
 RUN_OVERHEAD = 0

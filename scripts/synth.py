@@ -47,6 +47,12 @@ NODES = 18
 TOPS = [  # (name, params, paper FF / LUT4 / MHz)
     ("harmonic_node", {}, "11 / 22 / 361 (Table 1)"),
     ("harmonic_cluster", {"depth": 1024}, "198 / 398 / 300 (Table 2, without RAM)"),
+    # 6x12 block (4 clusters) of a 2x2-block map at p_max = 254 (16 * 256 = 1024 words)
+    ("harmonic_block", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024},
+     "- (paper: 36x66 grid; 48x96 block 50699 / 101396 / 150, Table 3)"),
+    # the planner top: that block + Control + Decision + host streams, p_max = 62
+    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256},
+     "- (paper: Control 844 slices, Decision 3p+682 slices)"),
 ]
 VARIANTS = {"": "", "-nowidelut": ".nowidelut"}  # extra synth_xilinx flags -> log suffix
 SCRIPT = ("read_verilog {v}; synth_xilinx -family xc2v -top {top} -flatten "
@@ -110,6 +116,31 @@ def report(results, version, elapsed):
     return "\n".join(lines) + "\n"
 
 
+BREAKDOWN_SCRIPT = ("read_verilog {v}; synth_xilinx -family xc2v -top {top} -noiopad -noclkbuf "
+                    "-nowidelut; stat")
+
+
+def cluster_breakdown(v, top, log):
+    """The cluster synthesized with its hierarchy kept (no -flatten, plain
+    LUT4s): FF / LUT4 of the 18 node modules, of the Counters and of the
+    cluster's own logic (host port multiplexers, per-iteration command and
+    Sel registers, done/flag logic: the block control part)."""
+    res = subprocess.run([YOSYS, "-q", "-l", str(log), "-p", BREAKDOWN_SCRIPT.format(v=v, top=top)],
+                         capture_output=True, text=True)
+    if res.returncode:
+        sys.exit(f"yosys failed on {v} (see {log}):\n{res.stderr[-2000:]}")
+    text = log.read_text().rsplit("Printing statistics.", 1)[1]
+    parts = {"nodes": Counter(), "counters": Counter(), "cluster logic": Counter()}
+    for name, body in re.findall(r"^=== (\S+) ===\n(.*?)(?=^=== |\Z)", text, re.M | re.S):
+        if "design hierarchy" in name:
+            continue
+        cells = body.split("Number of cells:", 1)[1].split("\n\n", 1)[0] if "Number of cells:" in body else ""
+        counts = Counter({k: int(n) for k, n in re.findall(r"^\s+(\w+)\s+(\d+)$", cells, re.M)})
+        key = "nodes" if ".node_" in name else "counters" if name.endswith(".counters") else "cluster logic"
+        parts[key] += group(counts)[0]
+    return parts
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--out", default=str(OUT_DIR / "report.md"), help="Markdown report")
@@ -126,10 +157,19 @@ def main():
         for flags, suffix in VARIANTS.items():
             jobs.append(dict(name=name, paper=paper, top=v.stem, flags=flags, v=v,
                              log=OUT_DIR / f"{v.stem}{suffix}.log"))
-    with ThreadPoolExecutor() as pool:  # the yosys runs are independent
+    with ThreadPoolExecutor(max_workers=2) as pool:  # independent runs; the machine is shared
         cells = pool.map(lambda j: run_yosys(j["v"], j["top"], j["flags"], j["log"]), jobs)
         results = list(zip(jobs, cells))
     text = report(results, version, time.monotonic() - t0)
+    cl = next(j for j, _ in results if j["name"] == "harmonic_cluster")
+    parts = cluster_breakdown(cl["v"], cl["top"], OUT_DIR / f"{cl['top']}.hier.log")
+    text += ("\nCluster broken down (hierarchy kept, `-nowidelut`; the block control of a "
+             "cluster is its iteration/command logic, shared with the host port multiplexers):\n\n"
+             "| part | FF | LUT4 |\n|---|---|---|\n")
+    for key, s_ in parts.items():
+        text += f"| {key} | {s_['FF']} | {s_['LUT']} |\n"
+    text += (f"| ↳ per node (/{NODES}) | {parts['nodes']['FF'] / NODES:.1f} | "
+             f"{parts['nodes']['LUT'] / NODES:.1f} |\n")
     print(text, end="")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)

@@ -43,6 +43,9 @@ class Border(wiring.Component):
         Block rows and columns of the map.
     stride : int
         RAM words per block (p_max + 2).
+    segment : (rows, cols)
+        The cluster size: each edge is stored as one RAM per cluster segment
+        (written whole; ``en_*`` is read once per segment, at its first bit).
 
     Ports
     -----
@@ -52,13 +55,15 @@ class Border(wiring.Component):
         The clusters' read address offsets (relative to a block base).
     w_addr : In(range(depth)); w_top, w_bottom : In(m); w_left, w_right : In(n)
     en_top, en_bottom : In(m); en_left, en_right : In(n)
-        Edge write: absolute address, bits and per-bit write enables.
+        Edge write: absolute address, bits and enables (one per segment,
+        given on each of its bits).
     h_N, h_S, m_N, m_S : Out(m); h_W, h_E, m_W, m_E : Out(n)
         The border streams.
     """
 
-    def __init__(self, n, m, blocks, stride):
+    def __init__(self, n, m, blocks, stride, segment=(3, 6)):
         BR, BC = blocks
+        self.seg_rows, self.seg_cols = segment
         for name, v in (("n", n), ("m", m), ("BR", BR), ("BC", BC), ("stride", stride)):
             if not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name}={v!r}: must be an integer >= 1")
@@ -87,19 +92,26 @@ class Border(wiring.Component):
             ("left", self.n, self.w_left, self.en_left, "E", 1, self.bc != BC - 1),
         )
         for name, width, data, en, side, offset, valid in sides:
-            ram = Memory(shape=width, depth=self.depth, init=[])
-            m.submodules[f"ram_{name}"] = ram
-            wp = ram.write_port(granularity=1)
-            lsb, msb = ram.read_port(), ram.read_port()
-            m.d.comb += [wp.addr.eq(self.w_addr), wp.data.eq(data), wp.en.eq(en)]
+            seg = self.seg_cols if name in ("top", "bottom") else self.seg_rows
             src = Signal(range(self.depth), name=f"src_{side}")
             m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
-            m.d.comb += [lsb.addr.eq(src + self.cntR), msb.addr.eq(src + self.r_cnt)]
             # The validity of the data follows its address by one cycle.
             ok = Signal(name=f"ok_{side}")
             m.d.sync += ok.eq(valid)
-            m.d.comb += [
-                getattr(self, f"h_{side}").eq(Mux(ok, lsb.data, 0)),
-                getattr(self, f"m_{side}").eq(Mux(ok, msb.data, 0)),
-            ]
+            # One RAM per cluster edge segment (6 columns / 3 rows): a cluster
+            # writes its whole segment at once (at load the host writes one
+            # cluster), so no per-bit write enables, which would split the
+            # storage into 1-bit-wide block RAMs.
+            for k in range(width // seg):
+                sl = slice(k * seg, (k + 1) * seg)
+                ram = Memory(shape=seg, depth=self.depth, init=[])
+                m.submodules[f"ram_{name}_{k}"] = ram
+                wp = ram.write_port()
+                lsb, msb = ram.read_port(), ram.read_port()
+                m.d.comb += [
+                    wp.addr.eq(self.w_addr), wp.data.eq(data[sl]), wp.en.eq(en[k * seg]),
+                    lsb.addr.eq(src + self.cntR), msb.addr.eq(src + self.r_cnt),
+                    getattr(self, f"h_{side}")[sl].eq(Mux(ok, lsb.data, 0)),
+                    getattr(self, f"m_{side}")[sl].eq(Mux(ok, msb.data, 0)),
+                ]
         return m

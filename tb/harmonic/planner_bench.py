@@ -156,13 +156,18 @@ def planner_params(shape, block=(6, 12), p_max=30, depth=None):
     return {"n": n, "m": m, "br": BR, "bc": BC, "p_max": p_max, "depth": depth}
 
 
-def run_planner_rtl(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), sim="icarus",
+def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), sim="verilator",
                     progress=None, work=None, events=()):
     """Run the Planner RTL on a whole map through cocotb; return a dict with
     the fields of :class:`models.harmonic.PlanResult` (h, const, p,
     converged, sweeps, block_iterations, check_iterations, clear_passes,
     node_updates, cycles, unreachable) and ``params`` (the RTL parameters).
 
+    The RTL is built for the map: ``block`` (n, m) nodes per block (default
+    3x6, one cluster: Icarus simulates ~1000 cycles/s of it, ~200 of a 6x12
+    block, whose Verilator build takes 10+ minutes), the padded map's block
+    grid, p_max = the schedule's last precision and the smallest power-of-two
+    RAM depth that holds B*(p_max+2) words (:func:`planner_params`).
     Unreachable free cells are walled off (loaded as obstacles) like the
     model does.  ``events``: ``(s, (r, c), kind)`` as in
     :func:`models.harmonic.plan`; s = 0 is sent while idle before START, s >= 1

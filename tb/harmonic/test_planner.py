@@ -132,21 +132,30 @@ async def planner_dynamic(dut):
     bench = _bench(dut)
     rows, cols = _shape()
     P = PARAMS
-    sched, iters = (6, 12), 3
-    ob, goals = random_map(rows, cols, 7, density=0.1)
+    # a map whose runs converge at p = 16 on the b3x6 set (~20K cycles each)
+    sched, iters = ((8, 16) if P["p_max"] >= 16 else (6, 12)), 3
+    ob, goals = random_map(rows, cols, 3, density=0.1)
     base = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched)
     free = np.argwhere(~ob & ~base.unreachable & ~_padded(ob, goals))
     passes = base.sweeps + base.check_iterations // (P["br"] * P["bc"])
     s = min(3, passes - 1)
     cell = tuple(int(x) for x in free[len(free) // 3])
-    res, _ = await _run(bench, ob, goals, sched, iters, events=[(s, cell, "obstacle")])
-    assert res.events_applied == 1 and res.clear_passes == 1
-    dut._log.info(f"obstacle at {cell} taken at the end of pass {s - 1}: equal, {res.cycles} cycles")
+    goal2 = tuple(int(x) for x in free[-1])
+    res, _ = await _run(bench, ob, goals, sched, iters,
+                        events=[(s, cell, "obstacle"), (s + 2, goal2, "goal")])
+    assert res.events_applied == 2 and res.clear_passes == 2
+    if SET_NAME == "b3x6":
+        assert res.converged, "the dynamic map is meant to converge (a converged run on the RTL)"
+    dut._log.info(f"obstacle at {cell} taken at the end of pass {s - 1}, goal at {goal2} at the end "
+                  f"of pass {s + 1}: equal, converged={res.converged}, {res.cycles} cycles")
     # After the run: an obstacle while idle, then a new run.
     ob2 = ob.copy()
     ob2[cell] = True
+    goals = goals + [goal2]
     cell2 = tuple(int(x) for x in free[2 * len(free) // 3])
-    res2, _ = await _run(bench, ob2, goals, sched, iters, events=[(0, cell2, "obstacle")])
+    # The idle SET clears at the last run's p = 16; the new run starts lower
+    # (every word above the clear's bits is 0, so any schedule is valid).
+    res2, _ = await _run(bench, ob2, goals, (4, 8), iters, events=[(0, cell2, "obstacle")])
     assert res2.events_applied == 1
     dut._log.info(f"obstacle at {cell2} after the run: equal, {res2.cycles} cycles")
 
@@ -212,8 +221,10 @@ async def planner_bad_commands(dut):
 @pytest.mark.parametrize("sim", SIMULATORS)
 @pytest.mark.parametrize("name", SETS)
 def test_planner(sim, name):
-    if name == "b6x12" and sim == "icarus":
-        pytest.skip("6x12 blocks: Verilator only (Icarus runs ~200 cycles/s on 72 nodes)")
+    if name == "b6x12" and os.environ.get("HARMONIC_BIG") != "1":
+        # Icarus runs ~200 cycles/s on 72 nodes, Verilator compiles the
+        # 4-cluster design for 10+ minutes: outside the regression budget.
+        pytest.skip("6x12 blocks: set HARMONIC_BIG=1 (minutes of build and run)")
     run("harmonic_planner", SETS[name], sim, "test_planner",
         env={"PLANNER_PARAMS": json.dumps(SETS[name]), "PLANNER_SET": name})
 
