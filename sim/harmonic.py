@@ -7,18 +7,20 @@
 MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free) or
 an image (.pgm/.png: dark = obstacle).  Cells are ROW,COL from the top left,
 0-based.  The map is cut into blocks of NxM nodes (default 3x6, one cluster,
-and I = 6, plan()'s default; the RTL engines need multiples of 3x6); a size that is not a multiple of the block is padded with
-obstacles on the bottom and right, which changes nothing in the solution
-(outside the map already reads as an obstacle).
+and I = 6, plan()'s default; the RTL engines need multiples of 3x6); a size
+that is not a multiple of the block is padded with obstacles on the bottom
+and right, which changes nothing in the solution (outside the map already
+reads as an obstacle).
 
 The planner runs the paper's block-synchronous algorithm (section 4
 pseudo-code): up to I iterations per block while the block changes, sweeps
 over all blocks until none changes, then the next precision of the schedule
 while local maxima remain.  Schedule default 16:16:256 (p = 16, 32, ... 256);
-the RTL engines run arithmetic schedules only (P1:STEP:PMAX) and simulate
-slowly (hundreds to thousands of cycles per second): use them on small maps.  Free cells
-no goal can reach cannot get a gradient; they are reported ("unreachable")
-and left out of the convergence criterion.
+the RTL engines run arithmetic schedules only (P1:STEP:PMAX), build one
+design per map size and p_max, and simulate slowly (hundreds to thousands of
+cycles per second): use them on small maps.  Free cells no goal can reach
+cannot get a gradient; they are reported ("unreachable") and left out of
+the convergence criterion.
 
 Trajectories: steepest 4-neighbour ascent from each --start (ties to the
 first of N, E, W, S) until a goal, on the final field.
