@@ -140,7 +140,7 @@ def cycles_section(name):
     for it in (1, 2, 3, 4, 8, 16):
         vrow(f"6x12, I = {it}", plan(obstacle, goals, block=RTL_BLOCK, iters=it, schedule=inc), RTL_BLOCK)
     # block size (I = 2: the best I of the 6x12 rows on both maps, see the table)
-    for blk in ((4, 4), (8, 8), (16, 16)):
+    for blk in ((3, 6), (4, 4), (8, 8), (16, 16)):
         vrow(f"{blk[0]}x{blk[1]}, I = 2", plan(obstacle, goals, block=blk, iters=2, schedule=inc), blk)
     # precision step
     for step in (8, 32, 64):
@@ -150,7 +150,7 @@ def cycles_section(name):
         vrow(f"6x12, I = 6, step {step}", plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS,
                                                schedule=sched), RTL_BLOCK)
     # block order and skipping still blocks
-    for blk, it in ((RTL_BLOCK, RTL_ITERS), ((4, 4), 2)):
+    for blk, it in ((RTL_BLOCK, RTL_ITERS), ((3, 6), 2), ((4, 4), 2)):
         for order in ("raster", "serpentine", "alternate", "goal"):
             for skip in (False, True):
                 if order == "raster" and not skip and blk == RTL_BLOCK:
