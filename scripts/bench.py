@@ -36,7 +36,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tb" / "harmonic"))
 
-from maps_small import corridor, spiral  # noqa: E402
+from harmonic_small_maps import corridor, spiral  # noqa: E402
 from models.harmonic import plan, plan_explore, reachable  # noqa: E402
 from sim.mapfile import load_map, load_scenarios  # noqa: E402
 

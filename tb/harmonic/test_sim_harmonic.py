@@ -118,7 +118,7 @@ def test_unreachable_start_is_reported(ascii_map, tmp_path, capsys):
 
 
 def test_not_converged_is_reported(tmp_path, capsys):
-    from maps_small import corridor
+    from harmonic_small_maps import corridor
     grid, goals = corridor(30)
     path = tmp_path / "corridor.txt"
     path.write_text("\n".join("".join("#" if x else "." for x in row) for row in grid) + "\n")
