@@ -41,7 +41,7 @@ from models.harmonic import plan, plan_explore, reachable  # noqa: E402
 from sim.mapfile import load_map, load_scenarios  # noqa: E402
 
 CLOCK_HZ = 150e6
-RTL_BLOCK, RTL_ITERS = (6, 12), 6          # plan()'s defaults: the planner RTL's array
+RTL_BLOCK, RTL_ITERS = (6, 12), 6          # plan()'s defaults: a 2x2-cluster block
 
 
 def bundled(name):
