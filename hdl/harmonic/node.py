@@ -1,6 +1,6 @@
 """Node module of the harmonic planner (paper 000, section 5.2, Fig. 8)."""
 
-from amaranth.hdl import Module, Signal
+from amaranth.hdl import Cat, Module, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -24,19 +24,20 @@ class Node(wiring.Component):
     =========  =========================================================
     cycle c    what the node sees / does
     =========  =========================================================
-    0 (ph0)    ``h`` carries the constant flag; the adders see 0 (their
-               inputs are masked) and flush the last sum bit (bit p-1 of
+    0 (ph0)    ``h`` carries the constant flag; the adder sees 0 (its
+               inputs are masked) and flushes the last sum bit (bit p-1 of
                the previous iteration's result is written).
-    1 (ph1)    ``h`` carries bit 0; the last carry (result bit p) is
-               written; the third adder starts afresh.
+    1 (ph1)    ``h`` carries bit 0; the carry's low bit (result bit p)
+               is written; the adder starts afresh.
     2 (ph2)    ``h`` carries bit 1; the constant flag of the new word is
                written; the Stable and Maximum results of the previous
                iteration are valid on ``stable`` / ``local_max``.
     k+1        ``h`` carries bit k; result bit k-2 is written (k >= 2).
     =========  =========================================================
 
-    So the sum of the four neighbours is formed LSB first by three full adders
-    (eq. 2), and dropping its two low bits, i.e. writing each sum bit two bit
+    So the sum of the four neighbours is formed LSB first by one serial
+    four-operand adder with a two-bit carry (eq. 2), and dropping its two
+    low bits, i.e. writing each sum bit two bit
     positions late, divides it by four.  The write window of one iteration
     runs from its cycle 2 to cycle 1 of the next one.
 
@@ -107,22 +108,22 @@ class Node(wiring.Component):
         # Mem: the stored word is the node's value as its neighbours see it.
         m.d.comb += [self.to.eq(self.h), self.to_m.eq(self.hm)]
 
-        # Update: three serial full adders, (N + S) + (E + W), one carry
-        # flip-flop each.  At ph0 the inputs carry the flags and are masked,
-        # which flushes the first two carries into the third adder.
+        # Update: one serial adder of the four neighbours, (N + S + E + W)
+        # LSB first, whose carry k (0 .. 3: at most (4 + 3) // 2) takes two
+        # flip-flops where three chained full adders take three.  At ph0 the
+        # inputs carry the flags and are masked, which flushes the carry:
+        # sum bit p+1 is written at ph0 (result bit p-1), sum bit p+2 is
+        # k[0] at ph1 (result bit p), and the adder starts afresh at ph1.
         live = ~self.ph0
         a, b = self.h_N & live, self.h_S & live
         c, d = self.h_E & live, self.h_W & live
-        c1, c2, c3 = Signal(), Signal(), Signal()
-        s1 = a ^ b ^ c1
-        s2 = c ^ d ^ c2
-        cin3 = c3 & ~self.ph1          # c3 holds result bit p at ph1
-        total = s1 ^ s2 ^ cin3
-        m.d.sync += [
-            c1.eq(_maj(a, b, c1)),
-            c2.eq(_maj(c, d, c2)),
-            c3.eq(_maj(s1, s2, cin3)),
-        ]
+        k = Signal(2)
+        kin = k[0] & ~self.ph1          # k[0] holds result bit p at ph1; k[1] is 0 there
+        # a + b + c + d + kin + 2*k[1] as two full adders of weight 1 and
+        # one of weight 2 (plain gates: no carry chain for a 3-bit sum).
+        s1, g1 = a ^ b ^ c, _maj(a, b, c)
+        total, g2 = s1 ^ d ^ kin, _maj(s1, d, kin)
+        m.d.sync += k.eq(Cat(g1 ^ g2 ^ k[1], _maj(g1, g2, k[1])))
 
         # Mem: the stored stream delayed by two flip-flops lines up with the
         # write address, so it is both the write-back value and the Stable
@@ -144,7 +145,7 @@ class Node(wiring.Component):
         with m.Elif(~self.enable | const):
             m.d.comb += self.w.eq(old)
         with m.Elif(self.ph1):
-            m.d.comb += self.w.eq(c3)
+            m.d.comb += self.w.eq(k[0])
         with m.Else():
             m.d.comb += self.w.eq(total)
 
