@@ -6,18 +6,21 @@
 
 MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free) or
 an image (.pgm/.png: dark = obstacle).  Cells are ROW,COL from the top left,
-0-based.  The map is cut into blocks of NxM nodes (default 6x12, I = 6: the
-defaults of models.harmonic.plan, the planner RTL's array); a size that is not a multiple of the block is padded with
-obstacles on the bottom and right, which changes nothing in the solution
-(outside the map already reads as an obstacle).
+0-based.  The map is cut into blocks of NxM nodes (default 3x6, one cluster,
+and I = 6, plan()'s default; the RTL engines need multiples of 3x6); a size
+that is not a multiple of the block is padded with obstacles on the bottom
+and right, which changes nothing in the solution (outside the map already
+reads as an obstacle).
 
 The planner runs the paper's block-synchronous algorithm (section 4
 pseudo-code): up to I iterations per block while the block changes, sweeps
 over all blocks until none changes, then the next precision of the schedule
 while local maxima remain.  Schedule default 16:16:256 (p = 16, 32, ... 256);
-the RTL engines are limited to what the planner driver supports.  Free cells
-no goal can reach cannot get a gradient; they are reported ("unreachable")
-and left out of the convergence criterion.
+the RTL engines run arithmetic schedules only (P1:STEP:PMAX), build one
+design per map size and p_max, and simulate slowly (hundreds to thousands of
+cycles per second): use them on small maps.  Free cells no goal can reach
+cannot get a gradient; they are reported ("unreachable") and left out of
+the convergence criterion.
 
 Trajectories: steepest 4-neighbour ascent from each --start (ties to the
 first of N, E, W, S) until a goal, on the final field.
@@ -44,6 +47,7 @@ from .cli import CliError, check_cell, parse_cell
 
 ENGINES = ("model", "icarus", "verilator")
 DEFAULT_SCHEDULE = "16:16:256"
+DEFAULT_BLOCK = (3, 6)  # one cluster (hdl/harmonic/cluster.py ROWS x COLS)
 MAX_BLOCK_SIDE = 4096   # the map is padded to whole blocks: keep that bounded
 P_LIMIT = 1022          # the deepest word (p+2 bits) a 1024-deep node RAM holds
 
@@ -55,7 +59,7 @@ def add_arguments(parser):
     parser.add_argument("--start", action="append", default=[], metavar="R,C",
                         help="start cell of a trajectory (repeatable)")
     parser.add_argument("--block", metavar="NxM",
-                        help="block size in nodes (default: the planner RTL's, models.harmonic.plan's default)")
+                        help="block size in nodes (default 3x6: one cluster; the RTL needs multiples of 3x6)")
     parser.add_argument("--iters", default=None, metavar="I",
                         help="iterations per block visit at most (default: plan's default)")
     parser.add_argument("--schedule", default=None, metavar="P1,P2,...|P1:STEP:PMAX",
@@ -131,12 +135,13 @@ def _progress(message):
 
 
 def _plan_defaults():
-    """plan()'s own defaults (the RTL planner's block and I), so that the
-    command and the model agree without a second copy of the numbers."""
+    """The block and I used when the command line gives none: one 3x6 cluster
+    (the block the planner RTL regression runs, so that --engine icarus /
+    verilator builds in seconds; the same default for the model, so every
+    engine gives the same JSON), and plan()'s own I."""
     import inspect
     from models.harmonic import plan
-    params = inspect.signature(plan).parameters
-    return tuple(params["block"].default), int(params["iters"].default)
+    return DEFAULT_BLOCK, int(inspect.signature(plan).parameters["iters"].default)
 
 
 def run_engine(engine, obstacle, goals, block, iters, schedule):
@@ -156,13 +161,54 @@ def run_engine(engine, obstacle, goals, block, iters, schedule):
     except ImportError:
         raise CliError(f"--engine {engine}: not available (the planner RTL driver "
                        "tb/harmonic/planner_bench.py is not in this checkout); use --engine model") from None
+    ticker = _Ticker(f"planner RTL on {engine}")
     try:
-        out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine, progress=_progress)
+        out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine,
+                              progress=ticker.status)
     except ValueError as e:
         raise CliError(f"--engine {engine}: {e}") from None
     finally:
-        print(file=sys.stderr)
-    return {k: (out.get(k) if isinstance(out, dict) else getattr(out, k)) for k in keys}
+        ticker.stop()
+    res = {k: out.get(k) for k in keys}
+    # The RTL reports no per-level record and no maxima count (only
+    # converged): the maxima are counted on the field it read back.
+    res["levels"] = []
+    res["maxima"] = _maxima(obstacle, goals, block, out["padded_h"])
+    return res
+
+
+def _maxima(obstacle, goals, block, padded_h):
+    from models.harmonic import local_max, neighbours, pad_to_blocks, reachable
+    padded = pad_to_blocks(obstacle, block)
+    const = padded | ~reachable(padded, goals)
+    for g in goals:
+        const[g] = True
+    h = np.asarray(padded_h, dtype=object)
+    return int(local_max(h, const, neighbours(h)).sum())
+
+
+class _Ticker:
+    """A progress line on stderr while the simulator runs (it runs in a
+    subprocess: the line shows the elapsed time, then the final status)."""
+
+    def __init__(self, what):
+        import threading
+        self.what, self.t0, self.done = what, time.time(), threading.Event()
+        self.thread = threading.Thread(target=self._run, daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        while not self.done.wait(1.0):
+            _progress(f"{self.what}: building / simulating, {time.time() - self.t0:.0f} s")
+
+    def status(self, st):
+        _progress(f"{self.what}: p = {st.get('p')}, {st.get('sweeps')} sweeps, "
+                  f"{st.get('cycles')} cycles, {time.time() - self.t0:.0f} s")
+
+    def stop(self):
+        self.done.set()
+        self.thread.join()
+        print(file=sys.stderr, flush=True)
 
 
 def plan_map(grid, goals, starts, block, iters, schedule, engine="model"):
@@ -263,7 +309,8 @@ def run(args):
         f"precision {result['precision']} ("
         + ("converged: no local maximum" if result["converged"]
            else f"NOT converged: {result['maxima']} local maxima left at the schedule's end")
-        + f"; levels p = {','.join(str(lv['p']) for lv in result['levels'])}); {result['sweeps']} sweeps, "
+        + (f"; levels p = {','.join(str(lv['p']) for lv in result['levels'])}" if result["levels"] else "")
+        + f"); {result['sweeps']} sweeps, "
         f"{result['block_iterations']} block iterations, {result['node_updates']} node updates, "
         f"{result['cycles']} cycles ({seconds:.1f} s)",
     ]

@@ -44,7 +44,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from maps_small import corridor, spiral
+from harmonic_small_maps import corridor, spiral
 from models.harmonic import neighbours, one, plan, relax, step
 from sim.mapfile import load_map
 

@@ -118,7 +118,7 @@ def test_unreachable_start_is_reported(ascii_map, tmp_path, capsys):
 
 
 def test_not_converged_is_reported(tmp_path, capsys):
-    from maps_small import corridor
+    from harmonic_small_maps import corridor
     grid, goals = corridor(30)
     path = tmp_path / "corridor.txt"
     path.write_text("\n".join("".join("#" if x else "." for x in row) for row in grid) + "\n")
@@ -177,14 +177,20 @@ def test_bad_input_is_one_line(tmp_path, capsys, args, message):
     assert re.search(message, lines[0]), lines[0]
 
 
-def test_rtl_engine_without_driver(capsys):
-    try:
-        import tb.harmonic.planner_bench  # noqa: F401
-    except ImportError:
-        rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "icarus"], capsys)
-        assert rc == 2 and "not available" in err and len(err.strip().splitlines()) == 1
-    else:
-        pytest.skip("the planner RTL driver is present (tested in test_sim_harmonic_rtl)")
+def test_rtl_engine_without_driver(capsys, monkeypatch):
+    """Without tb/harmonic/planner_bench.py the RTL engines say so in one line."""
+    monkeypatch.setitem(sys.modules, "tb.harmonic.planner_bench", None)    # import fails
+    rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "icarus"], capsys)
+    assert rc == 2 and "--engine icarus: not available" in err and len(err.strip().splitlines()) == 1
+
+
+def test_rtl_engine_refuses_what_the_rtl_cannot_run(capsys):
+    """A block that is not whole 3x6 clusters, a schedule that is not
+    arithmetic: one line from the driver / Planner checks, before any build."""
+    for extra, message in ((["--block", "4x4"], "multiple of 3"),
+                           (["--block", "3x6", "--schedule", "4,8,16"], "arithmetic")):
+        rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "icarus", *extra], capsys)
+        assert rc == 2 and message in err and len(err.strip().splitlines()) == 1, err
 
 
 def _sub(*args):

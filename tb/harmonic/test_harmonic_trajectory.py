@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from maps_small import corridor, pocket, spiral
+from harmonic_small_maps import corridor, pocket, spiral
 from models.harmonic import ASCENT_MOVES, ascent_next, ascent_reaches, one, trajectory
 from sim.mapfile import load_map, load_scenarios
 

@@ -1,0 +1,59 @@
+"""``python -m sim harmonic --engine icarus|verilator``: the planner RTL through
+the command line gives the model's JSON (values, counters, cycles,
+trajectories), on a map that needs padding.
+
+The parameters are the planner regression's "b3x6" set (tb/harmonic/
+test_planner.py: 3x3 blocks of 3x6 nodes, p_max 16, RAM depth 256), so the
+builds are shared with it on both simulators.
+"""
+
+import json
+
+import numpy as np
+import pytest
+
+from sim.cli import main
+from tb.runner import SIMULATORS
+
+# (map shape before padding, block, schedule, I): the padded map is the
+# regression's 3x3 blocks of 3x6 at p_max 16.
+CASES = {
+    "icarus": ((8, 17), "3x6", "8,16", "3"),
+    "verilator": ((8, 17), "3x6", "4:4:16", "2"),
+}
+
+
+def _map(shape, seed=5):
+    rng = np.random.default_rng(seed)
+    grid = rng.random(shape) < 0.2
+    grid[0, :] = False                      # a free top row: goal and starts connected
+    grid[:, 0] = False
+    return grid
+
+
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_rtl_engine_matches_model(sim, tmp_path, capsys):
+    shape, block, schedule, iters = CASES[sim]
+    grid = _map(shape)
+    path = tmp_path / "m.txt"
+    path.write_text("\n".join("".join("#" if x else "." for x in row) for row in grid) + "\n")
+    goal, starts = "0,0", ["0,%d" % (shape[1] - 1), "%d,0" % (shape[0] - 1)]
+    out = {}
+    for engine in ("model", sim):
+        args = ["harmonic", str(path), "--goal", goal, "--block", block, "--schedule", schedule,
+                "--iters", iters, "--engine", engine, "--json", str(tmp_path / f"{engine}.json")]
+        for s in starts:
+            args += ["--start", s]
+        rc = main(args)
+        err = capsys.readouterr().err
+        assert "Traceback" not in err
+        out[engine] = json.loads((tmp_path / f"{engine}.json").read_text())
+        out[engine]["rc"] = rc
+    model, rtl = out["model"], out[sim]
+    assert rtl["engine"] == sim and rtl["padded"] != [rtl["height"], rtl["width"]]
+    compared = 0
+    for key in ("rc", "height", "width", "precision", "converged", "maxima", "sweeps", "block_iterations",
+                "check_iterations", "node_updates", "cycles", "potential", "unreachable", "trajectories"):
+        assert rtl[key] == model[key], key
+        compared += 1
+    assert compared == 14 and model["cycles"] > 0 and len(model["trajectories"]) == 2
