@@ -290,6 +290,83 @@ def _schedule(schedule):
     return sched
 
 
+class _Grid:
+    """What :func:`plan` and :func:`plan_explore` share: the padded map, the
+    walled-off cells, the field with its 0 ring (outside the map), the block
+    visit and the result's final figures."""
+
+    def __init__(self, obstacle, goals, block, iters, schedule):
+        self.n, self.m = n, m = _check_block(block)
+        self.iters = int(iters)
+        if self.iters < 1:
+            raise ValueError(f"iters={self.iters}: at least 1 iteration per block")
+        self.sched = _schedule(schedule)
+        obstacle = np.asarray(obstacle, dtype=bool)
+        self.H, self.W = obstacle.shape
+        self.obst = obst = pad_to_blocks(obstacle, (n, m))
+        self.goal = goal = _goal_mask(goals, obst.shape)
+        if (goal & obst).any():
+            r, c = np.argwhere(goal & obst)[0]
+            raise ValueError(f"goal ({r}, {c}) is on an obstacle")
+        if not goal.any():
+            raise ValueError("no goal")
+        unreachable = ~obst & ~reachable(obst, goal)
+        self.const = obst | goal | unreachable
+        self.rows, self.cols = obst.shape
+        self.BR, self.BC = self.rows // n, self.cols // m
+        self.B = self.BR * self.BC
+        self.p = self.sched[0]
+        dtype = np.int64 if self.sched[-1] <= _INT64_P_MAX else object
+        self.pad = np.zeros((self.rows + 2, self.cols + 2), dtype=dtype)   # a 0 ring: outside the map
+        self.hv = self.pad[1:-1, 1:-1]
+        self.hv[goal] = one(self.p)
+        self.res = PlanResult(h=None, const=None, p=self.p, converged=False, maxima=0,
+                              unreachable=unreachable[:self.H, :self.W], block=(n, m),
+                              blocks=(self.BR, self.BC))
+
+    def visit(self, br, bc):
+        """Up to I Jacobi iterations of block (br, bc); returns (counted i, stable)."""
+        n, m, pad, hv = self.n, self.m, self.pad, self.hv
+        r0, c0 = br * n, bc * m
+        fixed = self.const[r0:r0 + n, c0:c0 + m]
+        for i in range(1, self.iters + 1):
+            old = hv[r0:r0 + n, c0:c0 + m]
+            s = (pad[r0:r0 + n, c0 + 1:c0 + m + 1] + pad[r0 + 2:r0 + n + 2, c0 + 1:c0 + m + 1]
+                 + pad[r0 + 1:r0 + n + 1, c0:c0 + m] + pad[r0 + 1:r0 + n + 1, c0 + 2:c0 + m + 2])
+            new = np.where(fixed, old, s >> 2)
+            if (new == old).all():
+                return i, True
+            hv[r0:r0 + n, c0:c0 + m] = new
+        return self.iters, False
+
+    def maxima(self):
+        """Local maxima of the free nodes (the check pass's Maximum flags)."""
+        pad = self.pad
+        nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
+        return int(local_max(self.hv, self.const, nb).sum())
+
+    def raise_precision(self):
+        """The schedule's next p (the new low bits 0); False after the last."""
+        later = [q for q in self.sched if q > self.p]
+        if not later:
+            return False
+        self.pad <<= later[0] - self.p
+        self.p = later[0]
+        return True
+
+    def result(self, cycles, maxima):
+        res = self.res
+        res.p = self.p
+        res.maxima = 0 if res.converged else maxima
+        res.cycles = cycles
+        res.node_updates = res.block_iterations * self.n * self.m
+        res.padded_h = np.array(self.hv, dtype=object)
+        res.padded_const = self.const.copy()
+        res.h = res.padded_h[:self.H, :self.W].copy()
+        res.const = self.const[:self.H, :self.W].copy()
+        return res
+
+
 def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=()):
     """Block-synchronous relaxation with increasing precision (section 4).
 
@@ -329,46 +406,20 @@ def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=()):
     goal are not walled off by the planner: they stay a zero plateau and
     count as maxima; the host walls them off with more obstacle orders.
     """
-    n, m = _check_block(block)
-    iters = int(iters)
-    if iters < 1:
-        raise ValueError(f"iters={iters}: at least 1 iteration per block")
-    sched = _schedule(schedule)
-    obstacle = np.asarray(obstacle, dtype=bool)
-    H, W = obstacle.shape
-    obst = pad_to_blocks(obstacle, (n, m))
-    goal = _goal_mask(goals, obst.shape)
-    if (goal & obst).any():
-        r, c = np.argwhere(goal & obst)[0]
-        raise ValueError(f"goal ({r}, {c}) is on an obstacle")
-    if not goal.any():
-        raise ValueError("no goal")
-    reach = reachable(obst, goal)
-    unreachable = ~obst & ~reach
-    const = obst | goal | unreachable
-    rows, cols = obst.shape
-    BR, BC = rows // n, cols // m
-    B = BR * BC
+    g = _Grid(obstacle, goals, block, iters, schedule)
+    res, const, hv, B, iters = g.res, g.const, g.hv, g.B, g.iters
     evs = sorted(((int(s), (int(r), int(c)), str(kind)) for s, (r, c), kind in events),
                  key=lambda e: e[0])
     for s, (r, c), kind in evs:
         if kind not in ("obstacle", "goal"):
             raise ValueError(f"event kind {kind!r}: expected 'obstacle' or 'goal'")
-        if not (0 <= r < rows and 0 <= c < cols) or s < 0:
-            raise ValueError(f"event at pass {s} on ({r}, {c}): outside the {rows}x{cols} map")
-
-    dtype = np.int64 if sched[-1] <= _INT64_P_MAX else object
-    p = sched[0]
-    pad = np.zeros((rows + 2, cols + 2), dtype=dtype)     # a 0 ring: outside the map
-    hv = pad[1:-1, 1:-1]
-    hv[goal] = one(p)
-    res = PlanResult(h=None, const=None, p=p, converged=False, maxima=0,
-                     unreachable=unreachable[:H, :W], block=(n, m), blocks=(BR, BC))
+        if not (0 <= r < g.rows and 0 <= c < g.cols) or s < 0:
+            raise ValueError(f"event at pass {s} on ({r}, {c}): outside the {g.rows}x{g.cols} map")
 
     def apply(r, c, kind):
         const[r, c] = True
         hv[~const] = 0
-        hv[r, c] = one(p) if kind == "goal" else 0
+        hv[r, c] = one(g.p) if kind == "goal" else 0
 
     due = deque(evs)
     while due and due[0][0] == 0:
@@ -376,41 +427,27 @@ def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=()):
         apply(r, c, kind)
         res.events_applied += 1
 
-    def update_visit(r0, c0):
-        """Up to I iterations of one block; returns (counted i, stable)."""
-        fixed = const[r0:r0 + n, c0:c0 + m]
-        for i in range(1, iters + 1):
-            old = hv[r0:r0 + n, c0:c0 + m]
-            s = (pad[r0:r0 + n, c0 + 1:c0 + m + 1] + pad[r0 + 2:r0 + n + 2, c0 + 1:c0 + m + 1]
-                 + pad[r0 + 1:r0 + n + 1, c0:c0 + m] + pad[r0 + 1:r0 + n + 1, c0 + 2:c0 + m + 2])
-            new = np.where(fixed, old, s >> 2)
-            if (new == old).all():
-                return i, True
-            hv[r0:r0 + n, c0:c0 + m] = new
-        return iters, False
-
-    corners = [(br * n, bc * m) for br in range(BR) for bc in range(BC)]
-    level = {"p": p, "sweeps": 0, "block_iterations": 0, "maxima": None}
+    blocks = [(br, bc) for br in range(g.BR) for bc in range(g.BC)]
+    level = {"p": g.p, "sweeps": 0, "block_iterations": 0, "maxima": None}
     passes = 0
     cycles = RUN_OVERHEAD
     mode = "update"
     while True:
         if mode == "update":
             changed = False
-            for r0, c0 in corners:
-                i, stable = update_visit(r0, c0)
+            for br, bc in blocks:
+                i, stable = g.visit(br, bc)
                 res.block_iterations += i
                 level["block_iterations"] += i
                 k = min(i + 1, iters) if stable else iters
-                cycles += visit_cycles(k, p)
+                cycles += visit_cycles(k, g.p)
                 changed |= i > 1 or not stable     # the block changed
             res.sweeps += 1
             level["sweeps"] += 1
         else:   # check pass: the Maximum flags of every block, nothing written
-            cycles += B * visit_cycles(1, p)
+            cycles += B * visit_cycles(1, g.p)
             res.check_iterations += B
-            nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
-            maxima = int(local_max(hv, const, nb).sum())
+            maxima = g.maxima()
             level["maxima"] = maxima
         passes += 1
         if due and due[0][0] <= passes:         # a pending order: a clear pass
@@ -418,7 +455,7 @@ def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=()):
                 _, (r, c), kind = due.popleft()
                 apply(r, c, kind)
                 res.events_applied += 1
-                cycles += SET_OVERHEAD + B * visit_cycles(1, p)
+                cycles += SET_OVERHEAD + B * visit_cycles(1, g.p)
                 res.clear_passes += 1
             mode = "update"
             continue
@@ -429,24 +466,12 @@ def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=()):
         if maxima == 0:
             res.converged = True
             break
-        later = [q for q in sched if q > p]
-        if not later:
+        if not g.raise_precision():
             break
         res.levels.append(level)
-        shift = later[0] - p
-        pad <<= shift
-        p = later[0]
-        level = {"p": p, "sweeps": 0, "block_iterations": 0, "maxima": None}
+        level = {"p": g.p, "sweeps": 0, "block_iterations": 0, "maxima": None}
     res.levels.append(level)
-    res.p = p
-    res.maxima = 0 if res.converged else maxima
-    res.cycles = cycles
-    res.node_updates = res.block_iterations * n * m
-    res.padded_h = np.array(hv, dtype=object)
-    res.padded_const = const.copy()
-    res.h = res.padded_h[:H, :W].copy()
-    res.const = const[:H, :W].copy()
-    return res
+    return g.result(cycles, maxima)
 
 
 # Decision module (5.3): the four triangles of a node and two consecutive
@@ -705,75 +730,40 @@ def plan_explore(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), ord
     """:func:`plan` (without events) with a block ``order`` and optional
     skipping of still blocks; returns a :class:`PlanResult` (``skipped``
     visits are counted in ``levels``)."""
-    n, m = _check_block(block)
-    iters = int(iters)
-    if iters < 1:
-        raise ValueError(f"iters={iters}: at least 1 iteration per block")
     if order not in ("raster", "serpentine", "alternate", "goal"):
         raise ValueError(f"order {order!r}: raster, serpentine, alternate or goal")
-    sched = _schedule(schedule)
-    obstacle = np.asarray(obstacle, dtype=bool)
-    H, W = obstacle.shape
-    obst = pad_to_blocks(obstacle, (n, m))
-    goal = _goal_mask(goals, obst.shape)
-    if not goal.any() or (goal & obst).any():
-        raise ValueError("needs at least one goal, none on an obstacle")
-    reach = reachable(obst, goal)
-    unreachable = ~obst & ~reach
-    const = obst | goal | unreachable
-    rows, cols = obst.shape
-    BR, BC = rows // n, cols // m
-    B = BR * BC
+    g = _Grid(obstacle, goals, block, iters, schedule)
+    res, n, m, BR, BC, iters = g.res, g.n, g.m, g.BR, g.BC, g.iters
     raster = [(br, bc) for br in range(BR) for bc in range(BC)]
     if order == "serpentine":
         base = [(br, bc if br % 2 == 0 else BC - 1 - bc) for br, bc in raster]
     elif order == "goal":
-        dist = np.full(obst.shape, np.inf)
-        queue = deque(map(tuple, np.argwhere(goal)))
-        for g in queue:
-            dist[g] = 0
+        dist = np.full(g.obst.shape, np.inf)
+        queue = deque(map(tuple, np.argwhere(g.goal)))
+        for q in queue:
+            dist[q] = 0
         while queue:
             r, c = queue.popleft()
             for rr, cc in ((r - 1, c), (r, c + 1), (r, c - 1), (r + 1, c)):
-                if 0 <= rr < rows and 0 <= cc < cols and not obst[rr, cc] and dist[rr, cc] == np.inf:
+                if 0 <= rr < g.rows and 0 <= cc < g.cols and not g.obst[rr, cc] and dist[rr, cc] == np.inf:
                     dist[rr, cc] = dist[r, c] + 1
                     queue.append((rr, cc))
         base = sorted(raster, key=lambda b: (dist[b[0] * n:b[0] * n + n, b[1] * m:b[1] * m + m].min(), b))
     else:
         base = raster
 
-    dtype = np.int64 if sched[-1] <= _INT64_P_MAX else object
-    p = sched[0]
-    pad = np.zeros((rows + 2, cols + 2), dtype=dtype)
-    hv = pad[1:-1, 1:-1]
-    hv[goal] = one(p)
-    res = PlanResult(h=None, const=None, p=p, converged=False, maxima=0,
-                     unreachable=unreachable[:H, :W], block=(n, m), blocks=(BR, BC))
-
     def visit(br, bc):
-        """Up to I iterations; returns (counted i, stable, changed edges N, E, W, S)."""
-        r0, c0 = br * n, bc * m
-        fixed = const[r0:r0 + n, c0:c0 + m]
-        before = hv[r0:r0 + n, c0:c0 + m].copy()
-        for i in range(1, iters + 1):
-            old = hv[r0:r0 + n, c0:c0 + m]
-            s = (pad[r0:r0 + n, c0 + 1:c0 + m + 1] + pad[r0 + 2:r0 + n + 2, c0 + 1:c0 + m + 1]
-                 + pad[r0 + 1:r0 + n + 1, c0:c0 + m] + pad[r0 + 1:r0 + n + 1, c0 + 2:c0 + m + 2])
-            new = np.where(fixed, old, s >> 2)
-            if (new == old).all():
-                stable = True
-                break
-            hv[r0:r0 + n, c0:c0 + m] = new
-        else:
-            i, stable = iters, False
-        after = hv[r0:r0 + n, c0:c0 + m]
+        """g.visit, and which of the block's edges (N, E, W, S) changed."""
+        before = g.hv[br * n:br * n + n, bc * m:bc * m + m].copy()
+        i, stable = g.visit(br, bc)
+        after = g.hv[br * n:br * n + n, bc * m:bc * m + m]
         edges = (not (after[0] == before[0]).all(), not (after[:, -1] == before[:, -1]).all(),
                  not (after[:, 0] == before[:, 0]).all(), not (after[-1] == before[-1]).all())
         return i, stable, edges
 
     cycles = RUN_OVERHEAD
     while True:
-        level = {"p": p, "sweeps": 0, "block_iterations": 0, "maxima": None, "skipped": 0}
+        level = {"p": g.p, "sweeps": 0, "block_iterations": 0, "maxima": None, "skipped": 0}
         dirty = {b: True for b in raster}
         while True:                                   # update sweeps
             blocks = base[::-1] if order == "alternate" and level["sweeps"] % 2 else base
@@ -787,7 +777,7 @@ def plan_explore(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), ord
                 i, stable, edges = visit(br, bc)
                 res.block_iterations += i
                 level["block_iterations"] += i
-                cycles += visit_cycles(min(i + 1, iters) if stable else iters, p)
+                cycles += visit_cycles(min(i + 1, iters) if stable else iters, g.p)
                 if i > 1 or not stable:
                     changed = True
                     dirty[(br, bc)] = not stable
@@ -798,29 +788,16 @@ def plan_explore(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), ord
             level["sweeps"] += 1
             if not (any(dirty.values()) if skip else changed):
                 break
-        cycles += B * visit_cycles(1, p)              # check pass
-        res.check_iterations += B
-        nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
-        maxima = int(local_max(hv, const, nb).sum())
-        level["maxima"] = maxima
+        cycles += g.B * visit_cycles(1, g.p)          # check pass
+        res.check_iterations += g.B
+        maxima = level["maxima"] = g.maxima()
         res.levels.append(level)
         if maxima == 0:
             res.converged = True
             break
-        later = [q for q in sched if q > p]
-        if not later:
+        if not g.raise_precision():
             break
-        pad <<= later[0] - p
-        p = later[0]
-    res.p = p
-    res.maxima = maxima
-    res.cycles = cycles
-    res.node_updates = res.block_iterations * n * m
-    res.padded_h = np.array(hv, dtype=object)
-    res.padded_const = const.copy()
-    res.h = res.padded_h[:H, :W].copy()
-    res.const = const[:H, :W].copy()
-    return res
+    return g.result(cycles, maxima)
 
 
 __all__ += ["SKIP_CYCLES", "plan_explore"]
