@@ -9,6 +9,7 @@ STAMP    := $(VENV)/.installed
 SIM      ?= icarus
 MODULE   ?= node
 JOBS     ?= 2
+ENGINE   ?= model
 PYTEST   := $(BIN)/python -m pytest
 
 export AMARANTH_USE_YOSYS := builtin
@@ -39,9 +40,10 @@ yosys:
 cxx:	# Verilator compiles its models with the system C++ compiler
 	$(call need_deb,g++,g++)
 
-## make demo: plan on a bundled map with the model, check the cluster RTL on a window, plot
-demo: $(STAMP) icarus
-	$(BIN)/python -m sim.demo --out results/demo
+## make demo: map -> plan (both planners) -> track, plots and summary in results/demo
+## (ENGINE=icarus|verilator runs the DFLC of the closed loop as RTL)
+demo: $(STAMP) $(if $(filter model,$(ENGINE)),,icarus cxx)
+	$(BIN)/python -m sim.demo --out results/demo --engine $(ENGINE)
 
 ## make test: model tests plus the whole cocotb regression on Icarus and Verilator
 ## (JOBS pytest-xdist workers; the wall time lands in build/regression.json)

@@ -1,8 +1,7 @@
 """Drive a harmonic Cluster in simulation: host port, border words, iterations.
 
-Shared by the cluster regression (tb/harmonic/test_cluster.py) and the demo's
-RTL run (sim/cluster_window.py).  The bench emulates the border nodes around
-the 3x6 cluster: fixed words stored one bit per address and read, with one
+Used by the cluster regression (tb/harmonic/test_cluster.py).  The bench
+emulates the border nodes around the 3x6 cluster: fixed words stored one bit per address and read, with one
 cycle of RAM latency, at the addresses the cluster presents (cntR for the
 LSB-first streams, r_cnt for the MSB-first ones).
 """

@@ -8,8 +8,8 @@ command line (``python -m sim harmonic --rtl``).
   planner's struct layouts, one command -> one response, map loading, a run
   to the end, reading every node back.
 * :func:`planner_params`: the block / RAM parameters for a map.
-* :func:`run_planner_rtl`: a whole map through cocotb (a JSON job file, as
-  sim/demo.py runs sim/cluster_window.py), returning the fields of
+* :func:`run_planner_rtl`: a whole map through cocotb (a JSON job file read
+  by tb/harmonic/planner_job.py), returning the fields of
   :class:`models.harmonic.PlanResult`.
 """
 
