@@ -148,30 +148,25 @@ class Block(wiring.Component):
         m.d.comb += border.w_addr.eq(c0.w_addr)
         with m.If(host):
             m.d.comb += border.w_addr.eq(self.host_addr)
+        # The border RAMs' segments: each cluster edge that faces another
+        # block, with the word bits of its nodes (top/bottom rows, left/right
+        # columns of the block).
+        segments = []
         for j in range(CC):
-            for side, i, r, sl in (("top", 0, 0, slice(COLS * j, COLS * (j + 1))),
-                                   ("bottom", CR - 1, ROWS - 1, slice(COLS * j, COLS * (j + 1)))):
-                c = cl[i][j]
-                k = i * CC + j
-                data = Cat(c.w_data[bit(r, q)] for q in range(COLS))
-                hdata = Cat(self.host_wdata[bit(r, q)] for q in range(COLS))
-                en = getattr(border, f"en_{side}")[sl]
-                d = getattr(border, f"w_{side}")[sl]
-                with m.If(host):
-                    m.d.comb += [d.eq(hdata), en.eq(Cat([self.host_we & (self.host_cluster == k)] * COLS))]
-                with m.Else():
-                    m.d.comb += [d.eq(data), en.eq(Cat([c.w_en] * COLS))]
+            cols = slice(COLS * j, COLS * (j + 1))
+            segments += [("top", 0, j, cols, [bit(0, q) for q in range(COLS)]),
+                         ("bottom", CR - 1, j, cols, [bit(ROWS - 1, q) for q in range(COLS)])]
         for i in range(CR):
-            for side, j, q, sl in (("left", 0, 0, slice(ROWS * i, ROWS * (i + 1))),
-                                   ("right", CC - 1, COLS - 1, slice(ROWS * i, ROWS * (i + 1)))):
-                c = cl[i][j]
-                k = i * CC + j
-                data = Cat(c.w_data[bit(r, q)] for r in range(ROWS))
-                hdata = Cat(self.host_wdata[bit(r, q)] for r in range(ROWS))
-                en = getattr(border, f"en_{side}")[sl]
-                d = getattr(border, f"w_{side}")[sl]
-                with m.If(host):
-                    m.d.comb += [d.eq(hdata), en.eq(Cat([self.host_we & (self.host_cluster == k)] * ROWS))]
-                with m.Else():
-                    m.d.comb += [d.eq(data), en.eq(Cat([c.w_en] * ROWS))]
+            rows = slice(ROWS * i, ROWS * (i + 1))
+            segments += [("left", i, 0, rows, [bit(r, 0) for r in range(ROWS)]),
+                         ("right", i, CC - 1, rows, [bit(r, COLS - 1) for r in range(ROWS)])]
+        for side, i, j, sl, bits in segments:
+            c = cl[i][j]
+            en = getattr(border, f"en_{side}")[sl]
+            d = getattr(border, f"w_{side}")[sl]
+            with m.If(host):
+                m.d.comb += [d.eq(Cat(self.host_wdata[b] for b in bits)),
+                             en.eq(Cat([self.host_we & (self.host_cluster == i * CC + j)] * len(bits)))]
+            with m.Else():
+                m.d.comb += [d.eq(Cat(c.w_data[b] for b in bits)), en.eq(Cat([c.w_en] * len(bits)))]
         return m
