@@ -56,8 +56,15 @@ def _available():
     return {name: mod for name, mod in COMMANDS.items() if importlib.util.find_spec(mod) is not None}
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse, but a usage error is one line (``--help`` still shows the usage)."""
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+
+
 def build_parser():
-    parser = argparse.ArgumentParser(prog="python -m sim", description="navcores: models and RTL runs of the cores")
+    parser = _Parser(prog="python -m sim", description="navcores: models and RTL runs of the cores")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for name, mod in _available().items():
         module = importlib.import_module(mod)

@@ -26,6 +26,13 @@ def test_parse_and_check_cell():
         check_cell(grid, (1, 1), "start")
 
 
-def test_no_command_is_a_usage_error():
-    out = subprocess.run([sys.executable, "-m", "sim"], cwd=ROOT, capture_output=True, text=True)
-    assert out.returncode == 2 and "Traceback" not in out.stderr and "COMMAND" in out.stderr
+@pytest.mark.parametrize("argv,message", [
+    ([], "required: COMMAND"),
+    (["fly"], "invalid choice: 'fly'"),
+    (["harmonic", "maps/empty-16-16.map", "--goal", "1,1", "--engine", "fpga"], "invalid choice: 'fpga'"),
+])
+def test_usage_errors_are_one_line(argv, message):
+    out = subprocess.run([sys.executable, "-m", "sim", *argv], cwd=ROOT, capture_output=True, text=True)
+    assert out.returncode == 2 and out.stdout == ""
+    lines = out.stderr.splitlines()
+    assert len(lines) == 1 and message in lines[0] and "Traceback" not in out.stderr, out.stderr
