@@ -104,7 +104,7 @@ def group(cells):
 
 def report(results, version, elapsed):
     lines = [
-        "# Harmonic planner: yosys synthesis vs paper 000 (Tables 1-2)", "",
+        "# Harmonic planner and EDT/BFS array: yosys synthesis vs papers 000 (Tables 1-2) and 004 (Tables I-II)", "",
         f"{version}, target `synth_xilinx -family xc2v` (Virtex-II, 4-input LUTs); "
         f"run took {elapsed:.1f} s.  Frequency: n/a (yosys gives no timing).", "",
         "| module | FF | LUT4 | block RAM | paper (FF / LUT4 / MHz) |",
