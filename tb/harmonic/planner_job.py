@@ -24,13 +24,20 @@ async def run_job(dut, job):
     bench = PlannerBench(dut, prm["n"], prm["m"], (prm["br"], prm["bc"]), prm["p_max"])
     obstacle = np.array(job["obstacle"], dtype=bool)
     goal = np.array(job["goal"], dtype=bool)
+    return await run_map(bench, obstacle, goal, job["schedule"], job["iters"], job.get("events", []))
+
+
+async def run_map(bench, obstacle, goal, schedule, iters, events=()):
+    """Load the map, send the idle orders (pass 0), START with ``schedule``
+    = (p1, step, p_last), send each order during its pass, wait for the end;
+    returns (status, h, const) read back from the planner."""
     await bench.load_map(obstacle, goal)
-    events = sorted(job.get("events", []), key=lambda e: e[0])
+    events = sorted(events, key=lambda e: e[0])
     for s, (r, c), kind in [e for e in events if e[0] == 0]:
         await set_order(bench, r, c, kind)
     await bench.wait_idle(poll=16)
-    p1, step, p_last = job["schedule"]
-    resp = await bench.command(Op.START, p1=p1, step=step, p_last=p_last, iters=job["iters"])
+    p1, step, p_last = schedule
+    resp = await bench.command(Op.START, p1=p1, step=step, p_last=p_last, iters=iters)
     assert resp["code"] == Code.OK, resp["code"]
     for s, (r, c), kind in [e for e in events if e[0] > 0]:
         await wait_pass(bench, s - 1)

@@ -30,8 +30,8 @@ import numpy as np
 import pytest
 
 from models.harmonic import decision, plan
-from tb.harmonic.planner_bench import Code, Op, PlannerBench
-from tb.harmonic.planner_job import set_order, wait_pass
+from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic
+from tb.harmonic.planner_job import run_map
 from tb.harmonic.planner_maps import MAPS, random_map
 from tb.harmonic.serial import start
 from tb.runner import SIMULATORS, run
@@ -71,18 +71,8 @@ async def _run(bench, ob, goals, sched, iters, events=()):
     """Model and RTL on one map; compare everything; return the model result."""
     P = PARAMS
     res = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched, events=events)
-    load = ob | res.unreachable
-    await bench.load_map(load, _padded(ob, goals))
-    for s, (r, c), kind in [e for e in events if e[0] == 0]:
-        await set_order(bench, r, c, kind)
-    await bench.wait_idle(poll=16)
-    st = await bench.start(sched, iters)
-    assert st["code"] == Code.OK, st["code"]
-    for s, (r, c), kind in [e for e in events if e[0] > 0]:
-        await wait_pass(bench, s - 1)
-        await set_order(bench, r, c, kind, during=s - 1)
-    st = await bench.wait_idle()
-    h, const = await bench.read_all(ob.shape)
+    st, h, const = await run_map(bench, ob | res.unreachable, _padded(ob, goals), arithmetic(sched),
+                                 iters, events)
     bad = np.argwhere((h != res.padded_h) | (const != res.padded_const))
     assert not len(bad), (f"{len(bad)} nodes differ, first {tuple(bad[0])}: RTL {h[tuple(bad[0])]} "
                           f"model {res.padded_h[tuple(bad[0])]}\nRTL\n{h}\nmodel\n{res.padded_h}")
