@@ -19,11 +19,14 @@ instance in turn:
   out exactly.
 
 Configurations (hdl/dflc/multi.py SETS["regress"]): the paper's default (Table 1, min,
-LUT divider, n = 2, 9 triangles, sequential); n = 3 with 5/3/4 MFs, prod,
-restoring array and missing rules; trapezoids with gaps (zero firing
-strength), max, LUT, parallel; 5/4 MFs, probor, array, parallel; n = 1
-sequential; n = 4 (16 rules per sample); with extra CPR pipeline registers
-in all but the default instance.
+LUT divider, n = 2, 9 triangles, sequential, default pipeline); n = 3 with
+5/3/4 MFs, prod, restoring array and missing rules, every pipeline generic at
+its minimum; trapezoids with gaps (zero firing strength), max, LUT, parallel,
+the front generics at 4; 5/4 MFs, probor, array, parallel, the singleton route
+longer than the weight route; n = 1 with the paper's Table 2 generics; n = 1,
+array, every generic at 4 (latency 45); n = 4 (16 rules per sample), the back
+generics at 4.  ``cycles`` asserts each instance's latency against
+``hdl.dflc.core.latency`` of its generics and its 2^n (or 1) clocks per sample.
 """
 
 import itertools
@@ -181,10 +184,14 @@ async def _random_stalls(dut, bench, config, model, rng, ready_p):
 @cocotb.test()
 async def cycles(dut):
     start_clock(dut)
+    checked = {}
     for key, config, par, model in instances(dut):
         rng = random.Random(seed() + 1)
         bench = await new_bench(dut, key, config)
-        await _cycles(dut, bench, config, par, model, rng)
+        checked[key] = await _cycles(dut, bench, config, par, model, rng)
+    assert len(checked) == len(list(instances(dut)))
+    if ONLY is None:    # the generics really spread the latency (multi.py's comments)
+        assert checked == {"t1": 13, "n3": 13, "tr": 28, "or": 20, "n1": 20, "n1m": 46, "n4": 37}, checked
 
 
 async def _cycles(dut, bench, config, par, model, rng):
@@ -200,7 +207,8 @@ async def _cycles(dut, bench, config, par, model, rng):
     assert set(np.diff(outs)) == {p}, f"output spacing {sorted(set(np.diff(outs)))}, expected {p}"
     lat = outs[0] - ins[0]
     assert lat == stream_latency(config, **par), f"latency {lat}, documented {stream_latency(config, **par)}"
-    dut._log.info(f"cycles {config.name}: {p} per sample, latency {lat}")
+    dut._log.info(f"cycles {config.name} {par}: {p} per sample, latency {lat}")
+    return lat
 
 
 @cocotb.test()
