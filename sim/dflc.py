@@ -7,7 +7,9 @@ IN.csv has a header naming the .fll's input variables (any order) and one
 sample per row in the variables' own units; values outside a variable's range
 saturate.  The model engine is models/dflc.py (bit-exact with the RTL); the
 icarus / verilator engines emit the stream top for the .fll
-(``dflc_stream_<stem>_<hash>``) and run the samples through it in cocotb.
+(``dflc_stream_<stem>_<hash>``; ``dflc_stream_table1``, the module ``make
+verilog`` emits, for the shipped default) and run the samples through it in
+cocotb (build/sim/<engine>/<module>/, reused while the .fll is unchanged).
 JSON keys: outputs (floats, output units), codes (output codes), zero_strength
 (booleans: no rule fired, the output is the .fll's default), cycles_per_sample,
 latency (clock cycles; the RTL engines report what they measured, the model
