@@ -38,10 +38,9 @@ TOPS = {
     "harmonic_planner": lambda n, m, br, bc, p_max, depth: Planner(n, m, (br, bc), p_max, depth),
     # DFLC: fll = a .fll stem (models/dflc_<fll>.fll or tb/dflc/fll/<fll>.fll),
     # widths ip_sz, dy_ip, mf_op_sz, op_sz, div (lut/array), op (sel_op), par (1 = parallel),
-    # cpr_mf, cpr_mult, cpr_div (extra pipeline registers)
+    # psr1_no .. psr4_no, cpr1_no .. cpr9_no (Table 2 pipeline registers)
     "dflc_stream": DflcStream,
-    "dflc_core": lambda par=0, cpr_mf=0, cpr_mult=0, cpr_div=0, **kw: DflcCore(
-        config_for(**kw), parallel=bool(par), cpr_mf=cpr_mf, cpr_mult=cpr_mult, cpr_div=cpr_div),
+    "dflc_core": lambda **kw: DflcCore.from_params(**kw),
     "dflc_multi": DflcMulti,     # test top: the regression's configurations in one build
     "edt_cell": EdtCell,
     "edt_array": EdtArray,

@@ -10,10 +10,12 @@ from amaranth.lib.wiring import In, Out
 
 from models.dflc import load_fll
 
-from .core import CPR_KEYS, DflcCore, latency
+from .core import DflcCore, latency
+from .pipe import PIPE_KEYS, check_pipe
 from .mf_gen import bits_for
 
-__all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth", "split_params"]
+__all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth", "split_params",
+           "core_from_params"]
 
 ROOT = Path(__file__).resolve().parents[2]
 # models/: the shipped controllers; tb/dflc/fll/: test fixtures;
@@ -41,22 +43,31 @@ def config_for(fll="table1", ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div="lut"
                     div_type=div, sel_op=op)
 
 
-def fifo_depth(config, parallel, **cpr):
+def fifo_depth(config, parallel, **pipe):
+    """Output FIFO depth = the credit count: ceil(L / P) + 2 (L the core's
+    latency at these generics, P the clocks per sample), so that a consumer
+    that is always ready never throttles the input."""
     p = 1 if parallel else 1 << config.n
-    return -(-latency(config, parallel, **cpr) // p) + 2
+    return -(-latency(config, parallel, **pipe) // p) + 2
 
 
-def stream_latency(config, parallel=False, **cpr):
+def stream_latency(config, parallel=False, **pipe):
     """Cycles from the i_stream handshake to o_stream.valid (empty output FIFO)."""
-    return latency(config, parallel, **cpr) + 1
+    return latency(config, parallel, **pipe) + 1
 
 
 def split_params(params):
-    """Top parameters -> (config_for kwargs, parallel, cpr kwargs)."""
+    """Top parameters -> (config_for kwargs, parallel, pipeline generics)."""
     p = dict(params)
     par = bool(p.pop("par", 0))
-    cpr = {k: p.pop(k) for k in CPR_KEYS if k in p}
-    return p, par, cpr
+    pipe = {k: p.pop(k) for k in PIPE_KEYS if k in p}
+    return p, par, pipe
+
+
+def core_from_params(**params):
+    """``hdl.emit``'s ``dflc_core``: the core of an emitted parameter set."""
+    p, par, pipe = split_params(params)
+    return DflcCore(config_for(**p), parallel=par, **pipe)
 
 
 class DflcStream(wiring.Component):
@@ -77,21 +88,24 @@ class DflcStream(wiring.Component):
 
     Keyword parameters (``hdl.emit`` TOPS ``dflc_stream``): ``fll`` (stem or
     path), ``ip_sz``, ``dy_ip``, ``mf_op_sz``, ``op_sz``, ``div`` (lut /
-    array), ``op`` (override sel_op), ``par`` (1: parallel option),
-    ``cpr_mf``, ``cpr_mult``, ``cpr_div`` (extra pipeline registers, see
-    :class:`core.DflcCore`).
+    array), ``op`` (override sel_op), ``par`` (1: parallel option), and the
+    pipeline generics of Table 2 ``psr1_no`` .. ``psr4_no``, ``cpr1_no`` ..
+    ``cpr9_no`` (register counts, see :class:`core.DflcCore`; defaults
+    :data:`core.PIPE_DEFAULTS`).  With an explicit ``config`` the generics
+    come as the ``pipe`` dict.
     """
 
-    def __init__(self, config=None, parallel=False, cpr=None, **kw):
+    def __init__(self, config=None, parallel=False, pipe=None, **kw):
         if config is None:
-            kw, par, cpr_kw = split_params(kw)
+            kw, par, pipe_kw = split_params(kw)
             parallel = parallel or par
-            cpr = {**cpr_kw, **(cpr or {})}
+            pipe = {**pipe_kw, **(pipe or {})}
             config = config_for(**kw)
         elif kw:
             raise TypeError(f"unexpected parameters {sorted(kw)} with an explicit config")
-        self.config, self.parallel, self.cpr = config, bool(parallel), dict(cpr or {})
-        self.depth = fifo_depth(config, self.parallel, **self.cpr)
+        check_pipe(pipe, op_sz=config.op_sz)
+        self.config, self.parallel, self.pipe = config, bool(parallel), dict(pipe or {})
+        self.depth = fifo_depth(config, self.parallel, **self.pipe)
         c = config
         super().__init__({
             "i_stream": In(stream.Signature(data.ArrayLayout(c.ip_sz, c.n))),
@@ -101,7 +115,7 @@ class DflcStream(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         c = self.config
-        m.submodules.core = core = DflcCore(c, self.parallel, **self.cpr)
+        m.submodules.core = core = DflcCore(c, self.parallel, **self.pipe)
         m.submodules.fifo = fifo = SyncFIFO(width=c.op_sz + 1, depth=self.depth)
         inflight = Signal(range(self.depth + 1))
         room = Signal()
