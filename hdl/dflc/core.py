@@ -4,6 +4,7 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import Param, check
 from .addr_gen import AddrGen
 from .cons_map import ConsMap
 from .divider import Divider
@@ -71,11 +72,14 @@ class DflcCore(wiring.Component):
         ``o_y`` is then the configuration's ``zero_code``.
     """
 
+    # The CPR parameters (hdl.emit's dflc_* tops list them; the rest is the config).
+    PARAMS = tuple(Param(k, int, 0, lo=0, hi=4, doc="extra pipeline registers (Table 2 CPR)",
+                         message="{name} = {value!r}: extra pipeline registers must be {lo} .. {hi}")
+                   for k in CPR_KEYS)
+
     def __init__(self, config, parallel=False, cpr_mf=0, cpr_mult=0, cpr_div=0):
         c = config
-        for name, v in (("cpr_mf", cpr_mf), ("cpr_mult", cpr_mult), ("cpr_div", cpr_div)):
-            if not isinstance(v, int) or not 0 <= v <= 4:
-                raise ValueError(f"{name} = {v!r}: extra pipeline registers must be 0 .. 4")
+        check(self.PARAMS, cpr_mf=cpr_mf, cpr_mult=cpr_mult, cpr_div=cpr_div)
         self.cpr = {"cpr_mf": cpr_mf, "cpr_mult": cpr_mult, "cpr_div": cpr_div}
         if not 1 <= c.n <= 4:
             raise ValueError(f"ip_no = {c.n}: must be 1 to 4")
@@ -92,6 +96,12 @@ class DflcCore(wiring.Component):
             "i_valid": In(1), "i_codes": In(data.ArrayLayout(c.ip_sz, c.n)), "i_ready": Out(1),
             "o_valid": Out(1), "o_y": Out(c.op_sz), "o_zero": Out(1),
         })
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest."""
+        return {"initiation_interval_cycles": 1 if self.parallel else 1 << self.config.n,
+                "latency_cycles": latency(self.config, self.parallel, **self.cpr),
+                "latency": "i_valid & i_ready to o_valid"}
 
     def elaborate(self, platform):
         m = Module()
