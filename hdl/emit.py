@@ -198,6 +198,7 @@ def manifest(name, params, component=None):
     """The manifest of ``name`` at ``params`` (a dict; JSON-ready)."""
     if component is None:
         component = build(name, params)
+        _silence(component)         # only its signature is read
     decl, constraints = params_of(name)
     timing = component.timing() if hasattr(component, "timing") else {}
     ports = ports_of(component)
@@ -215,6 +216,14 @@ def manifest(name, params, component=None):
         "timing": timing,
         "doc": inspect.getdoc(type(component)).split("\n\n")[0],
     }
+
+
+def _silence(component):
+    """No "created but never used" warning for a component (and the parts its
+    constructor built) that is only described, not elaborated."""
+    for obj in (component, *vars(component).values()):
+        if hasattr(obj, "elaborate"):
+            obj._MustUse__silence = True
 
 
 _PORT = re.compile(r"^\s*(input|output)\s+(?:signed\s+)?(?:\[(\d+):(\d+)\]\s*)?(\S+)\s*;", re.M)

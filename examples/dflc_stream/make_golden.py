@@ -21,7 +21,9 @@ N = 24
 SEED = 2024
 
 
-def main():
+def main(check=False):
+    """Write the files (``check``: only compare them with the stored ones; True if equal)."""
+    files = {}
     core = yaml.safe_load((HERE / "dflc_stream_example.core").read_text())
     params = dict(core["generate"]["flc"]["parameters"])
     assert params.pop("top") == "dflc_stream"
@@ -41,9 +43,18 @@ def main():
     for (c0, c1), yy, zz in zip(codes, y, zero):
         word = int(c0) | int(c1) << 10 | int(yy) << 20 | int(zz) << 34
         lines.append(f"{word:09x}")
-    (HERE / "golden.hex").write_text("\n".join(lines) + "\n")
-    print(f"wrote {HERE / 'golden.hex'}: {len(codes)} samples, {int(zero.sum())} with zero strength")
+    files["golden.hex"] = ("\n".join(lines) + "\n")
+    print(f"golden.hex: {len(codes)} samples, {int(zero.sum())} with zero strength")
+    if check:
+        stale = [n for n, text in files.items() if (HERE / n).read_text() != text]
+        if stale:
+            print(f"stale: {', '.join(stale)} (rerun without --check)")
+        return not stale
+    for name, text in files.items():
+        (HERE / name).write_text(text)
+    return True
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+    sys.exit(0 if main(check="--check" in sys.argv[1:]) else 1)

@@ -35,7 +35,9 @@ def pack(layout, **values):
     return word
 
 
-def main():
+def main(check=False):
+    """Write the files (``check``: only compare them with the stored ones; True if equal)."""
+    files = {}
     core = yaml.safe_load((HERE / "edt_bfs_example.core").read_text())
     p = core["generate"]["planner"]["parameters"]
     h, w = p["height"], p["width"]
@@ -62,17 +64,26 @@ def main():
     beats += [cell(r, c, 1, last=(r, c) == (h - 1, w - 1)) for r in range(h) for c in range(w)]
     head = [f"// examples/edt_bfs: python examples/edt_bfs/make_golden.py (image.txt, goal {GOAL}, "
             f"start {START}, dfar {DFAR})"]
-    (HERE / "stimulus.hex").write_text("\n".join(head + [f"{x:x}" for x in stim]) + "\n")
+    files["stimulus.hex"] = ("\n".join(head + [f"{x:x}" for x in stim]) + "\n")
     assert len(beats) <= MAX_BEATS
     pad = ["// unused (tb_edt_bfs.v reads MAX_BEATS words)"] + ["0"] * (MAX_BEATS - len(beats))
-    (HERE / "expected.hex").write_text("\n".join(head + [f"{x:x}" for x in beats] + pad) + "\n")
+    files["expected.hex"] = ("\n".join(head + [f"{x:x}" for x in beats] + pad) + "\n")
     meta = [len(beats), m.iterations_edt, m.iterations_bfs, m.cycles]
-    (HERE / "meta.hex").write_text("\n".join(head + ["// beats, EDT iterations, BFS iterations, cycles"]
+    files["meta.hex"] = ("\n".join(head + ["// beats, EDT iterations, BFS iterations, cycles"]
                                              + [f"{x:x}" for x in meta]) + "\n")
     print(f"path of {len(m.path)} pixels {m.path}; {len(beats)} beats; "
           f"{m.iterations_edt} EDT + {m.iterations_bfs} BFS iterations, {m.cycles} cycles")
     print(f"payload widths: command {cmd.size}, column {col.size}, result {res.size}")
+    if check:
+        stale = [n for n, text in files.items() if (HERE / n).read_text() != text]
+        if stale:
+            print(f"stale: {', '.join(stale)} (rerun without --check)")
+        return not stale
+    for name, text in files.items():
+        (HERE / name).write_text(text)
+    return True
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+    sys.exit(0 if main(check="--check" in sys.argv[1:]) else 1)
