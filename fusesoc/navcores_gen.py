@@ -39,6 +39,8 @@ def main(family):
     fll = params.get("fll")
     if fll is not None and str(fll).endswith(".fll") and not Path(str(fll)).is_absolute():
         params["fll"] = str((files_root / str(fll)).resolve())
+    # YAML booleans (par: true) are the command line's 1 / 0; null is the default.
+    params = {k: int(v) if isinstance(v, bool) else v for k, v in params.items() if v is not None}
     python = os.environ.get("NAVCORES_PYTHON", sys.executable)
     args = [python, "-m", "hdl.emit", str(top)] + [f"{k}={v}" for k, v in params.items()] + ["-o", "."]
     r = subprocess.run(args, capture_output=True, text=True)

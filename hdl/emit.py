@@ -7,6 +7,7 @@ module: the file and module names carry the parameters
     python -m hdl.emit --list [--json]                  # tops, parameters, types, defaults, ranges
     python -m hdl.emit TOP [name=value ...] [-o DIR]    # DIR/<module>.v + DIR/<module>.json
     python -m hdl.emit [OUT_DIR]                        # every top at its listed sets (make verilog)
+    python -m hdl.emit --manifests docs/manifests       # only their manifests (the committed copies)
 
 The parameters' types, defaults and ranges are the components' own
 declarations (``PARAMS`` / ``CONSTRAINTS`` beside each ``__init__``,
@@ -194,6 +195,16 @@ def streams_of(component, ports):
     return out
 
 
+def _value(component, p, params):
+    """The value of parameter ``p``: given, else the default (a derived default,
+    None, as the component resolved it, e.g. the cluster's p_max)."""
+    if p.name in params:
+        return params[p.name]
+    if p.default is None and isinstance(getattr(component, p.name, None), (int, str)):
+        return getattr(component, p.name)
+    return None if p.default is REQUIRED else p.default
+
+
 def manifest(name, params, component=None):
     """The manifest of ``name`` at ``params`` (a dict; JSON-ready)."""
     if component is None:
@@ -206,7 +217,7 @@ def manifest(name, params, component=None):
         "module": top_name(name, params),
         "top": name,
         "generator": "python -m hdl.emit " + " ".join([name] + [f"{k}={v}" for k, v in sorted(params.items())]),
-        "parameters": {p.name: params.get(p.name, None if p.default is REQUIRED else p.default) for p in decl},
+        "parameters": {p.name: _value(component, p, params) for p in decl},
         "parameter_spec": [p.describe() for p in decl],
         "constraints": [c.text for c in constraints],
         "clock": CLOCK,
@@ -249,7 +260,8 @@ def emit(name, params, out_dir, with_manifest=True):
     _write(path, text)
     if man is not None:
         # The manifest describes what was emitted: same ports, same widths.
-        want = {p["name"]: (p["direction"], p["width"]) for p in man["ports"]}
+        # (Amaranth emits no zero-width port: such a member is absent from the module.)
+        want = {p["name"]: (p["direction"], p["width"]) for p in man["ports"] if p["width"]}
         got = verilog_ports(text, module)
         clocking = {k: got.pop(k) for k in (CLOCK["name"], RESET["name"]) if k in got}
         if got != want:
@@ -259,6 +271,12 @@ def emit(name, params, out_dir, with_manifest=True):
             man["clock"] = man["reset"] = None
         _write(out / f"{module}.json", json.dumps(man, indent=1) + "\n")
     return path
+
+
+def manifest_text(name, params):
+    """The manifest's JSON text, without emitting (the clock and reset assumed:
+    every top has synchronous logic; ``emit`` checks the ports against the Verilog)."""
+    return json.dumps(manifest(name, params), indent=1) + "\n"
 
 
 def _write(path, text):
@@ -312,6 +330,8 @@ def main(argv=None):
     ap.add_argument("--list", action="store_true", help="list the tops and their parameters")
     ap.add_argument("--json", action="store_true", help="with --list: JSON")
     ap.add_argument("--no-manifest", action="store_true", help="Verilog only")
+    ap.add_argument("--manifests", metavar="DIR",
+                    help="only the manifests of every default set into DIR (docs/manifests)")
     ap.error = lambda msg: _fail(msg)
     args = ap.parse_args(argv)
     if args.list:
@@ -320,6 +340,13 @@ def main(argv=None):
             print(json.dumps(tops, indent=1))
         else:
             _print_listing(tops)
+        return 0
+    if args.manifests:
+        for name, params in DEFAULT_SETS:
+            path = Path(args.manifests) / f"{top_name(name, params)}.json"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            _write(path, manifest_text(name, params))
+            print(path)
         return 0
     if args.top is None:
         _fail("give a TOP (or --list)")

@@ -207,6 +207,18 @@ def test_default_sets_command(tmp_path, monkeypatch, capsys):
                      "harmonic_node.json", "harmonic_node.v"]
     assert capsys.readouterr().out.split() == [str(tmp_path / "harmonic_counters_pmax1022.v"),
                                                str(tmp_path / "harmonic_node.v")]
+    # the emitted manifest is the one --manifests writes without emitting
+    assert ((tmp_path / "harmonic_counters_pmax1022.json").read_text()
+            == emit.manifest_text("harmonic_counters", {"p_max": 1022}))
+
+
+def test_committed_manifests_are_current():
+    """docs/manifests/ (linked from the docs) holds every default set's manifest, as generated today."""
+    docs = ROOT / "docs" / "manifests"
+    want = {f"{emit.top_name(n, p)}.json": (n, p) for n, p in emit.DEFAULT_SETS}
+    assert sorted(f.name for f in docs.glob("*.json")) == sorted(want)
+    stale = [f for f, (n, p) in want.items() if (docs / f).read_text() != emit.manifest_text(n, p)]
+    assert not stale, f"stale manifests {stale}: python -m hdl.emit --manifests docs/manifests"
 
 
 def test_every_default_set_is_valid():
