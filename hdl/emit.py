@@ -134,7 +134,10 @@ def build(name, params):
     if missing:
         raise ValueError(f"{name}: missing parameter{'s' * (len(missing) > 1)} {', '.join(missing)} "
                          f"(see python -m hdl.emit --list)")
-    check(decl, **params)   # unknown names, types, single ranges; the component checks the rest
+    # Types and single ranges of the declared parameters; the component checks
+    # the rest (a parameter a top takes but does not declare passes through).
+    names = {p.name for p in decl}
+    check(decl, **{k: v for k, v in params.items() if k in names})
     return TOPS[name](**params)
 
 

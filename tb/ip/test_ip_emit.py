@@ -66,6 +66,24 @@ def test_list_shows_every_top_and_parameter():
     assert "p_max: int, >= 2, required" in text
 
 
+def test_every_parameter_is_declared():
+    """Each top's factory takes exactly its declared parameters (a new
+    constructor argument needs its Param beside the constructor)."""
+    import inspect
+    for name, factory in emit.TOPS.items():
+        assert hasattr(emit.SPECS.get(name, factory), "PARAMS"), f"{name}: no PARAMS declaration"
+        sig = inspect.signature(factory)
+        if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()) and name != "dflc_core":
+            continue                    # DflcStream(**kw): checked by its own PARAMS
+        takes = {p.name for p in sig.parameters.values()
+                 if p.kind is p.POSITIONAL_OR_KEYWORD and p.name not in ("path", "config", "parallel", "cpr", "signature")}
+        declared = {p.name for p in emit.params_of(name)[0]}
+        if name == "dflc_core":         # par, cpr_* named, the config's widths through **kw
+            assert takes <= declared, (name, takes - declared)
+        else:
+            assert takes == declared, (name, takes ^ declared)
+
+
 def test_declared_bounds_are_the_components_checks():
     """Every declared bound: the value just outside it is refused by the
     component class itself (not by hdl.emit), with the parameter named."""
