@@ -4,12 +4,13 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import Param, check
 from .addr_gen import AddrGen
 from .cons_map import ConsMap
 from .divider import Divider
 from .integrator import Integrator
 from .mf_gen import MfGen, bits_for
-from .pipe import PIPE_DEFAULTS, PIPE_KEYS, PIPE_TABLE2, check_pipe, delay
+from .pipe import PIPE_DEFAULTS, PIPE_KEYS, PIPE_RANGE, PIPE_TABLE2, check_pipe, delay
 from .rule_sel import RuleSel
 from .tnorm import Tnorm
 
@@ -122,6 +123,13 @@ class DflcCore(wiring.Component):
         ``o_y`` is then the configuration's ``zero_code``.
     """
 
+    # The pipeline generics (hdl.emit's dflc_* tops list them; the rest is the
+    # config): one declaration, from hdl/dflc/pipe.py's ranges and defaults,
+    # which check_pipe enforces.
+    PARAMS = tuple(Param(k, int, PIPE_DEFAULTS[k], lo=PIPE_RANGE[k][0], hi=PIPE_RANGE[k][1],
+                         doc=f"pipeline registers, Table 2 {k[:-3].upper()}")
+                   for k in PIPE_KEYS)
+
     def __init__(self, config, parallel=False, **pipe):
         c = config
         self.pipe = check_pipe(pipe, op_sz=c.op_sz)
@@ -147,6 +155,12 @@ class DflcCore(wiring.Component):
         fll, widths, div, op, par and the pipeline generics, as DflcStream)."""
         from .top import core_from_params    # top imports this module
         return core_from_params(**params)
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest."""
+        return {"initiation_interval_cycles": 1 if self.parallel else 1 << self.config.n,
+                "latency_cycles": latency(self.config, self.parallel, **self.pipe),
+                "latency": "i_valid & i_ready to o_valid"}
 
     def elaborate(self, platform):
         m = Module()

@@ -4,6 +4,7 @@ from amaranth.hdl import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import Flow
 
+from ..params import Param, check
 from .top import DflcStream, config_for, split_params
 
 __all__ = ["DflcMulti", "SETS"]
@@ -54,9 +55,11 @@ class DflcMulti(wiring.Component):
     very DflcStream component ``hdl.emit`` emits alone as ``dflc_stream_<fll>...``.
     """
 
+    PARAMS = (Param("set", str, "regress", choices=tuple(sorted(SETS)), doc="named set of configurations",
+                    message="set = {value!r}: expected one of {choices}"),)
+
     def __init__(self, set="regress"):
-        if set not in SETS:
-            raise ValueError(f"set = {set!r}: expected one of {sorted(SETS)}")
+        check(self.PARAMS, set=set)
         self.set = set
         self.tops = {}
         members = {}

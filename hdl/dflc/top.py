@@ -8,7 +8,9 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFO
 from amaranth.lib.wiring import In, Out
 
-from models.dflc import load_fll
+from models.dflc import DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
+
+from ..params import Constraint, Param, check
 
 from .core import DflcCore, latency
 from .pipe import PIPE_KEYS, check_pipe
@@ -95,8 +97,30 @@ class DflcStream(wiring.Component):
     come as the ``pipe`` dict.
     """
 
+    # Keyword parameters; the widths' limits are load_fll's (models.dflc.WIDTH_LIMITS).
+    PARAMS = (
+        Param("fll", str, "table1", doc="a .fll path, or a stem: table1 = models/dflc_table1.fll"),
+        *(Param(k, int, d, lo=WIDTH_LIMITS[k][0], hi=WIDTH_LIMITS[k][1], doc=doc,
+                message="{name} = {value!r}: must be an integer in {lo}..{hi}")
+          for k, d, doc in (("ip_sz", 12, "input code bits"), ("dy_ip", 8, "MF degree bits"),
+                            ("mf_op_sz", 12, "singleton code bits (MF_op_sz)"),
+                            ("op_sz", 12, "output code bits"))),
+        Param("div", str, "lut", choices=DIV_TYPES, doc="divider (div_type)",
+              message="div_type = {value!r}: expected one of {choices}"),
+        Param("op", str, None, choices=SEL_OPS, none_ok=True,
+              doc="antecedent operator override (sel_op; default: the .fll's)",
+              message="sel_op = {value!r}: expected one of {choices}"),
+        Param("par", bool, 0, doc="1: parallel option, one sample per clock"),
+        *DflcCore.PARAMS,
+    )
+    CONSTRAINTS = (
+        Constraint("op_sz >= mf_op_sz", lambda p: p["op_sz"] >= p["mf_op_sz"],
+                   "op_sz = {op_sz} < MF_op_sz = {mf_op_sz}: the output must hold a singleton code"),
+    )
+
     def __init__(self, config=None, parallel=False, pipe=None, **kw):
         if config is None:
+            check(self.PARAMS, self.CONSTRAINTS, **{**{p.name: p.default for p in self.PARAMS}, **kw})
             kw, par, pipe_kw = split_params(kw)
             parallel = parallel or par
             pipe = {**pipe_kw, **(pipe or {})}
@@ -111,6 +135,13 @@ class DflcStream(wiring.Component):
             "i_stream": In(stream.Signature(data.ArrayLayout(c.ip_sz, c.n))),
             "o_stream": Out(stream.Signature(data.StructLayout({"y": c.op_sz, "zero": 1}))),
         })
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest."""
+        return {"initiation_interval_cycles": 1 if self.parallel else 1 << self.config.n,
+                "latency_cycles": stream_latency(self.config, self.parallel, **self.pipe),
+                "latency": "i_stream handshake to o_stream.valid, output FIFO empty",
+                "fifo_depth": self.depth}
 
     def elaborate(self, platform):
         m = Module()
