@@ -870,8 +870,9 @@ class _ExpGrid(_Grid):
     """The padded map with mantissas (``pad``/``hv``) and one exponent per
     block (``E``); ``visit`` converts the border ring into the block's units."""
 
-    def __init__(self, obstacle, goals, block, iters, schedule, headroom, e_max):
+    def __init__(self, obstacle, goals, block, iters, schedule, headroom, e_max, ceiling=False):
         super().__init__(obstacle, goals, block, iters, schedule)
+        self.use_ceiling = bool(ceiling)
         self.headroom, self.e_max = int(headroom), int(e_max)
         if self.headroom < 0:
             raise ValueError(f"headroom={self.headroom}: must be >= 0")
@@ -883,6 +884,16 @@ class _ExpGrid(_Grid):
         free = ~self.const
         self.free_block = free.reshape(self.BR, n, self.BC, m).any(axis=(1, 3))
         self.sat = np.zeros((self.BR, self.BC), dtype=bool)
+        self.ceiling = np.full((self.BR, self.BC), self.e_max, dtype=np.int64)
+        self._dtype_for_p()
+
+    def _dtype_for_p(self):
+        """int64 while p <= 60 (sums of four (p+1)-bit mantissas fit), Python
+        ints above: the same values, only faster where the schedule starts low."""
+        want = np.int64 if self.p <= _INT64_P_MAX else object
+        if self.pad.dtype != want:
+            self.pad = self.pad.astype(want)
+            self.hv = self.pad[1:-1, 1:-1]
 
     def _ring(self, br, bc):
         """The block's four border rings (N, S, W, E): (mantissas, neighbour
@@ -950,7 +961,7 @@ class _ExpGrid(_Grid):
                 d = dr if d is None else min(d, dr)
         if d is None:
             return 0
-        return max(0, min(d, self.e_max - e))
+        return max(0, min(d, int(self.ceiling[br, bc]) - e))
 
     def repick(self, br, bc):
         """Apply the rule: shift the block's mantissas left by d (exact,
@@ -998,6 +1009,9 @@ class _ExpGrid(_Grid):
             return None
         step = later[0] - self.p
         n, m = self.n, self.m
+        if later[0] > _INT64_P_MAX:
+            self.pad = self.pad.astype(object)
+            self.hv = self.pad[1:-1, 1:-1]
         moved = []
         for br in range(self.BR):
             for bc in range(self.BC):
@@ -1006,13 +1020,16 @@ class _ExpGrid(_Grid):
                 if delta:
                     self.E[br, bc] -= delta
                     moved.append((br, bc))
+                if self.sat[br, bc] and self.use_ceiling:
+                    self.ceiling[br, bc] = self.E[br, bc]
         self.p = later[0]
         self.sat[...] = False
+        self._dtype_for_p()
         return moved
 
 
 def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
-                   e_max=E_MAX, repick="visit", trace=None):
+                   e_max=E_MAX, repick="visit", ceiling=False, trace=None):
     """The block-synchronous planner (:func:`plan`) with one exponent per block.
 
     Number format: block b's node with stored mantissa v (p+1 bits, the word
@@ -1081,7 +1098,7 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     """
     if repick not in ("visit", "check"):
         raise ValueError(f"repick {repick!r}: 'visit' or 'check'")
-    g = _ExpGrid(obstacle, goals, block, iters, schedule, headroom, e_max)
+    g = _ExpGrid(obstacle, goals, block, iters, schedule, headroom, e_max, ceiling)
     res, B, iters = g.res, g.B, g.iters
     blocks = [(br, bc) for br in range(g.BR) for bc in range(g.BC)]
 
