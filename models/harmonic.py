@@ -1046,13 +1046,17 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     stream -s bits late, or delay it by s cycles.
 
     Exponent rule (re-pick).  After every update visit of block b (``repick
-    ="visit"``; ``"check"``: only at check passes) and at every check pass
+    ="visit"``, the default; ``"stable"``: only after a visit whose first
+    iteration changed nothing; ``"check"``: only at check passes; "visit" is
+    the cheapest on the bundled maps) and at every check pass
     that finds local maxima, e_b rises by the largest d >= 0 such that every
     value block b holds or sees (its nodes and its four border rings, exact)
     stays below 2**(p+1-h) in its units (h = ``headroom``), at most up to
     ``e_max``; the block's mantissas shift left by d (exact).  A goal block, a
     block without free node and a block whose nodes and ring are all 0 keep
-    their exponent.  So within a precision level e_b only rises.  When the
+    their exponent.  So within a precision level e_b only rises.
+    ``ceiling=True`` (an option, measured worse on room-32-32-4): a block
+    saturated in a level may not rise above its lowered exponent again.  When the
     precision rises by a step (no re-pick possible at a check pass that
     found maxima), a block saturated in the ending level lowers e_b by
     δ = min(e_b, step) so that p + e_b stays (its words gain top bits, no
@@ -1096,8 +1100,8 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     re-pick, check and precision rise, with the cycles counted so far
     (event, p, exponents copy, mantissa copy, cycles; for the tests).
     """
-    if repick not in ("visit", "check"):
-        raise ValueError(f"repick {repick!r}: 'visit' or 'check'")
+    if repick not in ("visit", "stable", "check"):
+        raise ValueError(f"repick {repick!r}: 'visit', 'stable' or 'check'")
     g = _ExpGrid(obstacle, goals, block, iters, schedule, headroom, e_max, ceiling)
     res, B, iters = g.res, g.B, g.iters
     blocks = [(br, bc) for br in range(g.BR) for bc in range(g.BC)]
@@ -1123,7 +1127,7 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
             cycles += visit_cycles(min(i + 1, iters) if stable else iters, g.p)
             changed |= i > 1 or not stable
             note("visit")
-            if repick == "visit" and g.repick(br, bc):
+            if (repick == "visit" or (repick == "stable" and stable and i == 1)) and g.repick(br, bc):
                 cycles += visit_cycles(1, g.p)
                 res.repicks += 1
                 level["repicks"] += 1

@@ -49,6 +49,12 @@ def _exact(mant, E, p, n, m):
     return out
 
 
+def _scaled(mant, E, p, n, m, F):
+    """Exact values times 2**F (F >= every p + e_b): integers, comparable."""
+    shift = np.repeat(np.repeat(F - p - np.asarray(E, dtype=object), n, axis=0), m, axis=1)
+    return np.array(mant, dtype=object) << shift
+
+
 def _fixed_point_violations(res, p):
     """Nodes whose mantissa differs from the update of their neighbours, each
     neighbour's exact value floored into the node's units and clamped at the
@@ -96,6 +102,7 @@ CASES = [
     ("random", (4, 5), 1, (6, 12), dict(e_max=4)),
     ("corridor", (3, 4), 3, (6, 12, 18), dict()),
     ("spiral", (4, 4), 2, (6, 10, 14, 18), dict(e_max=7)),
+    ("random", (3, 6), 2, (6, 10, 14), dict(repick="stable", ceiling=True)),
 ]
 
 
@@ -118,11 +125,12 @@ def test_termination_invariant(case):
     goal_blocks = {(r // n, c // m) for r, c in goals}
     prev = None
     compared = levels_seen = 0
+    F = max(p + int(E.max()) for _, p, E, _, _ in trace)
     for event, p, E, mant, _ in trace:
         assert E.min() >= 0 and E.max() <= e_max
         for b in goal_blocks:
             assert E[b] == 0
-        val = _exact(mant, E, p, n, m)
+        val = _scaled(mant, E, p, n, m, F)
         if prev is not None:
             pev, pp, pE, pval = prev
             assert (val >= pval).all(), f"a value fell at {event}"
