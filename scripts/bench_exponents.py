@@ -43,14 +43,18 @@ SCHEDULE = tuple(range(STEP, 513, STEP))
 RAM_DEPTH = 1024
 
 
-def bundled_maps():
-    """[(name, obstacle, [goal])] for every maps/*.map, the goal of its
-    longest scenario (as scripts/bench.py picks it), else its last free cell."""
+def bundled_maps(maps_dir=None, names=None):
+    """[(name, obstacle, [goal])] for every maps/*.map (or those ``names``,
+    stems), the goal of its longest scenario (its ``-even-*.scen`` file, as
+    scripts/bench.py picks it), else its last free cell."""
     out = []
-    for path in sorted((ROOT / "maps").glob("*.map")):
+    for path in sorted(Path(maps_dir or ROOT / "maps").glob("*.map")):
+        if names and path.stem not in names:
+            continue
         obstacle = load_map(path)
-        scen = path.with_name(path.stem + "-even-10.scen")
-        if scen.exists():
+        scens = sorted(path.parent.glob(path.stem + "-even-*.scen"))
+        scen = scens[0] if scens else None
+        if scen is not None:
             goal = max(load_scenarios(scen, obstacle), key=lambda s: s.optimal_length).goal
         else:
             goal = tuple(int(x) for x in np.argwhere(~obstacle)[-1])
@@ -77,10 +81,10 @@ def _row(name, obstacle, scheme, res, seconds):
     }
 
 
-def comparison():
+def comparison(maps_dir=None, names=None):
     """Run both schemes on every bundled map: (markdown, rows)."""
     rows = []
-    for name, obstacle, goals in bundled_maps():
+    for name, obstacle, goals in bundled_maps(maps_dir, names):
         for scheme, kw in (("fixed point", {}), ("block exponents", {"block_exponents": True})):
             t0 = time.time()
             res = plan(obstacle, goals, block=BLOCK, iters=ITERS, schedule=SCHEDULE, **kw)
@@ -112,9 +116,11 @@ def comparison():
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default=str(ROOT / "build" / "bench" / "exponents.md"))
+    ap.add_argument("--maps", default=None, help="directory of .map files (default: maps/)")
+    ap.add_argument("--only", action="append", default=None, metavar="NAME", help="map stem (repeatable)")
     args = ap.parse_args(argv)
     t0 = time.time()
-    text, rows = comparison()
+    text, rows = comparison(args.maps, args.only)
     text = "# Block exponents against fixed point (issue 10)\n\n" + text + \
         f"\n({time.time() - t0:.0f} s of model runs)\n"
     print(text)
