@@ -187,7 +187,7 @@ def test_rtl_engine_without_driver(capsys, monkeypatch):
 def test_rtl_engine_refuses_what_the_rtl_cannot_run(capsys):
     """A block that is not whole 3x6 clusters, a schedule that is not
     arithmetic: one line from the driver / Planner checks, before any build."""
-    for extra, message in ((["--block", "4x4"], "multiple of 3"),
+    for extra, message in ((["--block", "4x6"], "multiple of 3"), (["--block", "3x4"], "multiple of 6"),
                            (["--block", "3x6", "--schedule", "4,8,16"], "arithmetic")):
         rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "icarus", *extra], capsys)
         assert rc == 2 and message in err and len(err.strip().splitlines()) == 1, err
