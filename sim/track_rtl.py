@@ -23,13 +23,10 @@ DFLC_TOP = "dflc_stream"
 DFLC_PARAMS = {"fll": "table1"}      # the paper's Table 1 controller, Table 2 widths
 
 
-async def closed_loop(dut, job, prefix=""):
-    """Run the job's loop on the RTL; returns ClosedLoop.result().
-
-    ``prefix``: the Table 1 instance's port prefix in a multi-configuration
-    test top (hdl/dflc/multi.py, ``"t1_"``), "" for the plain top."""
+async def closed_loop(dut, job):
+    """Run the job's loop on the RTL (the DFLC_TOP at DFLC_PARAMS); returns ClosedLoop.result()."""
     config = config_for(**DFLC_PARAMS)
-    bench = DflcStream(dut, config, prefix=prefix)
+    bench = DflcStream(dut, config)
     await bench.start()
     loop = loop_from_job(job, Dflc(config))
     while (codes := loop.inputs()) is not None:

@@ -1,10 +1,9 @@
 """The closed loop with the DFLC RTL: the same curvature codes as the golden model, bit for bit.
 
 One cocotb test module, run on Icarus and Verilator on the DFLC
-regression's own build (the multi-configuration test top ``dflc_multi``, set
-"regress", whose ``t1_`` instance is the paper's Table 1 controller, the very
-DflcStream that ``dflc_stream_table1`` emits alone), so it costs no extra
-simulator build:
+regression's own build of the paper's Table 1 controller
+(``dflc_stream_table1``, which the DFLC stream and command tests also use),
+so it costs no extra simulator build:
 
 * ``rtl_closed_loop``: the whole closed loop runs inside the simulator
   (sim/track_rtl.py ``closed_loop``: odometry -> Ψ⁻¹ -> φ1, φ2 -> DFLC RTL,
@@ -16,7 +15,7 @@ simulator build:
   both turning directions.
 * on Icarus (a cheap build) the pytest function also runs ``python -m sim
   track --engine icarus`` on the bundled line (a subprocess: the command's
-  own path through the runner and the plain ``dflc_stream_table1`` top) and
+  own path through the runner and the same ``dflc_stream_table1`` top) and
   compares its curvature codes with the model engine's.  (The Verilator
   engine of the commands is the same code on another simulator; a second
   Verilator build only for it is not worth its ~60 s here.)
@@ -54,7 +53,7 @@ async def rtl_closed_loop(dut):
     from sim.tracking import load_dflc, loop_from_job
 
     job = short_job()
-    rtl = await closed_loop(dut, job, prefix="t1_")
+    rtl = await closed_loop(dut, job)
     ref = run_model(loop_from_job(job, load_dflc()))
     n = len(ref["curvature_codes"])
     assert rtl["steps"] == ref["steps"] == n
@@ -71,7 +70,7 @@ async def rtl_closed_loop(dut):
 
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_track_rtl(sim, tmp_path):
-    assert run("dflc_multi", {"set": "regress"}, sim, "test_track_rtl") == 1
+    assert run("dflc_stream", {"fll": "table1"}, sim, "test_track_rtl") == 1
     if sim != "icarus":
         return
     # the command's --engine path (a subprocess)
