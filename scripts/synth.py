@@ -172,11 +172,10 @@ EDT_SCRIPT = ("read_verilog {v}; synth_xilinx -family xc2v -top {top} -noiopad -
               "-nowidelut; stat")
 
 
-def edt_hier(name, params, paper):
-    """One EDT top synthesized with its hierarchy kept: the group sums of the
-    top module's own logic (``glue``) and of one cell module, the number of
-    cells, and the total ``glue + cells x count``."""
-    v = emit(name, params, OUT_DIR)
+def edt_hier(v, name, params, paper):
+    """One EDT top (emitted to ``v``) synthesized with its hierarchy kept: the
+    group sums of the top module's own logic (``glue``) and of one cell
+    module, the number of cells, and the total ``glue + cells x count``."""
     log = OUT_DIR / f"{v.stem}.hier.log"
     res = subprocess.run([YOSYS, "-q", "-l", str(log), "-p", EDT_SCRIPT.format(v=v, top=v.stem)],
                          capture_output=True, text=True)
@@ -208,8 +207,9 @@ def edt_report(rows):
     for r in rows:
         t, c, g = r["total"], r["cell"], r["glue"]
         per = f"{c['FF']} / {c['LUT']} / {c['carry']}" if r["n"] else "-"
+        glue = f"{g['FF']} / {g['LUT']}" if r["n"] else "-"
         lines.append(f"| {r['top']} | {r['n'] or 1} | {t['FF']} | {t['LUT']} | {t['carry']} | {per} | "
-                     f"{g['FF']} / {g['LUT']} | {r['paper']} |")
+                     f"{glue} | {r['paper']} |")
     lines += ["", "Commands:", ""]
     lines += ["    " + shlex.join([YOSYS, "-p", EDT_SCRIPT.format(v=r["v"], top=r["top"])]) for r in rows]
     return lines
@@ -269,8 +269,9 @@ def main():
         text += f"| {key} | {s_['FF']} | {s_['LUT']} |\n"
     text += (f"| ↳ per node (/{NODES}) | {parts['nodes']['FF'] / NODES:.1f} | "
              f"{parts['nodes']['LUT'] / NODES:.1f} |\n")
+    edt_jobs = [(emit(name, params, OUT_DIR), name, params, paper) for name, params, paper in EDT_TOPS]
     with ThreadPoolExecutor(max_workers=2) as pool:
-        edt = list(pool.map(lambda t: edt_hier(*t), EDT_TOPS))
+        edt = list(pool.map(lambda j: edt_hier(*j), edt_jobs))
     text += "\n".join(edt_report(edt)) + "\n"
     print(text, end="")
     out.parent.mkdir(parents=True, exist_ok=True)
