@@ -19,6 +19,8 @@ counts the cells of the final ``stat``.
   by MUXF5..F8) and with ``-nowidelut`` (plain LUT4s, closer to how ISE
   counts "4 input LUTs").
 * yosys does no timing, so there is no frequency to compare.
+* EDT/BFS (paper 004): the cell and the 8x8 and 16x16 arrays with the
+  hierarchy kept (EDT_TOPS, own table: glue + cells x count).
 * DFLC (paper 003, section 7): the core alone (``dflc_core``, Table 2
   parameters, models/dflc_table1.fll) and its parallel option, on the paper's
   Spartan-3: ``synth_xilinx -family xc3s`` (DFLC_TOPS, own table).
@@ -55,11 +57,19 @@ TOPS = [  # (name, params, paper FF / LUT4 / MHz)
     # the planner top: that block + Control + Decision + host streams, p_max = 62
     ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256},
      "- (paper: Control 844 slices, Decision 3p+682 slices)"),
-    # EDT/BFS (paper 004): Table II gives 1188 gates for "BFS and NNT" and
-    # Table I 232 MHz; hdl/edt_bfs/README.md compares.  The 16x16 array is
-    # left out: yosys 0.23 needs about 6 minutes for the 8x8 one already.
+    # EDT/BFS (paper 004): synthesized with the hierarchy kept, see EDT_TOPS.
+]
+# EDT/BFS arrays (paper 004; Table II: 1188 gates for "BFS and NNT", Table I:
+# 232 MHz; hdl/edt_bfs/README.md compares).  Not flattened: the array is n*m
+# instances of one cell module, which yosys then synthesizes once; the total
+# is glue + cells x count (flattening took yosys 0.23 six minutes for 8x8).
+# Without flattening the edge cells keep the logic of their absent
+# neighbours (constant inputs), so the totals are an upper bound of the
+# flattened ones (compared once in the README).  -nowidelut only.
+EDT_TOPS = [
     ("edt_cell", {"height": 16, "width": 16}, "1188 gates / - / 232 (Tables I-II, per cell?)"),
     ("edt_array", {"height": 8, "width": 8}, "- (64 cells)"),
+    ("edt_array", {"height": 16, "width": 16}, "- (256 cells)"),
 ]
 DFLC_TOPS = [  # (name, params, paper figures), Spartan-3, paper 003 section 7
     ("dflc_core", {"fll": "table1"},
@@ -103,7 +113,7 @@ def group(cells):
 
 def report(results, version, elapsed):
     lines = [
-        "# Harmonic planner and EDT/BFS array: yosys synthesis vs papers 000 (Tables 1-2) and 004 (Tables I-II)", "",
+        "# Harmonic planner: yosys synthesis vs paper 000 (Tables 1-2)", "",
         f"{version}, target `synth_xilinx -family xc2v` (Virtex-II, 4-input LUTs); "
         f"run took {elapsed:.1f} s.  Frequency: n/a (yosys gives no timing).", "",
         "| module | FF | LUT4 | block RAM | paper (FF / LUT4 / MHz) |",
@@ -155,6 +165,53 @@ def cluster_breakdown(v, top, log):
         key = "nodes" if ".node_" in name else "counters" if name.endswith(".counters") else "cluster logic"
         parts[key] += group(counts)[0]
     return parts
+
+
+EDT_SCRIPT = ("read_verilog {v}; synth_xilinx -family xc2v -top {top} -noiopad -noclkbuf "
+              "-nowidelut; stat")
+
+
+def edt_hier(v, name, params, paper):
+    """One EDT top (emitted to ``v``) synthesized with its hierarchy kept: the
+    group sums of the top module's own logic (``glue``) and of one cell
+    module, the number of cells, and the total ``glue + cells x count``."""
+    log = OUT_DIR / f"{v.stem}.hier.log"
+    res = subprocess.run([YOSYS, "-q", "-l", str(log), "-p", EDT_SCRIPT.format(v=v, top=v.stem)],
+                         capture_output=True, text=True)
+    if res.returncode:
+        sys.exit(f"yosys failed on {v} (see {log}):\n{res.stderr[-2000:]}")
+    text = log.read_text().rsplit("Printing statistics.", 1)[1]
+    glue, cell = Counter(), Counter()
+    for mod, body in re.findall(r"^=== (\S+) ===\n(.*?)(?=^=== |\Z)", text, re.M | re.S):
+        if "design hierarchy" in mod or "Number of cells:" not in body:
+            continue
+        cells = body.split("Number of cells:", 1)[1].split("\n\n", 1)[0]
+        counts = group(Counter({k: int(n) for k, n in re.findall(r"^\s+(\w+)\s+(\d+)$", cells, re.M)}))[0]
+        if mod.lstrip("\\").endswith(".proto"):
+            cell = counts
+        else:
+            glue = counts
+    n = params["height"] * params["width"] if name == "edt_array" else 0
+    total = glue + Counter({g: c * n for g, c in cell.items()})
+    return dict(top=v.stem, paper=paper, glue=glue, cell=cell, n=n, total=total, v=v)
+
+
+def edt_report(rows):
+    lines = ["", "# EDT/BFS array: yosys synthesis (hierarchy kept) vs paper 004 (Tables I-II)", "",
+             "`synth_xilinx -family xc2v -nowidelut` without `-flatten`: the cell module is "
+             "synthesized once and the array total is glue + cells × count (edge cells keep "
+             "the logic of absent neighbours, so this bounds the flattened count from above).", "",
+             "| module | cells | FF | LUT4 | carry | per cell FF / LUT4 / carry | glue FF / LUT4 | paper |",
+             "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        t, c, g = r["total"], r["cell"], r["glue"]
+        per = f"{c['FF']} / {c['LUT']} / {c['carry']}" if r["n"] else "-"
+        glue = f"{g['FF']} / {g['LUT']}" if r["n"] else "-"
+        lines.append(f"| {r['top']} | {r['n'] or 1} | {t['FF']} | {t['LUT']} | {t['carry']} | {per} | "
+                     f"{glue} | {r['paper']} |")
+    lines += ["", "Commands:", ""]
+    lines += ["    " + shlex.join([YOSYS, "-p", EDT_SCRIPT.format(v=r["v"], top=r["top"])]) for r in rows]
+    return lines
 
 
 def dflc_report(results):
@@ -211,6 +268,10 @@ def main():
         text += f"| {key} | {s_['FF']} | {s_['LUT']} |\n"
     text += (f"| ↳ per node (/{NODES}) | {parts['nodes']['FF'] / NODES:.1f} | "
              f"{parts['nodes']['LUT'] / NODES:.1f} |\n")
+    edt_jobs = [(emit(name, params, OUT_DIR), name, params, paper) for name, params, paper in EDT_TOPS]
+    with ThreadPoolExecutor(max_workers=2) as pool:
+        edt = list(pool.map(lambda j: edt_hier(*j), edt_jobs))
+    text += "\n".join(edt_report(edt)) + "\n"
     print(text, end="")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)

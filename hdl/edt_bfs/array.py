@@ -9,7 +9,7 @@ from amaranth.lib.wiring import In, Out
 from models.edt_bfs import OFFSETS
 
 from ..params import check
-from .cell import MAX_SIDE, EdtCell, cell_widths
+from .cell import MAX_SIDE, EdtCell, cell_widths, result_layout, state_layout
 
 __all__ = ["EdtArray"]
 
@@ -100,9 +100,12 @@ class EdtArray(wiring.Component):
         # and the instances need them all.
         proto_at = (1, 1)
         proto = EdtCell(h, wd)
-        outs = ("done", "delta", "dx", "dy", "visited", "di", "cfr", "parent", "changed")
-        cells = [[{f: Signal(proto.signature.members[f].shape, name=f"c{r}_{c}_{f}") for f in outs}
+        w = self.w
+        cells = [[{"state": Signal(state_layout(w), name=f"c{r}_{c}_state"),
+                   "result": Signal(result_layout(w), name=f"c{r}_{c}_result"),
+                   "changed": Signal(name=f"c{r}_{c}_changed")}
                   for c in range(wd)] for r in range(h)]
+        none = Const(0, state_layout(w).size)          # outside the array: not done, not visited
         for r in range(h):
             for c in range(wd):
                 me = cells[r][c]
@@ -112,35 +115,38 @@ class EdtArray(wiring.Component):
                 }
                 for i, (dr, dc) in OFFSETS.items():
                     inside = 0 <= r + dr < h and 0 <= c + dc < wd
-                    for f in ("done", "delta", "dx", "dy", "visited"):
-                        # outside the array a neighbour is not done, not visited
-                        ins[f"n{i}_{f}"] = (cells[r + dr][c + dc][f] if inside
-                                            else Const(0, proto.signature.members[f"n{i}_{f}"].shape))
+                    ins[f"n{i}"] = cells[r + dr][c + dc]["state"].as_value() if inside else none
                 if c == 0:
                     # load pipeline: each row enters at its leftmost cell, whose
                     # west neighbour p_3 is the input column while shifting
                     # (and absent, 0, otherwise)
-                    ins["n3_done"] = self.in_obst[r] & self.shift
-                    ins["n3_visited"] = self.in_goal[r] & self.shift
+                    west = Signal(state_layout(w), name=f"c{r}_west")
+                    m.d.comb += [west.done.eq(self.in_obst[r] & self.shift),
+                                 west.visited.eq(self.in_goal[r] & self.shift)]
+                    ins["n3"] = west.as_value()
                 if (r, c) == proto_at:
                     m.submodules.proto = proto
                     m.d.comb += [getattr(proto, n).eq(v) for n, v in ins.items()]
-                    m.d.comb += [me[f].eq(getattr(proto, f)) for f in outs]
+                    m.d.comb += [me[f].eq(getattr(proto, f)) for f in me]
                 else:
                     ports = {f"i_{n}": v for n, v in ins.items()}
-                    ports.update({f"o_{f}": me[f] for f in outs})
+                    ports.update({f"o_{f}": (v.as_value() if f != "changed" else v) for f, v in me.items()})
                     m.submodules[f"cell_{r}_{c}"] = Instance(
                         cell_type, i_clk=ClockSignal(), i_rst=ResetSignal(), **ports)
         m.d.comb += self.changed.eq(Cat(*[cell["changed"] for row in cells for cell in row]).any())
 
         # Read-out multiplexer: one word per cell; a binary tree of 2:1
-        # multiplexers on the column bits, then on the row bits (a 1024-way
-        # case statement takes Icarus minutes to compile).  Addresses outside
-        # the array read 0.
-        fields = ("done", "di", "dx", "dy", "cfr", "visited", "parent")
-        rows = [_mux_tree([Cat(*[cell[f] for f in fields]) for cell in row], self.rd_col)
-                for row in cells]
-        word = _mux_tree(rows, self.rd_row)
+        # multiplexers on the row bits (one tree per column), then on the
+        # column bits (a 1024-way case statement takes Icarus minutes to
+        # compile).  Rows first: the read-out walks along a row, so only the
+        # last tree (W - 1 multiplexers) changes from one beat to the next,
+        # not all H * (W - 1) column multiplexers, which an event-driven
+        # simulator re-evaluates.  Addresses outside the array read 0.
+        def word(cell):
+            st, res = cell["state"], cell["result"]
+            return Cat(st.done, res.di, st.dx, st.dy, res.cfr, st.visited, res.parent)
+        columns = [_mux_tree([word(cells[r][c]) for r in range(h)], self.rd_row) for c in range(wd)]
+        word = _mux_tree(columns, self.rd_col)
         m.d.comb += Cat(self.rd_done, self.rd_di, self.rd_dx, self.rd_dy, self.rd_cfr,
                         self.rd_visited, self.rd_parent).eq(word)
         return m

@@ -1,14 +1,14 @@
 """One cell of the EDT/NNT + BFS array (paper 004, section IV, Fig. 2)."""
 
 from amaranth.hdl import C, Cat, Module, Mux, Signal, signed
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
 from models.edt_bfs import OFFSETS, widths
 
 from ..params import Param, check
 
-__all__ = ["EdtCell", "cell_widths"]
+__all__ = ["EdtCell", "cell_widths", "state_layout", "result_layout"]
 
 MAX_SIDE = 256      # elaboration limit: the read-out and the widths are sized for it
 
@@ -23,6 +23,17 @@ def cell_widths(height, width):
     assert height - 1 < 1 << (w["dx"] - 1) and width - 1 < 1 << (w["dy"] - 1)
     assert w["delta_max"] + 2 * height + 2 * width < 1 << (w["cand"] - 1)
     return w
+
+
+def state_layout(w):
+    """The registers a cell's neighbours read (port ``state``, inputs ``n1`` .. ``n8``)."""
+    return data.StructLayout({"done": 1, "delta": w["delta"], "dx": signed(w["dx"]),
+                              "dy": signed(w["dy"]), "visited": 1})
+
+
+def result_layout(w):
+    """The registers only the read-out reads (port ``result``)."""
+    return data.StructLayout({"di": w["di"], "cfr": 1, "parent": 4})
 
 
 class EdtCell(wiring.Component):
@@ -41,12 +52,11 @@ class EdtCell(wiring.Component):
     Ports (neighbour i = 1..8 numbered as in Fig. 1: 6 2 5 / 3 0 1 / 7 4 8)
     -----------------------------------------------------------------------
     shift : In(1)
-        Load pipeline (section IV): ``done <- n3_done``, ``visited <-
-        n3_visited``, the marks of the cell on the left (p_3; the array feeds
-        column 0's p_3 inputs with the incoming column during a shift); δ,
+        Load pipeline (section IV): ``done <- n3.done``, ``visited <-
+        n3.visited``, the marks of the cell on the left (p_3; the array feeds
+        column 0's p_3 input with the incoming column during a shift); δ,
         Δx, Δy, d_i, cfr and parent are cleared, so nothing of a previous
-        image survives a load.  Using p_3's wires keeps every input port
-        distinct, which the array's instances need.
+        image survives a load.
     step_edt : In(1)
         EDT iteration ``k`` (mode 1, step 2).  The registers δ, Δx, Δy, d_i,
         done load the MAX tree's winner only under the paper's three
@@ -63,17 +73,26 @@ class EdtCell(wiring.Component):
         Iteration number from the controller's counter.
     dfar : In(d_i bits)
         d_far.
-    n{i}_done, n{i}_delta, n{i}_dx, n{i}_dy, n{i}_visited : In
-        Neighbour p_i's registers (tie them to 0 outside the array).
-    done, delta (δ), dx (Δx), dy (Δy), visited : Out
-        The registers the neighbours read.  (Δx, Δy) = p - nearest obstacle
+    n1 .. n8 : In(state_layout)
+        Neighbour p_i's ``state`` (tie it to 0 outside the array).
+    state : Out(state_layout)
+        The registers the neighbours read: ``done``, ``delta`` (δ), ``dx``
+        (Δx), ``dy`` (Δy), ``visited``.  (Δx, Δy) = p - nearest obstacle
         pixel, signed (the NNT).
-    di, cfr, parent : Out
-        Integer distance (the iteration that set done), collision-free flag,
-        BFS parent (0 = none / root).
+    result : Out(result_layout)
+        ``di`` (integer distance: the iteration that set done), ``cfr``
+        (collision-free flag), ``parent`` (BFS parent, 0 = none / root).
     changed : Out(1)
         This cycle's step sets done (EDT) or visited (BFS): the controller's
         termination test.
+
+    Each port is one signal and ``state`` and ``result`` are one register
+    each (struct layouts), for the simulators' sake: Amaranth emits an
+    ``always @(posedge clk)`` per register, and Icarus wakes every such
+    process on every clock edge whatever its enable, so eight registers per
+    cell cost a 32x32 array 8192 process wake-ups per cycle and two cost
+    2048; whole-signal ports also keep the emitted cell module's port names
+    fixed, which the array's instances rely on.  The flip-flops are the same.
 
     Timing: every step is one clock; outputs are registers, ``changed`` is
     combinational from the registers and the step inputs.
@@ -91,17 +110,8 @@ class EdtCell(wiring.Component):
             "step_edt": In(1), "step_cfr": In(1), "step_bfs": In(1),
             "k": In(w["k"]), "dfar": In(w["di"]),
         }
-        for i in range(1, 9):
-            ports.update({
-                f"n{i}_done": In(1), f"n{i}_delta": In(w["delta"]),
-                f"n{i}_dx": In(signed(w["dx"])), f"n{i}_dy": In(signed(w["dy"])),
-                f"n{i}_visited": In(1),
-            })
-        ports.update({
-            "done": Out(1), "delta": Out(w["delta"]), "dx": Out(signed(w["dx"])),
-            "dy": Out(signed(w["dy"])), "visited": Out(1), "di": Out(w["di"]),
-            "cfr": Out(1), "parent": Out(4), "changed": Out(1),
-        })
+        ports.update({f"n{i}": In(state_layout(w)) for i in range(1, 9)})
+        ports.update({"state": Out(state_layout(w)), "result": Out(result_layout(w)), "changed": Out(1)})
         super().__init__(ports)
 
     def timing(self):
@@ -110,17 +120,17 @@ class EdtCell(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        regs = _View(**{f: getattr(self, f) for f in
-                        ("done", "delta", "dx", "dy", "visited", "di", "cfr", "parent")})
-        nbs = {i: _View(**{f: getattr(self, f"n{i}_{f}") for f in ("done", "delta", "dx", "dy", "visited")})
-               for i in range(1, 9)}
+        st, res = self.state, self.result
+        regs = _View(done=st.done, delta=st.delta, dx=st.dx, dy=st.dy, visited=st.visited,
+                     di=res.di, cfr=res.cfr, parent=res.parent)
+        nbs = {i: getattr(self, f"n{i}") for i in range(1, 9)}
         ctl = {n: getattr(self, n) for n in ("shift", "step_edt", "step_cfr", "step_bfs", "k", "dfar")}
         m.d.comb += self.changed.eq(cell_logic(m, self.w, ctl, regs, nbs))
         return m
 
 
 class _View:
-    """Named access to a cell's registers, or to a neighbour's through the n{i}_* ports."""
+    """Named access to a cell's registers (fields of ``state`` and ``result``)."""
 
     def __init__(self, **fields):
         self.__dict__.update(fields)
@@ -130,7 +140,7 @@ def cell_logic(m, w, ctl, regs, nbs):
     """Fig. 2's logic of one cell into module ``m``; returns its ``changed`` value.
 
     ``regs``: the cell's registers; ``nbs[i]``: neighbour p_i's
-    registers (the ports n{i}_*); ``ctl``: the broadcast controls.
+    ``state`` (port n{i}); ``ctl``: the broadcast controls.
     """
     cw = w["cand"]
 

@@ -16,10 +16,11 @@ from cocotb.triggers import ReadOnly, RisingEdge
 from hdl.edt_bfs.cell import cell_widths
 from hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
 
-__all__ = ["EdtBfsDriver", "compare"]
+__all__ = ["EdtBfsDriver", "compare", "pack", "unpack"]
 
 
-def _pack(layout, values):
+def pack(layout, values):
+    """``values`` (a dict of field -> int) packed into an integer of ``layout``."""
     word = 0
     for name, v in values.items():
         f = layout[name]
@@ -27,7 +28,8 @@ def _pack(layout, values):
     return word
 
 
-def _unpack(layout, word):
+def unpack(layout, word):
+    """An integer of ``layout`` as a dict of field -> int (signed fields signed)."""
     out = {}
     for name, f in layout:
         v = (word >> f.offset) & ((1 << f.width) - 1)
@@ -78,12 +80,12 @@ class EdtBfsDriver:
             goal[r, c] = True
         dfar = min(int(dfar), (1 << self.widths["di"]) - 1)
         sr, sc = start if start is not None else (0, 0)
-        cmd = _pack(self.cmd, {"dfar": dfar, "start_row": sr, "start_col": sc,
+        cmd = pack(self.cmd, {"dfar": dfar, "start_row": sr, "start_col": sc,
                                "path": int(start is not None)})
         cols = []
         for j in range(w):
             c = w - 1 - j
-            cols.append(_pack(self.img, {
+            cols.append(pack(self.img, {
                 "obst": sum(int(img[r, c]) << r for r in range(h)),
                 "goal": sum(int(goal[r, c]) << r for r in range(h))}))
         if max_cycles is None:
@@ -109,7 +111,7 @@ class EdtBfsDriver:
             fire_c = cv and int(d.c_stream__ready.value)
             fire_i = iv and int(d.i_stream__ready.value)
             fire_o = orr and int(d.o_stream__valid.value)
-            beat = _unpack(self.res, int(d.o_stream__payload.value)) if fire_o else None
+            beat = unpack(self.res, int(d.o_stream__payload.value)) if fire_o else None
             await RisingEdge(d.clk)
             cycle += 1
             if fire_c:

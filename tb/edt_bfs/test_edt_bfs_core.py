@@ -175,21 +175,26 @@ def _params(size):
     return {"height": h, "width": w}
 
 
-# All five tests at 8x8 on both simulators and 16x16 on Icarus; two random
-# 32x32 jobs on Icarus.  A Verilator build grows with the cell count (about
-# 100 kB of C++ per cell instance) and Icarus runs a 32x32 array at about
-# 15 ms per cycle, so the rest of the large cases run only with EDT_BIG=1
-# (hdl/edt_bfs/README.md gives the measured times).
-# (sim, size, random jobs, cocotb test filter or None for all five tests)
+# Every test at 8x8 on both simulators and at 7x9 (non-square, start_err) on
+# Icarus; at 32x32 on Icarus the case list (random and structured
+# images with 1-3 goals, and the edge cases: no obstacles, a goal on an
+# obstacle, an unreachable goal, start = goal, start outside the cfr, no
+# path, a d_far beyond every distance), in one build and one simulator run.
+# The changed environment, back-pressure and reset exercise the load
+# pipeline, the controller and the streams, which do not depend on the size;
+# at 32x32 they are opt-in.  Verilator emits per-instance C++ for the array (about 60-110 kB
+# per cell), so its 32x32 build is opt-in too (EDT_BIG=1; the measured costs
+# are in hdl/edt_bfs/README.md).
+# (sim, size, random jobs, cocotb test filter (a regex) or None for all tests)
+SIZED = "random_and_structured|edge_cases"
 CASES = [(sim, (8, 8), 6, None) for sim in SIMULATORS] + [
-    ("icarus", (16, 16), 3, None), ("icarus", (7, 9), 3, None),      # 7x9: non-square, start_err
-    ("icarus", (32, 32), 1, "random_and_structured")]
-BIG = [("icarus", (32, 32), 3, None), ("verilator", (16, 16), 2, None),
-       ("verilator", (32, 32), 1, "random_and_structured")]
+    ("icarus", (7, 9), 3, None), ("icarus", (32, 32), 2, SIZED)]
+BIG = [("icarus", (16, 16), 3, None), ("icarus", (32, 32), 3, "changed_environment|back_pressure|reset_mid_job"),
+       ("verilator", (16, 16), 2, None), ("verilator", (32, 32), 3, None)]
 
 
 @pytest.mark.parametrize("sim, size, jobs, only", CASES + BIG,
-                         ids=[f"{s}-{n[0]}x{n[1]}{'-' + o if o else ''}{'-big' if c in BIG else ''}"
+                         ids=[f"{s}-{n[0]}x{n[1]}{'-' + ('sized' if o == SIZED else o.split('|')[0]) if o else ''}{'-big' if c in BIG else ''}"
                               for c in CASES + BIG for s, n, _, o in [c]])
 def test_edt_bfs_core(sim, size, jobs, only):
     if (sim, size, jobs, only) in BIG and os.environ.get("EDT_BIG") != "1":
@@ -197,4 +202,5 @@ def test_edt_bfs_core(sim, size, jobs, only):
     env = {"EDT_SIZE": f"{size[0]}x{size[1]}", "EDT_JOBS": jobs}
     if only:
         env["COCOTB_TEST_FILTER"] = only
-    run("edt_bfs", _params(size), sim, "test_edt_bfs_core", env=env)
+    ran = run("edt_bfs", _params(size), sim, "test_edt_bfs_core", env=env)
+    assert not only or ran == len(only.split("|")), f"{ran} cocotb tests ran, filter {only!r}"

@@ -15,17 +15,13 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ReadOnly, RisingEdge, Timer
 
-from hdl.edt_bfs.cell import cell_widths
+from edt_bench import pack, unpack
+from hdl.edt_bfs.cell import cell_widths, result_layout, state_layout
 from models.edt_bfs import OFFSETS, bfs_step, edt_step
 from tb.runner import SIMULATORS, run, seed_from_env
 
 H = W = 16
 CYCLES = 3000
-
-
-def _sig(v, bits):
-    v = int(v) & ((1 << bits) - 1)
-    return v - (1 << bits) if v >> (bits - 1) else v
 
 
 @cocotb.test()
@@ -34,6 +30,7 @@ async def random_cycles(dut):
     dut._log.info(f"seed {seed} (replay with SEED={seed})")
     rng = np.random.default_rng(seed)
     w = cell_widths(H, W)
+    st_layout, res_layout = state_layout(w), result_layout(w)
     Clock(dut.clk, 10, unit="ns").start()
     for name in ("shift", "step_edt", "step_cfr", "step_bfs"):
         getattr(dut, name).value = 0
@@ -69,11 +66,7 @@ async def random_cycles(dut):
         dut.step_cfr.value = int(mode == "cfr")
         dut.step_bfs.value = int(mode == "bfs")
         for i, (d, de, x, y, v) in nb.items():
-            getattr(dut, f"n{i}_done").value = int(d)
-            getattr(dut, f"n{i}_delta").value = de
-            getattr(dut, f"n{i}_dx").value = x & ((1 << w["dx"]) - 1)
-            getattr(dut, f"n{i}_dy").value = y & ((1 << w["dy"]) - 1)
-            getattr(dut, f"n{i}_visited").value = int(v)
+            getattr(dut, f"n{i}").value = pack(st_layout, {"done": d, "delta": de, "dx": x, "dy": y, "visited": v})
         # model
         changed = False
         if mode == "shift":
@@ -104,10 +97,8 @@ async def random_cycles(dut):
         assert int(dut.changed.value) == changed, f"cycle {cyc}: changed"
         await RisingEdge(dut.clk)
         await ReadOnly()
-        got = {"done": bool(int(dut.done.value)), "delta": int(dut.delta.value),
-               "dx": _sig(dut.dx.value, w["dx"]), "dy": _sig(dut.dy.value, w["dy"]),
-               "di": int(dut.di.value), "visited": bool(int(dut.visited.value)),
-               "cfr": bool(int(dut.cfr.value)), "parent": int(dut.parent.value)}
+        got = {**unpack(st_layout, int(dut.state.value)), **unpack(res_layout, int(dut.result.value))}
+        got = {k_: (bool(v) if k_ in ("done", "visited", "cfr") else v) for k_, v in got.items()}
         assert got == st, f"cycle {cyc} ({mode}, k={k}): rtl {got} model {st}"
         await Timer(1, unit="ns")      # leave the read-only phase before driving
     dut._log.info(f"{CYCLES} cycles: {counts}")
