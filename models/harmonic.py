@@ -1070,6 +1070,18 @@ class _ExpGrid(_Grid):
         return moved
 
 
+SHIFT_STEP = 3          # the RTL's in-place rotation per iteration (rtl=True)
+
+
+def shift_iterations(d):
+    """Iterations of the RTL's shift visit that rotates a block's words by d
+    value positions (rtl=True): an iteration reads LSB first and writes each
+    bit three positions behind the read, so a rotation by at most 3 never
+    overwrites a bit before it is read; a rotation by d takes ceil(d/3)
+    iterations (3, 3, ..., the rest last: see hdl/harmonic/cluster.py)."""
+    return max(1, -(-int(d) // SHIFT_STEP))
+
+
 def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
                    e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False):
     """The block-synchronous planner (:func:`plan`) with one exponent per block.
@@ -1149,7 +1161,11 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     converged field has no exact local maximum either); (2) every update and
     check visit of a block finer than a neighbour first scans the clamp bits
     (:meth:`_ExpGrid.scan_cycles`: L+1 cycles, L = the largest positive
-    exponent difference, at most p+1); (3) the check pass's re-pick is
+    exponent difference, at most p+1); (2b) a shift visit rotates the words
+    in place by at most 3 positions per iteration, so a re-pick by d costs
+    :func:`shift_iterations` (min(d, p)) iterations and a coarsening by δ at a
+    precision rise (a left rotation by p+1-δ: the low step bits are 0)
+    shift_iterations(p+1-δ); (3) the check pass's re-pick is
     skipped (with ``repick="visit"`` it never moves: the sweep before it
     re-picked every block and changed nothing; asserted here).
     """
@@ -1184,8 +1200,9 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
             cycles += visit_cycles(min(i + 1, iters) if stable else iters, g.p)
             changed |= i > 1 or not stable
             note("visit")
-            if (repick == "visit" or (repick == "stable" and stable and i == 1)) and g.repick(br, bc):
-                cycles += visit_cycles(1, g.p)
+            d = (repick == "visit" or (repick == "stable" and stable and i == 1)) and g.repick(br, bc)
+            if d:
+                cycles += visit_cycles(shift_iterations(min(d, g.p)) if rtl else 1, g.p)
                 res.repicks += 1
                 level["repicks"] += 1
                 changed = True
@@ -1218,10 +1235,14 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
             level = new_level()
             note("repick")
             continue
+        before = g.E.copy()
         shifted = g.raise_precision_exp()
         if shifted is None:
             break
-        cycles += len(shifted) * visit_cycles(1, g.p)
+        for br, bc in shifted:
+            # rtl: the right shift by δ is a left rotation by p+1-δ
+            k = shift_iterations(g.p + 1 - int(before[br, bc] - g.E[br, bc])) if rtl else 1
+            cycles += visit_cycles(k, g.p)
         res.levels.append(level)
         level = new_level()
         note("raise")
@@ -1236,4 +1257,5 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     return out
 
 
-__all__ += ["E_MAX", "REPICK_HEADROOM", "convert_mantissa", "plan_exponents"]
+__all__ += ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "plan_exponents",
+            "shift_iterations"]

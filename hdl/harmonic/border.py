@@ -82,7 +82,11 @@ class Border(wiring.Component):
     Exponent ports: ``p`` In (the run's precision), ``s_N, s_S, s_W, s_E``
     In(signed), ``scan`` In(1), ``scan_busy`` Out(1), ``scan_len``
     Out (max over the sides inside the map of clip(s, 0, p+1)), ``clamped``
-    Out(1).
+    Out(1); ``raw`` In(1): the MSB-first streams read unconverted (update
+    visits: the nodes do not use them), and ``lead_*`` Out: the smallest
+    offset (1..p+1) at which a raw MSB-first read of that side showed a 1
+    since the last ``scan`` strobe (``stride``: none seen), i.e. the bit
+    length p+2-lead of the largest neighbour value, for the re-pick.
 
     Ports
     -----
@@ -115,7 +119,9 @@ class Border(wiring.Component):
             sw = signed(e_max.bit_length() + 1)
             extra = {"p": In(range(stride)), "s_N": In(sw), "s_S": In(sw), "s_W": In(sw), "s_E": In(sw),
                      "scan": In(1), "scan_busy": Out(1), "scan_len": Out(range(stride + 1)),
-                     "clamped": Out(1)}
+                     "clamped": Out(1), "raw": In(1),
+                     "lead_N": Out(range(stride + 1)), "lead_S": Out(range(stride + 1)),
+                     "lead_W": Out(range(stride + 1)), "lead_E": Out(range(stride + 1))}
         super().__init__({
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
             "cntR": In(range(stride)), "r_cnt": In(range(stride)),
@@ -213,6 +219,11 @@ class Border(wiring.Component):
         with m.If(self.scan):
             m.d.sync += over.eq(0)
         top = self.p + 1
+        lead = getattr(self, f"lead_{side}")
+        raw_r, roff_r = Signal(name=f"raw_{side}_r"), Signal(range(self.stride), name=f"roff_{side}_r")
+        m.d.sync += [raw_r.eq(self.raw), roff_r.eq(self.r_cnt)]
+        with m.If(self.scan):
+            m.d.sync += lead.eq(self.stride)
         streams = []
         for cnt, name in ((self.cntR, "h"), (self.r_cnt, "m")):
             off = Signal(signed(max(self.stride, self.e_max).bit_length() + 3), name=f"off_{name}_{side}")
@@ -233,9 +244,14 @@ class Border(wiring.Component):
                 if name == "h":
                     m.d.comb += port.addr.eq(src + addr)
                 else:
-                    m.d.comb += port.addr.eq(Mux(self._pres, src + 1 + self._jcur, src + addr))
+                    m.d.comb += port.addr.eq(Mux(self._pres, src + 1 + self._jcur,
+                                                 Mux(self.raw, src + self.r_cnt, src + addr)))
                 out = Mux(flag_r, port.data, Mux(inr_r, port.data, 0) | over[sl])
                 m.d.comb += getattr(self, f"{name}_{side}")[sl].eq(Mux(ok, out, 0))
             with m.If(sel_s):
                 m.d.sync += over[sl].eq(over[sl] | msb.data)
+            # The ring lead: a raw read of offset r_cnt (registered) with a 1.
+            with m.If(raw_r & ~self._pres_r & ok & (roff_r >= 1) & (roff_r <= top) & msb.data.any()
+                      & (roff_r < lead)):
+                m.d.sync += lead.eq(roff_r)
         return conv

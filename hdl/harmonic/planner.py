@@ -49,9 +49,11 @@ def command_layout(blocks, n, m, p_max):
     })
 
 
-def response_layout(p_max):
+def response_layout(p_max, exponents=False, e_max=255):
     pw = _pw(p_max)
+    extra = {"exponent": range(e_max + 1)} if exponents else {}   # READ: the block's e_b
     return data.StructLayout({
+        **extra,
         "code": Code, "op": Op, "busy": 1, "converged": 1, "p": pw,
         "const": 1, "value": p_max + 1,
         "triangle": 2, "g_row": signed(p_max + 2), "g_col": signed(p_max + 2),
@@ -111,12 +113,16 @@ class Planner(wiring.Component):
         Words per cluster RAM; needs BR*BC*(p_max+2) <= depth.
     """
 
-    def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024):
-        self.block = Block(n, m, blocks, p_max, depth)      # checks the parameters
+    def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False):
+        if not isinstance(block_exponents, bool):
+            raise ValueError(f"block_exponents={block_exponents!r}: must be True or False")
+        self.exponents = block_exponents
+        ekw = {"exponents": True} if block_exponents else {}
+        self.block = Block(n, m, blocks, p_max, depth, **ekw)      # checks the parameters
         self.n, self.m, self.BR, self.BC = n, m, *blocks
         self.p_max, self.depth = p_max, depth
         self.cmd_layout = command_layout(blocks, n, m, p_max)
-        self.resp_layout = response_layout(p_max)
+        self.resp_layout = response_layout(p_max, **ekw)
         super().__init__({
             "i_stream": In(stream.Signature(self.cmd_layout)),
             "o_stream": Out(stream.Signature(self.resp_layout)),
@@ -128,7 +134,8 @@ class Planner(wiring.Component):
         S, CC = p_max + 2, mm // COLS
         B = BR * BC
         m.submodules.block = blk = self.block
-        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max)
+        X = self.exponents
+        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, **({"exponents": True} if X else {}))
         m.submodules.decision = dec = Decision(p_max)
         for name in ("run", "p", "enable", "clear", "sel", "sel_row", "sel_col", "br", "bc"):
             m.d.comb += getattr(blk, name).eq(getattr(ctl, f"blk_{name}"))
@@ -137,6 +144,12 @@ class Planner(wiring.Component):
             ctl.blk_take.eq(blk.take), ctl.blk_done.eq(blk.done), ctl.blk_busy.eq(blk.busy),
             ctl.blk_all_stable.eq(blk.all_stable), ctl.blk_any_max.eq(blk.any_max),
         ]
+        if X:
+            for name in ("shift", "shift_d", "s_N", "s_S", "s_W", "s_E", "raw", "scan"):
+                m.d.comb += getattr(blk, name).eq(getattr(ctl, f"blk_{name}"))
+            for name in ("scan_len", "clamped", "lead_own", "lead_N", "lead_S", "lead_W", "lead_E",
+                         "all_const"):
+                m.d.comb += getattr(ctl, f"blk_{name}").eq(getattr(blk, name))
 
         cmd = self.i_stream.payload
         resp = self.o_stream.payload
@@ -336,6 +349,8 @@ class Planner(wiring.Component):
             with m.State("READ_RESP"):
                 respond(Code.OK, Op.READ)
                 m.d.sync += [resp.value.eq(vals[0]), resp.const.eq(rd_const)]
+                if X:
+                    m.d.sync += resp.exponent.eq(ctl.e_rd)
                 m.next = "IDLE"
             with m.State("DECIDE_GO"):
                 m.next = "DECIDE"
@@ -363,4 +378,8 @@ class Planner(wiring.Component):
         with m.If(self.i_stream.valid & self.i_stream.ready):
             m.d.sync += [resp.value.eq(0), resp.const.eq(0), resp.triangle.eq(0),
                          resp.g_row.eq(0), resp.g_col.eq(0)]
+            if X:
+                m.d.sync += resp.exponent.eq(0)
+        if X:
+            m.d.comb += ctl.e_rd_block.eq(c.block)
         return m

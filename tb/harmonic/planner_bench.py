@@ -34,12 +34,13 @@ def _fields(layout):
 
 
 class PlannerBench:
-    def __init__(self, dut, n, m, blocks, p_max):
+    def __init__(self, dut, n, m, blocks, p_max, exponents=False):
         self.dut, self.n, self.m = dut, n, m
         self.BR, self.BC = blocks
         self.p_max = p_max
+        self.exponents = bool(exponents)
         self.cmd_f = _fields(command_layout(blocks, n, m, p_max))
-        self.resp_f = _fields(response_layout(p_max))
+        self.resp_f = _fields(response_layout(p_max, exponents=True) if exponents else response_layout(p_max))
         self.commands = 0
         dut.i_stream__valid.value = 0
         dut.o_stream__ready.value = 1
@@ -127,7 +128,16 @@ class PlannerBench:
                 resp = await self.command(Op.READ, block=b, row=x, col=y)
                 assert resp["code"] == Code.OK, resp["code"]
                 h[r, c], const[r, c] = resp["value"], bool(resp["const"])
+                if self.exponents:
+                    self.block_exponents[b // self.BC, b % self.BC] = resp["exponent"]
         return h, const
+
+    @property
+    def block_exponents(self):
+        """The e_b READ reported (BR x BC; block-exponent option)."""
+        if not hasattr(self, "_exps"):
+            self._exps = np.zeros((self.BR, self.BC), dtype=np.int64)
+        return self._exps
 
 
 def _mask(flags):
@@ -204,6 +214,17 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     if progress:
         progress(out["status"])
     return res
+
+
+def register_exponent_top():
+    """The Planner with its block-exponent option as a runner top,
+    ``harmonic_planner_exp`` (hdl/emit.py, not this core's file, lists only
+    the default Planner; the lead may move this one line there)."""
+    from hdl.emit import TOPS
+    from hdl.harmonic.planner import Planner
+    TOPS.setdefault("harmonic_planner_exp", lambda n, m, br, bc, p_max, depth: Planner(
+        n, m, (br, bc), p_max, depth, block_exponents=True))
+    return "harmonic_planner_exp"
 
 
 def job_env():
