@@ -3,7 +3,7 @@
 against ``models.harmonic.plan(..., block_exponents=True, rtl=True)``, bit-exact.
 
 One build per simulator: 3x3 blocks of 3x6 nodes (B = 9, every border
-kind), p_max 16.  One cocotb test runs several small maps (random maps
+kind), p_max 14.  One cocotb test runs three small maps (two random maps
 whose exponents move and saturate, a corridor) one after the other through
 the host streams: LOAD, START, STATUS to the end, READ every node (the
 mantissa, the flag and the block's exponent): every mantissa, flag and e_b,
@@ -28,7 +28,7 @@ from tb.runner import SIMULATORS, run
 
 PARAMS = dict(n=3, m=6, br=3, bc=3, p_max=14, depth=256)
 # (map, seed, schedule, I)
-RUNS = [("random", 1, (6, 10, 14), 3), ("random", 4, (6, 10, 14), 3), ("random", 3, (6, 10, 14), 3),
+RUNS = [("random", 1, (6, 10, 14), 3), ("random", 3, (6, 10, 14), 3),
         ("corridor", 0, (4, 8, 12), 2)]
 ONLY = os.environ.get("PLANNER_EXP_ONLY")
 
