@@ -56,6 +56,12 @@ class Controller(wiring.Component):
     Parameters
     ----------
     blocks : (BR, BC); n, m : block size; p_max : largest precision.
+    exponents, e_max, headroom : block exponents (issue 10; default off):
+        the ``blk_s_*``, ``blk_scan*``, ``blk_lead_*``, ``blk_shift*`` ports,
+        e_b registers (0..e_max), the re-pick with headroom h, shift visits
+        and the coarsening at a precision rise; ``e_rd`` = e of block
+        ``e_rd_block``; ``repicks`` counts re-picks
+        (:func:`models.harmonic.plan_exponents`, ``rtl=True``).
 
     Ports
     -----

@@ -111,6 +111,16 @@ class Planner(wiring.Component):
         Largest precision.
     depth : int
         Words per cluster RAM; needs BR*BC*(p_max+2) <= depth.
+    block_exponents : bool
+        Issue 10, beyond the paper (default False: the design above,
+        unchanged).  True: one exponent per block
+        (:func:`models.harmonic.plan_exponents` with ``rtl=True``, bit for
+        bit): exponent registers, the border conversion with its clamp scan,
+        the re-pick and the in-place shift visits in the Control module;
+        READ's response gains ``exponent`` (the node's block's e_b: the
+        value is the mantissa, value / 2**(p + e_b)).  DIRECTION is not
+        exponent-aware (raw mantissas across borders); no dynamic orders
+        during a run.  See hdl/harmonic/README.md, "Planner RTL option".
     """
 
     def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False):
