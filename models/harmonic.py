@@ -870,9 +870,10 @@ class _ExpGrid(_Grid):
     """The padded map with mantissas (``pad``/``hv``) and one exponent per
     block (``E``); ``visit`` converts the border ring into the block's units."""
 
-    def __init__(self, obstacle, goals, block, iters, schedule, headroom, e_max, ceiling=False):
+    def __init__(self, obstacle, goals, block, iters, schedule, headroom, e_max, ceiling=False, rtl=False):
         super().__init__(obstacle, goals, block, iters, schedule)
         self.use_ceiling = bool(ceiling)
+        self.rtl = bool(rtl)
         self.headroom, self.e_max = int(headroom), int(e_max)
         if self.headroom < 0:
             raise ValueError(f"headroom={self.headroom}: must be >= 0")
@@ -987,9 +988,50 @@ class _ExpGrid(_Grid):
                 out[br * n:br * n + n, bc * m:bc * m + m] <<= F - self.p - int(self.E[br, bc])
         return out
 
+    def scan_cycles(self, br, bc):
+        """The RTL's clamp scan before a visit of block (br, bc) (``rtl=True``):
+        L = max over the neighbour blocks of clip(e_b - e_b', 0, p+1) border
+        offsets read MSB first, plus the strobe cycle; 0 when L = 0
+        (:class:`hdl.harmonic.border.Border`)."""
+        e, L = int(self.E[br, bc]), 0
+        for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+            nb, nc = br + dr, bc + dc
+            if 0 <= nb < self.BR and 0 <= nc < self.BC:
+                L = max(L, min(max(e - int(self.E[nb, nc]), 0), self.p + 1))
+        return L + 1 if L else 0
+
+    def maxima_converted(self):
+        """Local maxima as the RTL's Maximum sees them (``rtl=True``): a
+        neighbour in another block is compared after the border conversion
+        (:func:`convert_mantissa`: floor, clamp), exactly the stream the
+        node's MSB-first comparison gets.  Conservative: a free node's
+        mantissa never reaches the clamp value 2^(p+1)-1 (it would need
+        all four neighbours there), so a clamped neighbour is greater, as
+        exactly; a floored one can only look equal where it is greater.
+        Hence every exact local maximum is one here too, and a field
+        without converted maxima has no exact one."""
+        n, m, p = self.n, self.m, self.p
+        total = 0
+        for br in range(self.BR):
+            for bc in range(self.BC):
+                r0, c0 = br * n, bc * m
+                e = int(self.E[br, bc])
+                loc = np.zeros((n + 2, m + 2), dtype=object)
+                loc[1:-1, 1:-1] = self.hv[r0:r0 + n, c0:c0 + m]
+                for side, ring in zip(((0, slice(1, -1)), (-1, slice(1, -1)), (slice(1, -1), 0),
+                                       (slice(1, -1), -1)), self._ring(br, bc)):
+                    if ring is not None:
+                        loc[side] = convert_mantissa(np.array(ring[0], dtype=object), e - ring[1], p)[0]
+                h = loc[1:-1, 1:-1]
+                nb = (loc[:-2, 1:-1], loc[1:-1, 2:], loc[1:-1, :-2], loc[2:, 1:-1])
+                total += int(local_max(h, self.const[r0:r0 + n, c0:c0 + m], nb).sum())
+        return total
+
     def maxima(self):
         """Local maxima of the free nodes, comparing exact values across
-        block borders (the common scale)."""
+        block borders (the common scale); ``rtl=True``: :meth:`maxima_converted`."""
+        if self.rtl:
+            return self.maxima_converted()
         h = self.common()
         pad = np.zeros((self.rows + 2, self.cols + 2), dtype=object)
         pad[1:-1, 1:-1] = h
@@ -1028,8 +1070,20 @@ class _ExpGrid(_Grid):
         return moved
 
 
+SHIFT_STEP = 3          # the RTL's in-place rotation per iteration (rtl=True)
+
+
+def shift_iterations(d):
+    """Iterations of the RTL's shift visit that rotates a block's words by d
+    value positions (rtl=True): an iteration reads LSB first and writes each
+    bit three positions behind the read, so a rotation by at most 3 never
+    overwrites a bit before it is read; a rotation by d takes ceil(d/3)
+    iterations (3, 3, ..., the rest last: see hdl/harmonic/cluster.py)."""
+    return max(1, -(-int(d) // SHIFT_STEP))
+
+
 def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
-                   e_max=E_MAX, repick="visit", ceiling=False, trace=None):
+                   e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False):
     """The block-synchronous planner (:func:`plan`) with one exponent per block.
 
     Number format: block b's node with stored mantissa v (p+1 bits, the word
@@ -1099,10 +1153,27 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     receives a tuple after every visit,
     re-pick, check and precision rise, with the cycles counted so far
     (event, p, exponents copy, mantissa copy, cycles; for the tests).
+
+    ``rtl=True``: what the planner RTL's option (``Planner(...,
+    block_exponents=True)``) does, needing ``repick="visit"`` and no
+    ceiling: (1) the Maximum compares a neighbour in another block after the
+    border conversion (:meth:`_ExpGrid.maxima_converted`: conservative, a
+    converged field has no exact local maximum either); (2) every update and
+    check visit of a block finer than a neighbour first scans the clamp bits
+    (:meth:`_ExpGrid.scan_cycles`: L+1 cycles, L = the largest positive
+    exponent difference, at most p+1); (2b) a shift visit rotates the words
+    in place by at most 3 positions per iteration, so a re-pick by d costs
+    :func:`shift_iterations` (min(d, p)) iterations and a coarsening by δ at a
+    precision rise (a left rotation by p+1-δ: the low step bits are 0)
+    shift_iterations(p+1-δ); (3) the check pass's re-pick is
+    skipped (with ``repick="visit"`` it never moves: the sweep before it
+    re-picked every block and changed nothing; asserted here).
     """
+    if rtl and (repick != "visit" or ceiling):
+        raise ValueError("rtl=True: the RTL re-picks after every visit (repick='visit'), no ceiling")
     if repick not in ("visit", "stable", "check"):
         raise ValueError(f"repick {repick!r}: 'visit', 'stable' or 'check'")
-    g = _ExpGrid(obstacle, goals, block, iters, schedule, headroom, e_max, ceiling)
+    g = _ExpGrid(obstacle, goals, block, iters, schedule, headroom, e_max, ceiling, rtl)
     res, B, iters = g.res, g.B, g.iters
     blocks = [(br, bc) for br in range(g.BR) for bc in range(g.BC)]
 
@@ -1121,14 +1192,17 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     while True:
         changed = False
         for br, bc in blocks:
+            if rtl:
+                cycles += g.scan_cycles(br, bc)
             i, stable = g.visit(br, bc)
             res.block_iterations += i
             level["block_iterations"] += i
             cycles += visit_cycles(min(i + 1, iters) if stable else iters, g.p)
             changed |= i > 1 or not stable
             note("visit")
-            if (repick == "visit" or (repick == "stable" and stable and i == 1)) and g.repick(br, bc):
-                cycles += visit_cycles(1, g.p)
+            d = (repick == "visit" or (repick == "stable" and stable and i == 1)) and g.repick(br, bc)
+            if d:
+                cycles += visit_cycles(shift_iterations(min(d, g.p)) if rtl else 1, g.p)
                 res.repicks += 1
                 level["repicks"] += 1
                 changed = True
@@ -1138,6 +1212,8 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
         if changed:
             continue
         cycles += B * visit_cycles(1, g.p)             # check pass
+        if rtl:
+            cycles += sum(g.scan_cycles(br, bc) for br, bc in blocks)
         res.check_iterations += B
         maxima = level["maxima"] = g.maxima()
         level["saturated"] = int(g.sat.sum())
@@ -1149,6 +1225,8 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
         for br, bc in blocks:
             if g.repick(br, bc):
                 moved += 1
+        if rtl:
+            assert moved == 0, "repick='visit': a check pass cannot re-pick"
         if moved:                                     # a new level at the same p
             cycles += moved * visit_cycles(1, g.p)
             res.repicks += moved
@@ -1157,10 +1235,14 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
             level = new_level()
             note("repick")
             continue
+        before = g.E.copy()
         shifted = g.raise_precision_exp()
         if shifted is None:
             break
-        cycles += len(shifted) * visit_cycles(1, g.p)
+        for br, bc in shifted:
+            # rtl: the right shift by δ is a left rotation by p+1-δ
+            k = shift_iterations(g.p + 1 - int(before[br, bc] - g.E[br, bc])) if rtl else 1
+            cycles += visit_cycles(k, g.p)
         res.levels.append(level)
         level = new_level()
         note("raise")
@@ -1175,4 +1257,5 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     return out
 
 
-__all__ += ["E_MAX", "REPICK_HEADROOM", "convert_mantissa", "plan_exponents"]
+__all__ += ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "plan_exponents",
+            "shift_iterations"]

@@ -18,7 +18,12 @@ in the Control module, one register per block), so the capacity follows the
 p the map needs.  The capacity figure is for maps of the same kind: p grows
 with the map (Fig. 3), so a larger map of the kind needs at least this p.
 
-    python scripts/bench_exponents.py [--out build/bench/exponents.md]
+    python scripts/bench_exponents.py [--out build/bench/exponents.md] [--rtl]
+
+``--rtl`` (``comparison(rtl=True)``): the block-exponent runs use the planner
+RTL's variant, plan(..., rtl=True) (the Maximum on converted values, the
+clamp scans, shift visits of ceil(d/3) iterations), the one
+Planner(..., block_exponents=True) matches bit for bit.
 
 `comparison()` returns (markdown text, rows as a list of dicts); the
 `make bench` report imports and calls it.
@@ -32,7 +37,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
 
 from models.harmonic import plan  # noqa: E402
 from sim.mapfile import load_map, load_scenarios  # noqa: E402
@@ -81,18 +85,21 @@ def _row(name, obstacle, scheme, res, seconds):
     }
 
 
-def comparison(maps_dir=None, names=None):
-    """Run both schemes on every bundled map: (markdown, rows)."""
+def comparison(maps_dir=None, names=None, rtl=False):
+    """Run both schemes on every bundled map: (markdown, rows).  ``rtl``:
+    the block-exponent runs are the planner RTL's variant (plan(..., rtl=True))."""
     rows = []
+    exp_kw = {"block_exponents": True, "rtl": True} if rtl else {"block_exponents": True}
     for name, obstacle, goals in bundled_maps(maps_dir, names):
-        for scheme, kw in (("fixed point", {}), ("block exponents", {"block_exponents": True})):
+        for scheme, kw in (("fixed point", {}), ("block exponents", exp_kw)):
             t0 = time.time()
             res = plan(obstacle, goals, block=BLOCK, iters=ITERS, schedule=SCHEDULE, **kw)
             rows.append(_row(name, obstacle, scheme, res, time.time() - t0))
     lines = [
         f"Block {BLOCK[0]}x{BLOCK[1]}, I = {ITERS}, schedule {STEP}:{STEP}:512 for both, goal of the "
-        "longest scenario; cycles by the planner RTL's timing model (block exponents: + one shift visit "
-        f"per re-pick); capacity: blocks of {BLOCK[0]}x{BLOCK[1]} a {RAM_DEPTH}-deep node RAM holds at "
+        "longest scenario; cycles by the planner RTL's timing model (block exponents: "
+        + ("the RTL's variant rtl=True: clamp scans, shift visits of ceil(d/3) iterations, Maximum on "
+           "converted values" if rtl else "+ one shift visit per re-pick") + f"); capacity: blocks of {BLOCK[0]}x{BLOCK[1]} a {RAM_DEPTH}-deep node RAM holds at "
         "that p (floor(1024/(p+2))), and nodes.",
         "",
         "| map | blocks | fixed p | exp p (max e_b) | fixed iterations | exp iterations | fixed cycles | "
@@ -118,9 +125,10 @@ def main(argv=None):
     ap.add_argument("--out", default=str(ROOT / "build" / "bench" / "exponents.md"))
     ap.add_argument("--maps", default=None, help="directory of .map files (default: maps/)")
     ap.add_argument("--only", action="append", default=None, metavar="NAME", help="map stem (repeatable)")
+    ap.add_argument("--rtl", action="store_true", help="block exponents as the planner RTL does them (rtl=True)")
     args = ap.parse_args(argv)
     t0 = time.time()
-    text, rows = comparison(args.maps, args.only)
+    text, rows = comparison(args.maps, args.only, rtl=args.rtl)
     text = "# Block exponents against fixed point (issue 10)\n\n" + text + \
         f"\n({time.time() - t0:.0f} s of model runs)\n"
     print(text)

@@ -23,13 +23,17 @@ cycles per second): use them on small maps.  Free cells no goal can reach
 cannot get a gradient; they are reported ("unreachable") and left out of
 the convergence criterion.
 
---block-exponents (beyond the paper, issue 10; model engine only, an RTL
-engine with it is a one-line error): every block keeps an exponent e_b, a
-mantissa v of block b stands for v / 2**(p+e_b), so far from the goal the
-p-bit word still holds p significant bits (models.harmonic.plan_exponents
-states the exponent rule and why it terminates).  "precision" is then the
+--block-exponents (beyond the paper, issue 10; every engine): every block
+keeps an exponent e_b, a mantissa v of block b stands for v / 2**(p+e_b), so
+far from the goal the p-bit word still holds p significant bits
+(models.harmonic.plan_exponents states the exponent rule and why it
+terminates).  Every engine runs the planner RTL's variant (plan(...,
+block_exponents=True, rtl=True): the Maximum compares converted neighbour
+values, the cycles include the clamp scans and shift visits); the RTL
+engines build Planner(..., block_exponents=True).  "precision" is then the
 word's p; the JSON gains "exponents" (the final e_b per block, BR x BC) and
-"frac_bits" (p + max e_b: the potential's resolution).
+"frac_bits" (p + max e_b: the potential's resolution); "maxima" counts the
+exact local maxima of the final field.
 
 Trajectories: steepest 4-neighbour ascent from each --start (ties to the
 first of N, E, W, S) until a goal, on the final field.
@@ -76,7 +80,7 @@ def add_arguments(parser):
     parser.add_argument("--engine", choices=ENGINES, default="model",
                         help="model (default), or the planner RTL on icarus / verilator")
     parser.add_argument("--block-exponents", action="store_true",
-                        help="one exponent per block (issue 10, beyond the paper; model engine only): "
+                        help="one exponent per block (issue 10, beyond the paper; every engine): "
                              "the word length follows the block, not the map")
     parser.add_argument("--json", metavar="OUT", help="write the result as JSON")
     parser.add_argument("--plot", metavar="OUT.png", help="plot map, potential (log scale) and trajectories")
@@ -159,24 +163,26 @@ def _plan_defaults():
 def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=False):
     """Plan with the model or the RTL; returns a dict with the PlanResult
     fields (h and unreachable on the unpadded map).  With block exponents
-    (model only) also ``exponents`` (BR x BC) and ``frac_bits`` (h is then on
+    also ``exponents`` (BR x BC) and ``frac_bits`` (h is then on
     the common scale 2**-frac_bits)."""
     keys = ("h", "p", "converged", "maxima", "unreachable", "sweeps", "block_iterations",
             "check_iterations", "node_updates", "cycles", "levels")
     if engine == "model":
         from models.harmonic import plan
         try:
-            r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule),
-                     block_exponents=block_exponents)
+            # With block exponents every engine runs the planner RTL's variant
+            # (rtl=True: converted Maximum, scan and shift-visit cycles), so
+            # the model and the RTL engines give the same JSON.
+            opts = {"block_exponents": True, "rtl": True} if block_exponents else {}
+            r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule), **opts)
         except ValueError as e:
             raise CliError(str(e)) from None
         out = {k: getattr(r, k) for k in keys}
         if block_exponents:
             out["exponents"], out["frac_bits"] = r.exponents, r.frac_bits
+            # exact local maxima of the final field (the RTL engines count the same)
+            out["maxima"] = _maxima(obstacle, goals, block, r.padded_h)
         return out
-    if block_exponents:
-        raise CliError(f"--engine {engine}: --block-exponents is built in the model only "
-                       "(the planner RTL has no exponent option yet); use --engine model")
     try:
         from tb.harmonic.planner_bench import run_planner_rtl
     except ImportError:
@@ -185,7 +191,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
     ticker = _Ticker(f"planner RTL on {engine}")
     try:
         out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine,
-                              progress=ticker.status)
+                              progress=ticker.status, block_exponents=block_exponents)
     except ValueError as e:
         raise CliError(f"--engine {engine}: {e}") from None
     finally:
@@ -194,6 +200,19 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
     # The RTL reports no per-level record and no maxima count (only
     # converged): the maxima are counted on the field it read back.
     res["levels"] = []
+    if block_exponents:
+        # Mantissas and e_b -> the common scale 2**-frac_bits, as the model's h.
+        E = out["exponents"]
+        frac = int(out["p"]) + int(E.max())
+        full = np.array(out["padded_h"], dtype=object)
+        n, m = block
+        for br in range(E.shape[0]):
+            for bc in range(E.shape[1]):
+                full[br * n:br * n + n, bc * m:bc * m + m] <<= frac - int(out["p"]) - int(E[br, bc])
+        res["h"] = full[:obstacle.shape[0], :obstacle.shape[1]].copy()
+        res["exponents"], res["frac_bits"] = E, frac
+        res["maxima"] = _maxima(obstacle, goals, block, full)
+        return res
     res["maxima"] = _maxima(obstacle, goals, block, out["padded_h"])
     return res
 
@@ -327,9 +346,6 @@ def run(args):
 
     t0 = time.time()
     bexp = bool(getattr(args, "block_exponents", False))
-    if bexp and args.engine != "model":
-        raise CliError(f"--engine {args.engine}: --block-exponents is built in the model only "
-                       "(the planner RTL has no exponent option yet); use --engine model")
     result, _ = plan_map(grid, goals, starts, block, iters, schedule, args.engine, bexp)
     seconds = time.time() - t0
 

@@ -1,6 +1,6 @@
 """An n x m block of 3x6 clusters with its border nodes (paper 000, 5.1, 5.4)."""
 
-from amaranth.hdl import Cat, Module, Signal
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -70,6 +70,10 @@ class Block(wiring.Component):
         Param("p_max", int, 30, lo=2, doc="largest precision",
               message="precision p_max={value!r} is not supported: p must be at least 2"),
         Param("depth", int, 1024, lo=1, doc="words per cluster RAM"),
+        Param("exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
+              message="exponents={value!r}: must be True or False"),
+        Param("e_max", int, 255, lo=0, doc="largest block exponent (with exponents)",
+              message="e_max={value!r}: must be an integer >= 0"),
     )
     CONSTRAINTS = (
         Constraint(f"n % {ROWS} == 0", lambda p: p["n"] % ROWS == 0,
@@ -83,14 +87,34 @@ class Block(wiring.Component):
                    lambda p: {"b": p["br"] * p["bc"], "words": p["br"] * p["bc"] * (p["p_max"] + 2)}),
     )
 
-    def __init__(self, n, m, blocks=(1, 1), p_max=30, depth=1024):
+    def __init__(self, n, m, blocks=(1, 1), p_max=30, depth=1024, exponents=False, e_max=255):
         BR, BC = blocks
-        check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=BR, bc=BC, p_max=p_max, depth=depth)
+        check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=BR, bc=BC, p_max=p_max, depth=depth,
+              exponents=exponents, e_max=e_max)
         stride = p_max + 2
         self.n, self.m, self.BR, self.BC = n, m, BR, BC
         self.p_max, self.depth, self.stride = p_max, depth, stride
         self.CR, self.CC = n // ROWS, m // COLS
+        self.exponents, self.e_max = bool(exponents), e_max
+        extra = {}
+        if self.exponents:
+            # Block exponents (issue 10; see Border and Cluster): the border
+            # conversion and scan, the shift iteration, and what the
+            # re-pick needs: ``lead_own`` (the smallest value offset, 1..p+1,
+            # written with a 1 since ``scan``; stride = none: the block's
+            # largest value, as values only rise within a visit),
+            # ``lead_N..E`` (the same for the raw neighbour edges while
+            # ``raw``), ``all_const`` (every node constant, from the flags
+            # of the visit's first iteration).
+            sw = signed(e_max.bit_length() + 1)          # as Border's s_*
+            L = range(stride + 1)
+            extra = {"shift": In(1), "shift_d": In(signed((p_max + 1).bit_length() + 1)),
+                     "s_N": In(sw), "s_S": In(sw), "s_W": In(sw), "s_E": In(sw), "raw": In(1),
+                     "scan": In(1), "scan_busy": Out(1), "scan_len": Out(L), "clamped": Out(1),
+                     "lead_own": Out(L), "lead_N": Out(L), "lead_S": Out(L), "lead_W": Out(L),
+                     "lead_E": Out(L), "all_const": Out(1)}
         super().__init__({
+            **extra,
             "run": In(1), "p": In(range(p_max + 1)), "enable": In(1), "clear": In(1),
             "Sat": In(1), "sel": In(1), "sel_row": In(range(n)), "sel_col": In(range(m)),
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
@@ -103,8 +127,13 @@ class Block(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         n, mm, CR, CC, S = self.n, self.m, self.CR, self.CC, self.stride
-        m.submodules.border = border = Border(n, mm, (self.BR, self.BC), S)
-        cl = [[Cluster(depth=self.depth, p_max=self.p_max) for _ in range(CC)] for _ in range(CR)]
+        if self.exponents:
+            border = Border(n, mm, (self.BR, self.BC), S, exponents=True, e_max=self.e_max)
+        else:
+            border = Border(n, mm, (self.BR, self.BC), S)
+        m.submodules.border = border
+        ekw = {"exponents": True} if self.exponents else {}
+        cl = [[Cluster(depth=self.depth, p_max=self.p_max, **ekw) for _ in range(CC)] for _ in range(CR)]
         base = Signal(range(self.depth))
         m.d.comb += base.eq((self.br * self.BC + self.bc) * S)
 
@@ -184,4 +213,31 @@ class Block(wiring.Component):
                              en.eq(Cat([self.host_we & (self.host_cluster == i * CC + j)] * len(bits)))]
             with m.Else():
                 m.d.comb += [d.eq(Cat(c.w_data[b] for b in bits)), en.eq(Cat([c.w_en] * len(bits)))]
+        if self.exponents:
+            self._exponents(m, border, [c for row in cl for c in row], base)
         return m
+
+    def _exponents(self, m, border, clusters, base):
+        """Block exponents: pass the border's conversion ports, drive the
+        clusters' shift, track the block's largest value (``lead_own``) and
+        whether every node is constant (``all_const``)."""
+        for name in ("s_N", "s_S", "s_W", "s_E", "raw", "scan"):
+            m.d.comb += getattr(border, name).eq(getattr(self, name))
+        m.d.comb += border.p.eq(self.p)
+        for name in ("scan_busy", "scan_len", "clamped", "lead_N", "lead_S", "lead_W", "lead_E"):
+            m.d.comb += getattr(self, name).eq(getattr(border, name))
+        for c in clusters:
+            m.d.comb += [c.shift.eq(self.shift), c.shift_d.eq(self.shift_d)]
+        c0 = clusters[0]
+        off = Signal(range(self.depth), name="w_off")
+        m.d.comb += off.eq(c0.w_addr - base)
+        written = Cat(*[c.w_data.any() for c in clusters]).any()
+        with m.If(self.scan):
+            m.d.sync += self.lead_own.eq(self.stride)
+        with m.Elif(c0.busy & c0.w_en & written & (off >= 1) & (off < self.lead_own)):
+            m.d.sync += self.lead_own.eq(off)
+        # The flags stream at cycle 0; the next cycle is the take.
+        flags_all = Signal()
+        m.d.sync += flags_all.eq(Cat(*[c.h.all() for c in clusters]).all())
+        with m.If(c0.take):
+            m.d.sync += self.all_const.eq(flags_all)

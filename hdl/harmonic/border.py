@@ -1,7 +1,7 @@
 """Border nodes of a block: storage of the neighbouring blocks' edge values
 (paper 000, sections 5.1 and 5.4)."""
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
@@ -46,6 +46,47 @@ class Border(wiring.Component):
     segment : (rows, cols)
         The cluster size: each edge is stored as one RAM per cluster segment
         (written whole; ``en_*`` is read once per segment, at its first bit).
+    exponents : bool
+        Block exponents (issue 10; default False: the ports and logic below
+        do not exist and the module is the fixed-point one).  Each stream is
+        read in the computed block's units, :func:`models.harmonic.convert_mantissa`
+        bit for bit: see "Block exponents" below.
+    e_max : int
+        Largest block exponent (exponents only; 255: 8-bit registers).
+
+    Block exponents
+    ---------------
+    Per side, ``s_*`` = e_b - e_b' (the computed block's exponent minus the
+    neighbour's).  Value bit k of a word is at offset 1 + p - k, so the
+    converted bit k (v >> -s for s < 0, v << s for s > 0) is at offset
+    ``cntR + s`` (``r_cnt + s`` MSB first): a read offset, i.e. the stream
+    read -s bits late or delayed by s cycles.  An offset outside 1 .. p+1
+    (the shifted-in zeros, or bits shifted out) reads 0; the flag cycle
+    (``cntR`` = 0) reads the flag unshifted.  The clamp (s > 0: a 1 in the
+    top s bits, offsets 1 .. min(s, p+1), saturates the value at
+    2^(p+1)-1) must be known before the LSB-first stream starts: a *scan*
+    reads those offsets once per visit (the neighbours' words do not change
+    while block b is computed) through the MSB-first port and keeps one
+    ``over`` bit per border node; then every value bit of a clamped node
+    streams 1.  ``clamped`` (OR of the over bits) marks block b saturated.
+
+    ===========  ==========================================================
+    cycle        scan (``scan`` strobe at t; ``scan_len`` = L)
+    ===========  ==========================================================
+    t            over cleared; offset 1 presented (if L > 0)
+    t+j          offset 1+j presented (j < L); the data of offset j arrives
+    t+L          the last data arrives; ``scan_busy`` low from t+L+1 (L = 0:
+                 ``scan_busy`` is never high; the scan costs nothing)
+    ===========  ==========================================================
+
+    Exponent ports: ``p`` In (the run's precision), ``s_N, s_S, s_W, s_E``
+    In(signed), ``scan`` In(1), ``scan_busy`` Out(1), ``scan_len``
+    Out (max over the sides inside the map of clip(s, 0, p+1)), ``clamped``
+    Out(1); ``raw`` In(1): the MSB-first streams read unconverted (update
+    visits: the nodes do not use them), and ``lead_*`` Out: the smallest
+    offset (1..p+1) at which a raw MSB-first read of that side showed a 1
+    since the last ``scan`` strobe (``stride``: none seen), i.e. the bit
+    length p+2-lead of the largest neighbour value, for the re-pick.
 
     Ports
     -----
@@ -61,7 +102,7 @@ class Border(wiring.Component):
         The border streams.
     """
 
-    def __init__(self, n, m, blocks, stride, segment=(3, 6)):
+    def __init__(self, n, m, blocks, stride, segment=(3, 6), exponents=False, e_max=255):
         BR, BC = blocks
         self.seg_rows, self.seg_cols = segment
         for name, v in (("n", n), ("m", m), ("BR", BR), ("BC", BC), ("stride", stride)):
@@ -69,6 +110,18 @@ class Border(wiring.Component):
                 raise ValueError(f"{name}={v!r}: must be an integer >= 1")
         self.n, self.m, self.BR, self.BC, self.stride = n, m, BR, BC, stride
         self.depth = BR * BC * stride
+        self.exponents = bool(exponents)
+        if self.exponents and (not isinstance(e_max, int) or e_max < 1):
+            raise ValueError(f"e_max={e_max!r}: must be an integer >= 1")
+        self.e_max = e_max
+        extra = {}
+        if self.exponents:
+            sw = signed(e_max.bit_length() + 1)
+            extra = {"p": In(range(stride)), "s_N": In(sw), "s_S": In(sw), "s_W": In(sw), "s_E": In(sw),
+                     "scan": In(1), "scan_busy": Out(1), "scan_len": Out(range(stride + 1)),
+                     "clamped": Out(1), "raw": In(1),
+                     "lead_N": Out(range(stride + 1)), "lead_S": Out(range(stride + 1)),
+                     "lead_W": Out(range(stride + 1)), "lead_E": Out(range(stride + 1))}
         super().__init__({
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
             "cntR": In(range(stride)), "r_cnt": In(range(stride)),
@@ -77,6 +130,7 @@ class Border(wiring.Component):
             "en_top": In(m), "en_bottom": In(m), "en_left": In(n), "en_right": In(n),
             "h_N": Out(m), "h_S": Out(m), "h_W": Out(n), "h_E": Out(n),
             "m_N": Out(m), "m_S": Out(m), "m_W": Out(n), "m_E": Out(n),
+            **extra,
         })
 
     def elaborate(self, platform):
@@ -102,16 +156,102 @@ class Border(wiring.Component):
             # writes its whole segment at once (at load the host writes one
             # cluster), so no per-bit write enables, which would split the
             # storage into 1-bit-wide block RAMs.
+            if self.exponents:
+                conv = self._shift(m, side, width, ok, valid)
             for k in range(width // seg):
                 sl = slice(k * seg, (k + 1) * seg)
                 ram = Memory(shape=seg, depth=self.depth, init=[])
                 m.submodules[f"ram_{name}_{k}"] = ram
                 wp = ram.write_port()
                 lsb, msb = ram.read_port(), ram.read_port()
-                m.d.comb += [
-                    wp.addr.eq(self.w_addr), wp.data.eq(data[sl]), wp.en.eq(en[k * seg]),
-                    lsb.addr.eq(src + self.cntR), msb.addr.eq(src + self.r_cnt),
-                    getattr(self, f"h_{side}")[sl].eq(Mux(ok, lsb.data, 0)),
-                    getattr(self, f"m_{side}")[sl].eq(Mux(ok, msb.data, 0)),
-                ]
+                m.d.comb += [wp.addr.eq(self.w_addr), wp.data.eq(data[sl]), wp.en.eq(en[k * seg])]
+                if not self.exponents:
+                    m.d.comb += [
+                        lsb.addr.eq(src + self.cntR), msb.addr.eq(src + self.r_cnt),
+                        getattr(self, f"h_{side}")[sl].eq(Mux(ok, lsb.data, 0)),
+                        getattr(self, f"m_{side}")[sl].eq(Mux(ok, msb.data, 0)),
+                    ]
+                else:
+                    conv(src, sl, lsb, msb)
+        if self.exponents:
+            self._scan_control(m)
         return m
+
+    # Block exponents (issue 10).  Not elaborated by default.
+
+    def _scan_control(self, m):
+        """The per-visit clamp scan's counter (see the class docstring)."""
+        p1 = Signal(range(self.stride + 1))
+        m.d.comb += p1.eq(self.p + 1)
+        lens = []
+        for side, valid in (("N", self.br != 0), ("S", self.br != self.BR - 1),
+                            ("W", self.bc != 0), ("E", self.bc != self.BC - 1)):
+            s = getattr(self, f"s_{side}")
+            ln = Signal(range(self.stride + 1), name=f"scan_len_{side}")
+            m.d.comb += ln.eq(Mux(~valid | (s <= 0), 0, Mux(s >= p1, p1, s)))
+            lens.append(ln)
+        acc = lens[0]
+        for ln in lens[1:]:
+            acc = Mux(ln > acc, ln, acc)
+        m.d.comb += self.scan_len.eq(acc)
+        busy = Signal()
+        j = Signal(range(self.stride + 1))
+        m.d.comb += [
+            self._pres.eq((self.scan & (self.scan_len != 0)) | busy),
+            self._jcur.eq(Mux(self.scan, 0, j)),
+            self.scan_busy.eq(busy | self._pres_r),
+            self.clamped.eq(Cat(*self._overs).any()),
+        ]
+        m.d.sync += [self._pres_r.eq(self._pres), self._jr.eq(self._jcur)]
+        with m.If(self._pres):
+            m.d.sync += [j.eq(self._jcur + 1), busy.eq(self._jcur + 1 < self.scan_len)]
+
+    def _shift(self, m, side, width, ok, valid):
+        """One side's converted streams: read offset cntR + s / r_cnt + s,
+        0 outside offsets 1..p+1, the flag unshifted, all ones where clamped."""
+        if not hasattr(self, "_pres"):
+            self._pres, self._pres_r = Signal(), Signal()
+            self._jcur, self._jr = Signal(range(self.stride + 1)), Signal(range(self.stride + 1))
+            self._overs = []
+        s = getattr(self, f"s_{side}")
+        over = Signal(width, name=f"over_{side}")
+        self._overs.append(over)
+        with m.If(self.scan):
+            m.d.sync += over.eq(0)
+        top = self.p + 1
+        lead = getattr(self, f"lead_{side}")
+        raw_r, roff_r = Signal(name=f"raw_{side}_r"), Signal(range(self.stride), name=f"roff_{side}_r")
+        m.d.sync += [raw_r.eq(self.raw), roff_r.eq(self.r_cnt)]
+        with m.If(self.scan):
+            m.d.sync += lead.eq(self.stride)
+        streams = []
+        for cnt, name in ((self.cntR, "h"), (self.r_cnt, "m")):
+            off = Signal(signed(max(self.stride, self.e_max).bit_length() + 3), name=f"off_{name}_{side}")
+            flag, inr = Signal(name=f"flag_{name}_{side}"), Signal(name=f"inr_{name}_{side}")
+            flag_r, inr_r = Signal(name=f"flag_{name}_{side}_r"), Signal(name=f"inr_{name}_{side}_r")
+            m.d.comb += [off.eq(cnt + s), flag.eq(cnt == 0), inr.eq((off >= 1) & (off <= top))]
+            m.d.sync += [flag_r.eq(flag), inr_r.eq(inr)]
+            addr = Signal(range(self.stride), name=f"addr_{name}_{side}")
+            m.d.comb += addr.eq(Mux(flag | ~inr, 0, off[:len(addr)]))
+            streams.append((name, addr, flag_r, inr_r))
+        # The scan's accumulation: the data of offset 1+jr arrives now.
+        sel_s = Signal(name=f"scan_sel_{side}")
+        m.d.comb += sel_s.eq(self._pres_r & ok & (self._jr < s))
+
+        def conv(src, sl, lsb, msb):
+
+            for (name, addr, flag_r, inr_r), port in zip(streams, (lsb, msb)):
+                if name == "h":
+                    m.d.comb += port.addr.eq(src + addr)
+                else:
+                    m.d.comb += port.addr.eq(Mux(self._pres, src + 1 + self._jcur,
+                                                 Mux(self.raw, src + self.r_cnt, src + addr)))
+                out = Mux(flag_r, port.data, Mux(inr_r, port.data, 0) | over[sl])
+                m.d.comb += getattr(self, f"{name}_{side}")[sl].eq(Mux(ok, out, 0))
+            with m.If(sel_s):
+                m.d.sync += over[sl].eq(over[sl] | msb.data)
+            # The ring lead: a raw read of offset r_cnt (registered) with a 1.
+            with m.If(raw_r & ~self._pres_r & ok & (roff_r >= 1) & (roff_r <= top) & msb.data.any()
+                      & (roff_r < lead)):
+                m.d.sync += lead.eq(roff_r)
+        return conv

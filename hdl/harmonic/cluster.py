@@ -1,6 +1,6 @@
 """3x6 cluster of nodes sharing one dual-port RAM (paper 000, sections 5.1, 5.2, 5.4)."""
 
-from amaranth.hdl import Cat, Module, Signal, unsigned
+from amaranth.hdl import Cat, Module, Mux, Signal, signed, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
@@ -102,6 +102,8 @@ class Cluster(wiring.Component):
               message="RAM depth must be an integer >= 4, not {value!r}"),
         Param("p_max", int, None, lo=2, doc="largest precision (default depth - 2)",
               message="precision p_max={value!r} is not supported: p must be at least 2"),
+        Param("exponents", bool, False, doc="shift iterations for block exponents (issue 10)",
+              message="exponents={value!r}: must be True or False"),
     )
     CONSTRAINTS = (
         Constraint("p_max + 2 <= depth", lambda p: p["p_max"] + 2 <= p["depth"],
@@ -110,15 +112,27 @@ class Cluster(wiring.Component):
                    lambda p: {"w": p["p_max"] + 2}),
     )
 
-    def __init__(self, depth=1024, p_max=None):
-        check(self.PARAMS, depth=depth)
+    def __init__(self, depth=1024, p_max=None, exponents=False):
+        check(self.PARAMS, depth=depth, exponents=exponents)
         if p_max is None:
             p_max = depth - 2
         check(self.PARAMS, self.CONSTRAINTS, depth=depth, p_max=p_max)
         self.depth = depth
         self.p_max = p_max
+        self.exponents = bool(exponents)
         addr = unsigned((p_max + 1).bit_length())
+        extra = {}
+        if self.exponents:
+            # Block exponents (issue 10): a shift iteration (``shift`` sampled
+            # at ``take`` with ``run``; ``enable`` low) writes every word back
+            # rotated by ``shift_d`` value positions (left > 0, right < 0):
+            # the value bits at offsets 1..p+1 move to 1 + ((a - 1 - d) mod
+            # (p+1)), the flag stays.  A left shift of a value whose top d
+            # bits are 0 (or a right shift of one whose low -d bits are 0) is
+            # this rotation.  Hold ``shift_d`` (|d| <= p) while busy.
+            extra = {"shift": In(1), "shift_d": In(signed((p_max + 1).bit_length() + 1))}
         super().__init__({
+            **extra,
             "run": In(1),
             "p": In(range(p_max + 1)),
             "enable": In(1),
@@ -174,6 +188,7 @@ class Cluster(wiring.Component):
         sel_r = Signal(NODES)
         sat_r = Signal()
         clr_r = Signal()        # the current write window belongs to a clear iteration
+        shf = Signal()          # ... to a shift iteration (exponents only)
 
         p_ok = self.p >= 2
         if (1 << len(self.p)) - 1 > self.p_max:     # p's port can exceed p_max
@@ -203,11 +218,13 @@ class Cluster(wiring.Component):
                 last_win.eq(win), last_upd.eq(upd),
                 sel_r.eq(self.Sel), sat_r.eq(self.Sat),
             ]
+            if self.exponents:
+                m.d.sync += shf.eq(self.run & self.shift)
             with m.If(~self.run):
                 m.d.sync += running.eq(0)
 
         # RAM ports: counters while iterating, host port while idle.
-        write = win & upd
+        write = win & (upd | shf) if self.exponents else win & upd
         m.d.comb += [
             port_a.addr.eq(self.host_addr),
             port_b.addr.eq(self.host_addr),
@@ -226,6 +243,15 @@ class Cluster(wiring.Component):
             ]
             with m.If(write):
                 m.d.comb += port_b.addr.eq(self.base + cnt.cntW)
+                if self.exponents:
+                    t = Signal(signed(len(cnt.cntW) + 3))
+                    rot = Signal(len(cnt.cntW))
+                    p1 = p_r + 1
+                    m.d.comb += t.eq(cnt.cntW - 1 - self.shift_d)
+                    m.d.comb += rot.eq(Mux(cnt.cntW == 0, 0,
+                                           Mux(t < 0, t + p1, Mux(t >= p1, t - p1, t)) + 1))
+                    with m.If(shf):
+                        m.d.comb += port_b.addr.eq(self.base + rot)
         m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(port_w.en)]
 
         # Clear iteration: mask the adders' inputs from bit 0 (cycle 1, the

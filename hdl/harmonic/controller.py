@@ -2,7 +2,7 @@
 
 import enum
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Array, Cat, Module, Mux, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -56,6 +56,12 @@ class Controller(wiring.Component):
     Parameters
     ----------
     blocks : (BR, BC); n, m : block size; p_max : largest precision.
+    exponents, e_max, headroom : block exponents (issue 10; default off):
+        the ``blk_s_*``, ``blk_scan*``, ``blk_lead_*``, ``blk_shift*`` ports,
+        e_b registers (0..e_max), the re-pick with headroom h, shift visits
+        and the coarsening at a precision rise; ``e_rd`` = e of block
+        ``e_rd_block``; ``repicks`` counts re-picks
+        (:func:`models.harmonic.plan_exponents`, ``rtl=True``).
 
     Ports
     -----
@@ -73,11 +79,26 @@ class Controller(wiring.Component):
     blk_* : the :class:`~hdl.harmonic.block.Block` command and flag ports.
     """
 
-    def __init__(self, blocks, n, m, p_max):
+    def __init__(self, blocks, n, m, p_max, exponents=False, e_max=255, headroom=1):
         BR, BC = blocks
         self.BR, self.BC, self.n, self.m, self.p_max = BR, BC, n, m, p_max
+        self.exponents, self.e_max, self.headroom = bool(exponents), e_max, headroom
         P = range(p_max + 1)
+        extra = {}
+        if self.exponents:
+            L = range(p_max + 3)
+            sw = signed(e_max.bit_length() + 1)
+            extra = {
+                "blk_shift": Out(1), "blk_shift_d": Out(signed((p_max + 1).bit_length() + 1)),
+                "blk_s_N": Out(sw), "blk_s_S": Out(sw), "blk_s_W": Out(sw), "blk_s_E": Out(sw),
+                "blk_raw": Out(1), "blk_scan": Out(1), "blk_scan_len": In(L), "blk_clamped": In(1),
+                "blk_lead_own": In(L), "blk_lead_N": In(L), "blk_lead_S": In(L), "blk_lead_W": In(L),
+                "blk_lead_E": In(L), "blk_all_const": In(1),
+                "e_rd_block": In(range(max(BR * BC, 2))), "e_rd": Out(range(e_max + 1)),
+                "repicks": Out(32),
+            }
         super().__init__({
+            **extra,
             "start": In(1), "p1": In(P), "step": In(P), "p_last": In(P), "iters": In(8),
             "order": In(1), "order_ready": Out(1),
             "o_br": In(range(max(BR, 2))), "o_bc": In(range(max(BC, 2))), "o_row": In(range(n)),
@@ -119,6 +140,11 @@ class Controller(wiring.Component):
         ]
         with m.If(self.running):
             m.d.sync += self.cycles.eq(self.cycles + 1)
+        X = self.exponents
+        if X:
+            self._exp_signals(m, locals())
+            rep, crs, scanned, scan_j, need_scan = (self._x[k] for k in ("rep", "crs", "scanned", "scan_j",
+                                                                          "need_scan"))
 
         def latch_order():
             m.d.sync += [act_br.eq(pend_br), act_bc.eq(pend_bc), act_row.eq(pend_row),
@@ -133,6 +159,10 @@ class Controller(wiring.Component):
         with m.FSM() as fsm:
             with m.State("IDLE"):
                 with m.If(self.start):
+                    if X:
+                        m.d.sync += [rep.eq(0), crs.eq(0), scanned.eq(0), self._x["sat"].eq(0),
+                                     self.repicks.eq(0)]
+                        m.d.sync += [e.eq(0) for e in self._x["E"]]
                     m.d.sync += [
                         self.p.eq(self.p1), step.eq(self.step), p_last.eq(self.p_last),
                         iters.eq(self.iters), self.running.eq(1), self.busy.eq(1),
@@ -148,8 +178,22 @@ class Controller(wiring.Component):
                                  br.eq(0), bc.eq(0)]
                     m.next = "VSTART"
             with m.State("VSTART"):
-                m.d.sync += [k.eq(0), seen.eq(0), first.eq(1), first_ok.eq(0)]
-                m.next = "VRUN"
+                if X:
+                    with m.If(need_scan):
+                        m.d.sync += scan_j.eq(1)
+                        m.next = "SCANW"
+                    with m.Else():
+                        m.d.sync += [k.eq(0), seen.eq(0), first.eq(1), first_ok.eq(0)]
+                        m.next = "VRUN"
+                else:
+                    m.d.sync += [k.eq(0), seen.eq(0), first.eq(1), first_ok.eq(0)]
+                    m.next = "VRUN"
+            if X:
+                with m.State("SCANW"):          # the clamp scan: L more cycles
+                    m.d.sync += scan_j.eq(scan_j + 1)
+                    with m.If(scan_j == self.blk_scan_len):
+                        m.d.sync += scanned.eq(1)
+                        m.next = "VSTART"
             with m.State("VRUN"):
                 with m.If(self.blk_take):
                     m.d.sync += k.eq(k + 1)
@@ -157,7 +201,7 @@ class Controller(wiring.Component):
                     m.d.sync += first.eq(0)
                     with m.If(first):
                         m.d.sync += first_ok.eq(self.blk_all_stable)
-                    with m.If(mode == Mode.UPDATE):
+                    with m.If(((mode == Mode.UPDATE) & ~rep) if X else (mode == Mode.UPDATE)):
                         with m.If(~seen):
                             m.d.sync += self.block_iterations.eq(self.block_iterations + 1)
                         with m.If(self.blk_all_stable):
@@ -170,6 +214,24 @@ class Controller(wiring.Component):
                         m.next = "VEND"
             with m.State("VEND"):
                 m.next = "VSTART"
+                if X:
+                    m.d.sync += scanned.eq(0)
+                    with self._vend_exponents(m, locals()):
+                        self._vend(m, locals())
+                else:
+                    self._vend(m, locals())
+        self._tail(m, locals())
+        return m
+
+    def _vend(self, m, v):
+        """The end of a visit: next block, pass, level (fixed point, and the
+        exponent option's update/check visits)."""
+        mode, first_ok, changed, br, bc, anymax, pend = (v[x] for x in (
+            "mode", "first_ok", "changed", "br", "bc", "anymax", "pend"))
+        idle_clear, step, p_last, latch_order = v["idle_clear"], v["step"], v["p_last"], v["latch_order"]
+        BR, BC, X = self.BR, self.BC, self.exponents
+        if True:
+            if True:
                 with m.If((mode == Mode.UPDATE) & ~first_ok):
                     m.d.sync += changed.eq(1)
                 with m.If(bc != BC - 1):
@@ -200,15 +262,149 @@ class Controller(wiring.Component):
                             m.next = "IDLE"
                         with m.Elif((step != 0) & (self.p + step <= p_last)):
                             m.d.sync += self.p.eq(self.p + step)
+                            if X:
+                                self._rise(m, v)
                         with m.Else():
                             m.d.sync += [self.running.eq(0), self.busy.eq(0)]
                             m.next = "IDLE"
+
+    def _tail(self, m, v):
         # The clusters' run: start request in VSTART, then the command at each
         # take.  Plain expressions (continuous assignments in the Verilog), so
         # they are defined from time 0 on every simulator.
+        mode, iters, fsm, k, seen = (v[x] for x in ("mode", "iters", "fsm", "k", "seen"))
         limit = Signal(9)
-        m.d.comb += limit.eq(Mux(mode == Mode.UPDATE, iters, 1))
-        m.d.comb += self.blk_run.eq(
-            fsm.ongoing("VSTART")
-            | (fsm.ongoing("VRUN") & self.blk_take & (k < limit) & ~((mode == Mode.UPDATE) & seen)))
-        return m
+        if self.exponents:
+            rep = v["rep"]
+            x = self._x
+            m.d.comb += [
+                self.blk_scan.eq(fsm.ongoing("VSTART") & ~x["scanned"] & ~rep
+                                 & ((mode == Mode.UPDATE) | (mode == Mode.CHECK))),
+                x["need_scan"].eq(self.blk_scan & (self.blk_scan_len != 0)),
+            ]
+            m.d.comb += limit.eq(Mux((mode == Mode.UPDATE) & ~rep, iters, 1))
+            more = Mux(rep, x["rem"] != 0, (k < limit) & ~((mode == Mode.UPDATE) & seen))
+            m.d.comb += [
+                self.blk_run.eq((fsm.ongoing("VSTART") & ~v["need_scan"])
+                                | (fsm.ongoing("VRUN") & self.blk_take & more)),
+                x["rep_take"].eq(fsm.ongoing("VRUN") & self.blk_take & rep & (x["rem"] != 0)),
+            ]
+        else:
+            m.d.comb += limit.eq(Mux(mode == Mode.UPDATE, iters, 1))
+            m.d.comb += self.blk_run.eq(
+                fsm.ongoing("VSTART")
+                | (fsm.ongoing("VRUN") & self.blk_take & (k < limit) & ~((mode == Mode.UPDATE) & seen)))
+
+    # Block exponents (issue 10; models.harmonic.plan_exponents(..., rtl=True)).
+    # Not elaborated by default.
+
+    def _exp_signals(self, m, v):
+        BR, BC, B, p_max, e_max, h = self.BR, self.BC, self.BR * self.BC, self.p_max, self.e_max, self.headroom
+        br, bc, mode, fsm_state = v["br"], v["bc"], v["mode"], None
+        x = self._x = {}
+        x["E"] = E = [Signal(range(e_max + 1), name=f"E_{i}") for i in range(B)]
+        Ea = Array(E)
+        x["sat"] = Signal(B, name="sat")            # clamped in this level
+        x["crs_pend"] = Signal(B, name="crs_pend")  # blocks still to coarsen at this rise
+        x["rep"] = Signal(name="rep")               # this visit is a shift visit
+        x["crs"] = Signal(name="crs")               # ... of the coarsening at a rise
+        x["scanned"] = Signal(name="scanned")
+        x["scan_j"] = Signal(range(p_max + 4), name="scan_j")
+        x["shd"] = shd = Signal.like(self.blk_shift_d, name="shd")   # this iteration's rotation
+        x["rem"] = rem = Signal(range(p_max + 2), name="rem")         # rotation still to do
+        # A shift visit rotates by at most 3 per iteration (reads LSB first,
+        # writes three positions behind: never a bit before it is read; the
+        # rotation by 3 also leaves the next iteration's first reads
+        # written), the rest in the last iteration: set at each take.
+        with m.If(fsm_take := Signal(name="rep_take")):
+            m.d.sync += [shd.eq(Mux(rem > 3, 3, rem)), rem.eq(rem - Mux(rem > 3, 3, rem))]
+        x["rep_take"] = fsm_take
+        x["need_scan"] = need_scan = Signal(name="need_scan")
+        b = x["b"] = Signal(range(max(B, 2)), name="b_cur")
+        m.d.comb += b.eq(br * BC + bc)
+        e = x["e"] = Signal(range(e_max + 1), name="e_cur")
+        m.d.comb += e.eq(Ea[b])
+        sides = {"N": (br != 0, -BC), "S": (br != BR - 1, BC), "W": (bc != 0, -1), "E": (bc != BC - 1, 1)}
+        x["nb"] = {}
+        for side, (valid, off) in sides.items():
+            en = Signal(range(e_max + 1), name=f"e_{side}")
+            m.d.comb += [en.eq(Mux(valid, Ea[(b + off)[:len(b)]], 0)),
+                         getattr(self, f"blk_s_{side}").eq(Mux(valid, e - en, 0))]
+            x["nb"][side] = (valid, en)
+        rep = x["rep"]
+        m.d.comb += [
+            self.blk_enable.eq((mode != Mode.CHECK) & ~rep),
+            self.blk_shift.eq(rep), self.blk_shift_d.eq(shd),
+            self.blk_raw.eq((mode == Mode.UPDATE) & ~rep),
+            self.e_rd.eq(Ea[self.e_rd_block]),
+        ]
+        # The re-pick amount d after an update visit (REPICK rule of
+        # plan_exponents): with leads as offsets (bit length p+2-lead),
+        # top - bit length = lead - 1 - h for the block's own values and
+        # lead - 1 - h - e + e' for a neighbour edge in its units.
+        W = signed(max(2 * e_max + p_max + 8, 64).bit_length() + 2)
+        NONE = p_max + 2
+        BIG = (1 << (W.width - 2)) - 1
+        terms = [(self.blk_lead_own != NONE, self.blk_lead_own - 1 - h)]
+        for side, (valid, en) in x["nb"].items():
+            lead = getattr(self, f"blk_lead_{side}")
+            terms.append((valid & (lead != NONE), lead - 1 - h - e + en))
+        acc = Signal(W, name="d_min")
+        cur = BIG
+        for i, (ok, t) in enumerate(terms):
+            ti = Signal(W, name=f"d_term{i}")
+            m.d.comb += ti.eq(Mux(ok, t, BIG))
+            cur = Mux(ti < cur, ti, cur)
+        m.d.comb += acc.eq(cur)
+        d = x["d"] = Signal(W, name="d_repick")
+        room = e_max - e
+        m.d.comb += d.eq(Mux((acc == BIG) | self.blk_all_const | (acc <= 0), 0, Mux(acc > room, room, acc)))
+
+    def _vend_exponents(self, m, v):
+        """VEND of the exponent option: the re-pick after an update visit,
+        the end of a shift visit, the coarsening sequence; returns the
+        context of the ordinary VEND (update/check/clear visits without a
+        re-pick, and a re-pick's shift visit, which then moves on)."""
+        x = self._x
+        mode, rep, crs, d, b, shd = v["mode"], x["rep"], x["crs"], x["d"], x["b"], x["shd"]
+        E, sat = x["E"], x["sat"]
+        Ea = Array(E)
+        with m.If(crs):                               # a coarsening visit ended
+            self._next_coarsen(m, v, x["crs_pend"], self.p)
+        with m.Elif((mode == Mode.UPDATE) & ~rep):    # an update visit ended
+            m.d.sync += sat.eq(sat | (self.blk_clamped << b))
+            with m.If(~v["first_ok"]):
+                m.d.sync += v["changed"].eq(1)
+            with m.If(d != 0):                        # re-pick: shift visit of this block
+                m.d.sync += [Ea[b].eq(Ea[b] + d), rep.eq(1), v["changed"].eq(1),
+                             x["rem"].eq(Mux(d > self.p, self.p, d)), self.repicks.eq(self.repicks + 1)]
+        with m.If(rep & ~crs):
+            m.d.sync += rep.eq(0)
+        return m.If(~crs & ~((mode == Mode.UPDATE) & ~rep & (d != 0)))
+
+    def _next_coarsen(self, m, v, mask, p_new):
+        """Start the shift visit of the first block of ``mask`` (right by
+        δ = min(e_b, step), e_b lowered: a left rotation by p+1-δ of the word
+        at the new precision ``p_new``, whose low step bits are 0), or end
+        the coarsening: sweep from b = 0."""
+        x = self._x
+        BC, B = self.BC, self.BR * self.BC
+        E, step = x["E"], v["step"]
+        for i in range(B):
+            dl = Mux(E[i] < step, E[i], step)
+            with (m.If if i == 0 else m.Elif)(mask[i]):
+                m.d.sync += [v["br"].eq(i // BC), v["bc"].eq(i % BC), x["rem"].eq(p_new + 1 - dl),
+                             E[i].eq(E[i] - dl),
+                             x["crs_pend"].eq(mask & ~(1 << i)), x["rep"].eq(1), x["crs"].eq(1)]
+        with m.Else():
+            m.d.sync += [x["rep"].eq(0), x["crs"].eq(0), v["br"].eq(0), v["bc"].eq(0)]
+
+    def _rise(self, m, v):
+        """A precision rise: blocks saturated in the ending level with e_b > 0
+        coarsen (plan_exponents' raise_precision_exp); clamps restart."""
+        x = self._x
+        E, sat = x["E"], x["sat"]
+        mask = Signal(len(sat), name="crs_mask")
+        m.d.comb += mask.eq(sat & Cat(*[e != 0 for e in E]))
+        m.d.sync += sat.eq(0)
+        self._next_coarsen(m, v, mask, self.p + v["step"])

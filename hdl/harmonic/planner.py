@@ -7,6 +7,7 @@ from amaranth.hdl import Cat, Const, Module, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import Param, check
 from .block import Block
 from .cluster import COLS, ROWS
 from .controller import Controller
@@ -51,9 +52,11 @@ def command_layout(blocks, n, m, p_max):
     })
 
 
-def response_layout(p_max):
+def response_layout(p_max, exponents=False, e_max=255):
     pw = _pw(p_max)
+    extra = {"exponent": range(e_max + 1)} if exponents else {}   # READ: the block's e_b
     return data.StructLayout({
+        **extra,
         "code": Code, "op": Op, "busy": 1, "converged": 1, "p": pw,
         "const": 1, "value": p_max + 1,
         "triangle": 2, "g_row": signed(p_max + 2), "g_col": signed(p_max + 2),
@@ -111,19 +114,35 @@ class Planner(wiring.Component):
         Largest precision.
     depth : int
         Words per cluster RAM; needs BR*BC*(p_max+2) <= depth.
+    block_exponents : bool
+        Issue 10, beyond the paper (default False: the design above,
+        unchanged).  True: one exponent per block
+        (:func:`models.harmonic.plan_exponents` with ``rtl=True``, bit for
+        bit): exponent registers, the border conversion with its clamp scan,
+        the re-pick and the in-place shift visits in the Control module;
+        READ's response gains ``exponent`` (the node's block's e_b: the
+        value is the mantissa, value / 2**(p + e_b)).  DIRECTION is not
+        exponent-aware (raw mantissas across borders); no dynamic orders
+        during a run.  See hdl/harmonic/README.md, "Planner RTL option".
     """
 
-    # Block's parameters (it checks them), at the planner's defaults.
-    PARAMS = tuple(replace(p, default={"n": 6, "m": 12, "br": 2, "bc": 2}.get(p.name, p.default))
-                   for p in Block.PARAMS)
+    # Block's parameters (it checks them), at the planner's defaults, and the
+    # block-exponent option (issue 10; default off: the paper's design).
+    PARAMS = (*(replace(p, default={"n": 6, "m": 12, "br": 2, "bc": 2}.get(p.name, p.default))
+                for p in Block.PARAMS if p.name not in ("exponents", "e_max")),
+              Param("block_exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
+                    message="block_exponents={value!r}: must be True or False"))
     CONSTRAINTS = Block.CONSTRAINTS
 
-    def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024):
-        self.block = Block(n, m, blocks, p_max, depth)      # checks the parameters
+    def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False):
+        check(self.PARAMS[-1:], block_exponents=block_exponents)
+        self.exponents = bool(block_exponents)
+        ekw = {"exponents": True} if self.exponents else {}
+        self.block = Block(n, m, blocks, p_max, depth, **ekw)      # checks the parameters
         self.n, self.m, self.BR, self.BC = n, m, *blocks
         self.p_max, self.depth = p_max, depth
         self.cmd_layout = command_layout(blocks, n, m, p_max)
-        self.resp_layout = response_layout(p_max)
+        self.resp_layout = response_layout(p_max, **ekw)
         super().__init__({
             "i_stream": In(stream.Signature(self.cmd_layout)),
             "o_stream": Out(stream.Signature(self.resp_layout)),
@@ -141,7 +160,8 @@ class Planner(wiring.Component):
         S, CC = p_max + 2, mm // COLS
         B = BR * BC
         m.submodules.block = blk = self.block
-        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max)
+        X = self.exponents
+        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, **({"exponents": True} if X else {}))
         m.submodules.decision = dec = Decision(p_max)
         for name in ("run", "p", "enable", "clear", "sel", "sel_row", "sel_col", "br", "bc"):
             m.d.comb += getattr(blk, name).eq(getattr(ctl, f"blk_{name}"))
@@ -150,6 +170,12 @@ class Planner(wiring.Component):
             ctl.blk_take.eq(blk.take), ctl.blk_done.eq(blk.done), ctl.blk_busy.eq(blk.busy),
             ctl.blk_all_stable.eq(blk.all_stable), ctl.blk_any_max.eq(blk.any_max),
         ]
+        if X:
+            for name in ("shift", "shift_d", "s_N", "s_S", "s_W", "s_E", "raw", "scan"):
+                m.d.comb += getattr(blk, name).eq(getattr(ctl, f"blk_{name}"))
+            for name in ("scan_len", "clamped", "lead_own", "lead_N", "lead_S", "lead_W", "lead_E",
+                         "all_const"):
+                m.d.comb += getattr(ctl, f"blk_{name}").eq(getattr(blk, name))
 
         cmd = self.i_stream.payload
         resp = self.o_stream.payload
@@ -349,6 +375,8 @@ class Planner(wiring.Component):
             with m.State("READ_RESP"):
                 respond(Code.OK, Op.READ)
                 m.d.sync += [resp.value.eq(vals[0]), resp.const.eq(rd_const)]
+                if X:
+                    m.d.sync += resp.exponent.eq(ctl.e_rd)
                 m.next = "IDLE"
             with m.State("DECIDE_GO"):
                 m.next = "DECIDE"
@@ -376,4 +404,8 @@ class Planner(wiring.Component):
         with m.If(self.i_stream.valid & self.i_stream.ready):
             m.d.sync += [resp.value.eq(0), resp.const.eq(0), resp.triangle.eq(0),
                          resp.g_row.eq(0), resp.g_col.eq(0)]
+            if X:
+                m.d.sync += resp.exponent.eq(0)
+        if X:
+            m.d.comb += ctl.e_rd_block.eq(c.block)
         return m

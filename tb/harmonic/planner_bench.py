@@ -34,12 +34,13 @@ def _fields(layout):
 
 
 class PlannerBench:
-    def __init__(self, dut, n, m, blocks, p_max):
+    def __init__(self, dut, n, m, blocks, p_max, exponents=False):
         self.dut, self.n, self.m = dut, n, m
         self.BR, self.BC = blocks
         self.p_max = p_max
+        self.exponents = bool(exponents)
         self.cmd_f = _fields(command_layout(blocks, n, m, p_max))
-        self.resp_f = _fields(response_layout(p_max))
+        self.resp_f = _fields(response_layout(p_max, exponents=True) if exponents else response_layout(p_max))
         self.commands = 0
         dut.i_stream__valid.value = 0
         dut.o_stream__ready.value = 1
@@ -127,7 +128,16 @@ class PlannerBench:
                 resp = await self.command(Op.READ, block=b, row=x, col=y)
                 assert resp["code"] == Code.OK, resp["code"]
                 h[r, c], const[r, c] = resp["value"], bool(resp["const"])
+                if self.exponents:
+                    self.block_exponents[b // self.BC, b % self.BC] = resp["exponent"]
         return h, const
+
+    @property
+    def block_exponents(self):
+        """The e_b READ reported (BR x BC; block-exponent option)."""
+        if not hasattr(self, "_exps"):
+            self._exps = np.zeros((self.BR, self.BC), dtype=np.int64)
+        return self._exps
 
 
 def _mask(flags):
@@ -157,7 +167,7 @@ def planner_params(shape, block=(6, 12), p_max=30, depth=None):
 
 
 def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), sim="verilator",
-                    progress=None, work=None, events=()):
+                    progress=None, work=None, events=(), block_exponents=False):
     """Run the Planner RTL on a whole map through cocotb; return a dict with
     the fields of :class:`models.harmonic.PlanResult` (h, const, p,
     converged, sweeps, block_iterations, check_iterations, clear_passes,
@@ -174,7 +184,12 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     during pass s-1 (the bench watches the pass count).  ``progress(status)``
     is called from the job's STATUS polls (through the job's log, after the
     run, when the simulator runs in a subprocess: it gets the last status).
+    ``block_exponents``: the Planner's exponent option (``harmonic_planner_exp``,
+    no events); ``h``/``padded_h`` are then the mantissas and ``exponents``
+    (BR x BC) the block exponents (models.harmonic.plan(..., rtl=True)).
     """
+    if block_exponents and events:
+        raise ValueError("block exponents: dynamic orders (events) are not supported")
     from tb.runner import run
     obstacle = np.asarray(obstacle, dtype=bool)
     H, W = obstacle.shape
@@ -192,8 +207,10 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
             "params": params, "obstacle": (padded | unreachable).tolist(), "goal": goal.tolist(),
             "schedule": [p1, step, p_last], "iters": int(iters),
             "events": [[int(s), [int(r), int(c)], str(k)] for s, (r, c), k in events],
+            "exponents": bool(block_exponents),
         }))
-        run("harmonic_planner", params, sim, "tb.harmonic.planner_job",
+        top = register_exponent_top() if block_exponents else "harmonic_planner"
+        run(top, params, sim, "tb.harmonic.planner_job",
             env={"PLANNER_JOB": job, "PLANNER_RESULT": result}, log_file=work / "sim.log")
         out = json.loads(result.read_text())
     h = np.array([[int(v) for v in row] for row in out["h"]], dtype=object)
@@ -201,9 +218,22 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     res.update(h=h[:H, :W], const=np.array(out["const"], dtype=bool)[:H, :W],
                padded_h=h, unreachable=unreachable[:H, :W], params=params,
                node_updates=res["block_iterations"] * block[0] * block[1])
+    if block_exponents:
+        res["exponents"] = np.array(out["exponents"], dtype=np.int64)
     if progress:
         progress(out["status"])
     return res
+
+
+def register_exponent_top():
+    """The Planner with its block-exponent option as a runner top,
+    ``harmonic_planner_exp`` (hdl/emit.py, not this core's file, lists only
+    the default Planner; the lead may move this one line there)."""
+    from hdl.emit import TOPS
+    from hdl.harmonic.planner import Planner
+    TOPS.setdefault("harmonic_planner_exp", lambda n, m, br, bc, p_max, depth: Planner(
+        n, m, (br, bc), p_max, depth, block_exponents=True))
+    return "harmonic_planner_exp"
 
 
 def job_env():

@@ -21,10 +21,13 @@ from tb.harmonic.serial import start
 
 async def run_job(dut, job):
     prm = job["params"]
-    bench = PlannerBench(dut, prm["n"], prm["m"], (prm["br"], prm["bc"]), prm["p_max"])
+    bench = PlannerBench(dut, prm["n"], prm["m"], (prm["br"], prm["bc"]), prm["p_max"],
+                         exponents=bool(job.get("exponents")))
     obstacle = np.array(job["obstacle"], dtype=bool)
     goal = np.array(job["goal"], dtype=bool)
-    return await run_map(bench, obstacle, goal, job["schedule"], job["iters"], job.get("events", []))
+    out = await run_map(bench, obstacle, goal, job["schedule"], job["iters"], job.get("events", []))
+    run_job.exponents = bench.block_exponents.tolist() if bench.exponents else None
+    return out
 
 
 async def run_map(bench, obstacle, goal, schedule, iters, events=()):
@@ -82,4 +85,5 @@ async def planner_job(dut):
         "status": {k: int(status[k]) for k in keep},
         "h": [[int(v) for v in row] for row in h],
         "const": const.tolist(),
+        "exponents": run_job.exponents,
     }))

@@ -254,3 +254,27 @@ def test_option_errors():
         plan(ob, goals, block_exponents=True, headroom=-1)
     with pytest.raises(ValueError, match="e_max=-2"):
         plan(ob, goals, block_exponents=True, e_max=-2)
+
+
+def test_rtl_variant_conservative_maxima():
+    """rtl=True (the planner RTL's variant): converted-Maximum convergence
+    implies no exact local maximum on the common scale; the check pass never
+    re-picks (asserted inside); scans cost cycles only where exponents differ."""
+    from models.harmonic import local_max
+    from tb.harmonic.planner_maps import random_map
+    converged = 0
+    for seed in range(6):
+        ob, goals = random_map(9, 18, seed)
+        res = plan(ob, goals, block=(3, 6), iters=3, schedule=(6, 10, 14), block_exponents=True, rtl=True)
+        ref = plan(ob, goals, block=(3, 6), iters=3, schedule=(6, 10, 14), block_exponents=True)
+        assert res.cycles >= ref.cycles
+        if res.converged:
+            converged += 1
+            h = res.padded_h
+            pad = np.zeros((h.shape[0] + 2, h.shape[1] + 2), dtype=object)
+            pad[1:-1, 1:-1] = h
+            nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
+            assert not local_max(h, res.padded_const, nb).any()
+    assert converged >= 2
+    with pytest.raises(ValueError, match="rtl=True"):
+        plan(ob, goals, block_exponents=True, rtl=True, repick="stable")

@@ -213,7 +213,7 @@ def test_subprocess_ok_and_errors(tmp_path):
     assert bad.stderr.strip().splitlines() == [bad.stderr.strip()] and "invalid choice: 'fpga'" in bad.stderr
 
 
-# --- --block-exponents (issue 10; model engine only) -------------------------
+# --- --block-exponents (issue 10) ----------------------------------------------
 
 RANDOM = str(ROOT / "maps" / "random-32-32-10.map")
 
@@ -230,7 +230,7 @@ def test_block_exponents_json(tmp_path, capsys):
     rc, text, _ = _run([*args, "--block-exponents"], capsys)
     assert rc == 0, text
     r = json.loads(out.read_text())
-    res = plan(load_map(RANDOM), [(29, 6)], block=(6, 12), schedule=(16,), block_exponents=True)
+    res = plan(load_map(RANDOM), [(29, 6)], block=(6, 12), schedule=(16,), block_exponents=True, rtl=True)
     assert r["precision"] == 16 and r["converged"] and r["cycles"] == res.cycles
     assert r["exponents"] == res.exponents.tolist() and np.array(r["exponents"]).shape == (6, 3)
     assert r["exponents"][4][0] == 0 and r["frac_bits"] == 16 + max(map(max, r["exponents"])) > 16
@@ -245,11 +245,14 @@ def test_block_exponents_json(tmp_path, capsys):
     assert rc == 1 and not r["converged"] and "exponents" not in r and "frac_bits" not in r
 
 
-def test_block_exponents_rtl_engine_is_one_line(capsys):
+def test_block_exponents_rtl_engine_bad_schedule_is_one_line(capsys):
+    """The RTL engines with exponents: a schedule the RTL cannot run is a
+    one-line error before any build (the RTL run itself: test_sim_harmonic_rtl)."""
     for engine in ("icarus", "verilator"):
-        rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", engine, "--block-exponents"], capsys)
+        rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", engine, "--block-exponents",
+                              "--schedule", "4,8,16"], capsys)
         assert rc == 2 and text == "" and len(err.strip().splitlines()) == 1, err
-        assert f"--engine {engine}: --block-exponents is built in the model only" in err
+        assert f"--engine {engine}:" in err and "arithmetic schedules only" in err
 
 
 def test_block_exponents_subprocess(tmp_path):
@@ -258,6 +261,6 @@ def test_block_exponents_subprocess(tmp_path):
     assert ok.returncode == 0 and "reaches goal (30, 31)" in ok.stdout, ok.stderr
     r = json.loads((tmp_path / "r.json").read_text())
     assert len(r["exponents"]) == 6 and r["frac_bits"] > r["precision"]
-    bad = _sub(ROOM, "--goal", "3,3", "--engine", "verilator", "--block-exponents")
+    bad = _sub(ROOM, "--goal", "3,3", "--engine", "verilator", "--block-exponents", "--schedule", "4,8,16")
     assert bad.returncode == 2 and "Traceback" not in bad.stderr
-    assert len(bad.stderr.strip().splitlines()) == 1 and "model only" in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) == 1 and "arithmetic schedules only" in bad.stderr

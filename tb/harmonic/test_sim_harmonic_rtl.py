@@ -57,3 +57,32 @@ def test_rtl_engine_matches_model(sim, tmp_path, capsys):
         assert rtl[key] == model[key], key
         compared += 1
     assert compared == 14 and model["cycles"] > 0 and len(model["trajectories"]) == 2
+
+
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_rtl_engine_block_exponents_matches_model(sim, tmp_path, capsys):
+    """``--block-exponents`` on the RTL engines: the Planner's exponent option
+    (the build of tb/harmonic/test_planner_exponents.py: 3x3 blocks of 3x6,
+    p_max 14, depth 256) gives the model engine's JSON, exponents included,
+    on a padded map whose exponents move and whose blocks saturate."""
+    grid = _map((8, 17))
+    path = tmp_path / "m.txt"
+    path.write_text("\n".join("".join("#" if x else "." for x in row) for row in grid) + "\n")
+    out = {}
+    for engine in ("model", sim):
+        args = ["harmonic", str(path), "--goal", "0,0", "--start", "7,16", "--block", "3x6",
+                "--schedule", "6:4:14", "--iters", "3", "--engine", engine, "--block-exponents",
+                "--json", str(tmp_path / f"{engine}.json")]
+        rc = main(args)
+        err = capsys.readouterr().err
+        assert "Traceback" not in err
+        out[engine] = json.loads((tmp_path / f"{engine}.json").read_text())
+        out[engine]["rc"] = rc
+    model, rtl = out["model"], out[sim]
+    assert rtl["engine"] == sim and max(map(max, model["exponents"])) > 0
+    compared = 0
+    for key in ("rc", "precision", "converged", "maxima", "sweeps", "block_iterations", "check_iterations",
+                "cycles", "potential", "exponents", "frac_bits", "trajectories"):
+        assert rtl[key] == model[key], key
+        compared += 1
+    assert compared == 12 and model["converged"] and model["trajectories"][0]["reached_goal"]
