@@ -1,6 +1,7 @@
-# Every target bootstraps what it needs: a .venv with the Python packages of
-# pyproject.toml, and Icarus Verilog / yosys through apt-get when missing and
-# running as root (otherwise a message says what to install).
+# Every target bootstraps what it needs: a .venv with navcores installed in it
+# (editable, with the `ip` extra: FuseSoC for tb/ip), and Icarus Verilog /
+# yosys through apt-get when missing and running as root (otherwise a message
+# says what to install).
 
 PYTHON   ?= python3
 VENV     := .venv
@@ -21,8 +22,7 @@ all: test
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "Python >= 3.11 is needed ($(PYTHON) is older)"; exit 1; }
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -c "import tomllib; print('\n'.join(tomllib.load(open('pyproject.toml', 'rb'))['project']['dependencies']))" > $(VENV)/requirements.txt
-	$(BIN)/python -m pip install -q -r $(VENV)/requirements.txt
+	$(BIN)/python -m pip install -q -e '.[ip]'
 	touch $@
 venv: $(STAMP)
 

@@ -95,6 +95,8 @@ __all__ = ["SEL_OPS", "DIV_TYPES", "FllError", "Mf", "InputSpec", "DflcConfig",
 
 SEL_OPS = ("min", "prod", "max", "probor")        # Table 2 sel_op 0..3
 DIV_TYPES = ("array", "lut")                      # Table 2 div_type 0..1
+# Allowed widths (inclusive), checked by load_fll; hdl's parameter lists read them.
+WIDTH_LIMITS = {"ip_sz": (2, 16), "dy_ip": (2, 16), "mf_op_sz": (2, 16), "op_sz": (2, 24)}
 DEFAULT_FLL = Path(__file__).resolve().parent / "dflc_table1.fll"
 _CONJ = {"Minimum": "min", "AlgebraicProduct": "prod"}
 _DISJ = {"Maximum": "max", "AlgebraicSum": "probor"}
@@ -387,8 +389,8 @@ def load_fll(path, *, ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div_type="lut", 
     import fuzzylite as fl
 
     path = Path(path)
-    for what, v, lo, hi in (("ip_sz", ip_sz, 2, 16), ("dy_ip", dy_ip, 2, 16),
-                            ("mf_op_sz", mf_op_sz, 2, 16), ("op_sz", op_sz, 2, 24)):
+    for what, v in (("ip_sz", ip_sz), ("dy_ip", dy_ip), ("mf_op_sz", mf_op_sz), ("op_sz", op_sz)):
+        lo, hi = WIDTH_LIMITS[what]
         if not isinstance(v, int) or not lo <= v <= hi:
             raise ValueError(f"{what} = {v!r}: must be an integer in {lo}..{hi}")
     if op_sz < mf_op_sz:

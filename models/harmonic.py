@@ -277,10 +277,17 @@ class PlanResult:
     blocks: tuple = (1, 1)
     padded_h: np.ndarray = None
     padded_const: np.ndarray = None
+    # block exponents only (plan(..., block_exponents=True)); None otherwise
+    exponents: np.ndarray = None
+    frac_bits: int = None
+    mantissa: np.ndarray = None
+    repicks: int = 0
+    saturated: int = 0
 
     def potential(self):
         """Values as floats in [0, 1]."""
-        return np.array([[int(v) / one(self.p) for v in row] for row in self.h], dtype=float)
+        unit = one(self.p if self.frac_bits is None else self.frac_bits)
+        return np.array([[int(v) / unit for v in row] for row in self.h], dtype=float)
 
 
 def _schedule(schedule):
@@ -367,7 +374,8 @@ class _Grid:
         return res
 
 
-def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=()):
+def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=(),
+         block_exponents=False, **exponent_options):
     """Block-synchronous relaxation with increasing precision (section 4).
 
     The map (``obstacle``: bool H x W, True = obstacle; ``goals``: mask or
@@ -405,7 +413,17 @@ def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=()):
     at the same precision.  Free cells a new obstacle cuts off from every
     goal are not walled off by the planner: they stay a zero plateau and
     count as maxima; the host walls them off with more obstacle orders.
+
+    ``block_exponents=True``: the block-exponent variant, see
+    :func:`plan_exponents` (``exponent_options`` go there; no events).
     """
+    if block_exponents:
+        if events:
+            raise ValueError("block exponents: dynamic orders (events) are not supported")
+        return plan_exponents(obstacle, goals, block=block, iters=iters, schedule=schedule,
+                              **exponent_options)
+    if exponent_options:
+        raise ValueError(f"{sorted(exponent_options)}: options of block_exponents=True only")
     g = _Grid(obstacle, goals, block, iters, schedule)
     res, const, hv, B, iters = g.res, g.const, g.hv, g.B, g.iters
     evs = sorted(((int(s), (int(r), int(c)), str(kind)) for s, (r, c), kind in events),
@@ -801,3 +819,360 @@ def plan_explore(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), ord
 
 
 __all__ += ["SKIP_CYCLES", "plan_explore"]
+
+
+# --- block exponents (issue 10: beyond the paper) ---------------------------
+#
+# Fig. 3 / 3.2.2: the potential decays exponentially with the distance to the
+# goal, so one fixed-point word for the whole map needs bits in proportion to
+# the longest path, and the 1K-deep node RAM caps B * (p+2).  With block
+# exponents the word length follows the block instead: block b keeps an
+# exponent e_b, and a stored mantissa v of block b stands for v / 2**(p+e_b).
+# The nodes, the serial adder and the word layout are unchanged (p+2 bits);
+# what changes is how a value crosses a block border and the exponent
+# re-pick.  plan_exponents() is the algorithm; plan(..., block_exponents=True)
+# calls it.  Everything is exact integer arithmetic.
+
+E_MAX = 255             # default exponent bound: an 8-bit exponent register per block
+REPICK_HEADROOM = 1     # default h: a re-pick leaves the top h mantissa bits empty
+
+
+def convert_mantissa(v, s, p):
+    """A neighbour block's mantissa ``v`` seen from a block whose exponent is
+    ``s`` larger (``s < 0``: smaller), both at word precision ``p``.
+
+    ``s > 0`` (the reader is finer): ``v << s``, the LSB-first stream delayed
+    by s cycles, saturated at the word's top ``2**(p+1) - 1`` (a clamp);
+    ``s < 0``: ``v >> -s``, the stream read -s bits late (floor, the dropped
+    bits are lost); ``s = 0``: ``v``.  Works on ints and on integer numpy
+    arrays.  Returns ``(value, clamped)``, ``clamped`` True if any value hit
+    the top.  Both branches are monotone in ``v``, which the termination
+    argument of :func:`plan_exponents` needs."""
+    cap = (1 << (p + 1)) - 1
+    scalar = not isinstance(v, np.ndarray)
+    arr = np.asarray(v, dtype=object) if scalar else v
+    if s == 0:
+        out, clamped = arr, False
+    elif s < 0:
+        out = arr >> -s if -s <= p + 1 else arr * 0
+        clamped = False
+    else:
+        lim = cap >> s if s <= p + 1 else 0
+        over = np.asarray(arr > lim, dtype=bool)
+        safe = np.where(over, 0, arr)
+        out = np.where(over, cap, safe << s if s <= p + 1 else safe)
+        out = out.astype(arr.dtype) if not scalar else out
+        clamped = bool(over.any())
+    return (int(out) if scalar else out), clamped
+
+
+class _ExpGrid(_Grid):
+    """The padded map with mantissas (``pad``/``hv``) and one exponent per
+    block (``E``); ``visit`` converts the border ring into the block's units."""
+
+    def __init__(self, obstacle, goals, block, iters, schedule, headroom, e_max, ceiling=False):
+        super().__init__(obstacle, goals, block, iters, schedule)
+        self.use_ceiling = bool(ceiling)
+        self.headroom, self.e_max = int(headroom), int(e_max)
+        if self.headroom < 0:
+            raise ValueError(f"headroom={self.headroom}: must be >= 0")
+        if self.e_max < 0:
+            raise ValueError(f"e_max={self.e_max}: must be >= 0")
+        self.E = np.zeros((self.BR, self.BC), dtype=np.int64)
+        n, m = self.n, self.m
+        self.goal_block = self.goal.reshape(self.BR, n, self.BC, m).any(axis=(1, 3))
+        free = ~self.const
+        self.free_block = free.reshape(self.BR, n, self.BC, m).any(axis=(1, 3))
+        self.sat = np.zeros((self.BR, self.BC), dtype=bool)
+        self.ceiling = np.full((self.BR, self.BC), self.e_max, dtype=np.int64)
+        self._dtype_for_p()
+
+    def _dtype_for_p(self):
+        """int64 while p <= 60 (sums of four (p+1)-bit mantissas fit), Python
+        ints above: the same values, only faster where the schedule starts low."""
+        want = np.int64 if self.p <= _INT64_P_MAX else object
+        if self.pad.dtype != want:
+            self.pad = self.pad.astype(want)
+            self.hv = self.pad[1:-1, 1:-1]
+
+    def _ring(self, br, bc):
+        """The block's four border rings (N, S, W, E): (mantissas, neighbour
+        exponent) in the neighbour's own units, or None outside the map."""
+        n, m, hv = self.n, self.m, self.hv
+        r0, c0 = br * n, bc * m
+        out = []
+        for dr, dc, sl in ((-1, 0, (r0 - 1, slice(c0, c0 + m))), (1, 0, (r0 + n, slice(c0, c0 + m))),
+                           (0, -1, (slice(r0, r0 + n), c0 - 1)), (0, 1, (slice(r0, r0 + n), c0 + m))):
+            nb, nc = br + dr, bc + dc
+            if 0 <= nb < self.BR and 0 <= nc < self.BC:
+                out.append((hv[sl], int(self.E[nb, nc])))
+            else:
+                out.append(None)
+        return out
+
+    def visit(self, br, bc):
+        """Up to I Jacobi iterations of block (br, bc) against its ring
+        converted to the block's exponent; returns (counted i, stable)."""
+        n, m, p = self.n, self.m, self.p
+        r0, c0 = br * n, bc * m
+        e = int(self.E[br, bc])
+        loc = np.zeros((n + 2, m + 2), dtype=self.pad.dtype)
+        loc[1:-1, 1:-1] = self.hv[r0:r0 + n, c0:c0 + m]
+        for side, ring in zip(((0, slice(1, -1)), (-1, slice(1, -1)), (slice(1, -1), 0), (slice(1, -1), -1)),
+                              self._ring(br, bc)):
+            if ring is not None:
+                vals, clamped = convert_mantissa(ring[0], e - ring[1], p)
+                loc[side] = vals
+                self.sat[br, bc] |= clamped
+        fixed = self.const[r0:r0 + n, c0:c0 + m]
+        stable, count = False, self.iters
+        for i in range(1, self.iters + 1):
+            old = loc[1:-1, 1:-1]
+            s = loc[:-2, 1:-1] + loc[2:, 1:-1] + loc[1:-1, :-2] + loc[1:-1, 2:]
+            new = np.where(fixed, old, s >> 2)
+            if (new == old).all():
+                stable, count = True, i
+                break
+            loc[1:-1, 1:-1] = new
+        self.hv[r0:r0 + n, c0:c0 + m] = loc[1:-1, 1:-1]
+        return count, stable
+
+    def repick_amount(self, br, bc):
+        """The exponent rule: by how much e_b rises now (0: unchanged).
+
+        d = the largest d >= 0 with every value the block holds or sees (its
+        nodes and its ring, exact, in each owner's units) below
+        2**(p+1-h) in the block's units after the shift, capped at
+        e_max - e_b; 0 for a goal block (its goal is 2**p at e = 0), a block
+        with no free node, or a block whose nodes and ring are all 0."""
+        if self.goal_block[br, bc] or not self.free_block[br, bc]:
+            return 0
+        n, m, p = self.n, self.m, self.p
+        e = int(self.E[br, bc])
+        top = p + 1 - self.headroom
+        own = int(self.hv[br * n:br * n + n, bc * m:bc * m + m].max())
+        d = top - own.bit_length() if own else None
+        for ring in self._ring(br, bc):
+            if ring is None:
+                continue
+            big = int(ring[0].max())
+            if big:
+                dr = top - big.bit_length() - e + ring[1]
+                d = dr if d is None else min(d, dr)
+        if d is None:
+            return 0
+        return max(0, min(d, int(self.ceiling[br, bc]) - e))
+
+    def repick(self, br, bc):
+        """Apply the rule: shift the block's mantissas left by d (exact,
+        they fit by construction); returns d."""
+        d = self.repick_amount(br, bc)
+        if d:
+            n, m = self.n, self.m
+            self.hv[br * n:br * n + n, bc * m:bc * m + m] <<= d
+            self.E[br, bc] += d
+        return d
+
+    def frac_bits(self):
+        return self.p + int(self.E.max())
+
+    def common(self):
+        """The padded field on one scale, 2**-frac_bits (object ints, exact):
+        mantissa << (frac_bits - p - e_b)."""
+        F = self.frac_bits()
+        n, m = self.n, self.m
+        out = np.array(self.hv, dtype=object)
+        for br in range(self.BR):
+            for bc in range(self.BC):
+                out[br * n:br * n + n, bc * m:bc * m + m] <<= F - self.p - int(self.E[br, bc])
+        return out
+
+    def maxima(self):
+        """Local maxima of the free nodes, comparing exact values across
+        block borders (the common scale)."""
+        h = self.common()
+        pad = np.zeros((self.rows + 2, self.cols + 2), dtype=object)
+        pad[1:-1, 1:-1] = h
+        nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
+        return int(local_max(h, self.const, nb).sum())
+
+    def raise_precision_exp(self):
+        """The schedule's next p.  A block that clamped a ring value in this
+        level coarsens its exponent by up to the step (p + e_b kept: no
+        resolution lost, the word gains top bits: its mantissas shift by
+        step - δ, which moves its words: returned in ``moved``); every other
+        block keeps e_b and its mantissas shift left by the step (appended
+        LSB addresses, free, as in fixed point).  Returns None after the
+        last precision, else the list of moved blocks."""
+        later = [q for q in self.sched if q > self.p]
+        if not later:
+            return None
+        step = later[0] - self.p
+        n, m = self.n, self.m
+        if later[0] > _INT64_P_MAX:
+            self.pad = self.pad.astype(object)
+            self.hv = self.pad[1:-1, 1:-1]
+        moved = []
+        for br in range(self.BR):
+            for bc in range(self.BC):
+                delta = min(int(self.E[br, bc]), step) if self.sat[br, bc] else 0
+                self.hv[br * n:br * n + n, bc * m:bc * m + m] <<= step - delta
+                if delta:
+                    self.E[br, bc] -= delta
+                    moved.append((br, bc))
+                if self.sat[br, bc] and self.use_ceiling:
+                    self.ceiling[br, bc] = self.E[br, bc]
+        self.p = later[0]
+        self.sat[...] = False
+        self._dtype_for_p()
+        return moved
+
+
+def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
+                   e_max=E_MAX, repick="visit", ceiling=False, trace=None):
+    """The block-synchronous planner (:func:`plan`) with one exponent per block.
+
+    Number format: block b's node with stored mantissa v (p+1 bits, the word
+    and the serial adder of the fixed-point design) stands for
+    v / 2**(p + e_b); 0 <= e_b <= ``e_max``; goal = 2**p in its block, whose
+    exponent stays 0.  All exponents start at 0, so the run begins as the
+    fixed-point planner.
+
+    Update (eq. 2): inside a block nothing changes, floor((N+E+W+S)/4).  A
+    neighbour in another block b' is converted with s = e_b - e_b'
+    (:func:`convert_mantissa`): s < 0 shifts right (floor), s > 0 shifts left
+    saturating at the word's top 2**(p+1)-1 (a clamp, recorded: the block is
+    *saturated* in this level).  Serially both are timing: read the border
+    stream -s bits late, or delay it by s cycles.
+
+    Exponent rule (re-pick).  After every update visit of block b (``repick
+    ="visit"``, the default; ``"stable"``: only after a visit whose first
+    iteration changed nothing; ``"check"``: only at check passes; "visit" is
+    the cheapest on the bundled maps) and at every check pass
+    that finds local maxima, e_b rises by the largest d >= 0 such that every
+    value block b holds or sees (its nodes and its four border rings, exact)
+    stays below 2**(p+1-h) in its units (h = ``headroom``), at most up to
+    ``e_max``; the block's mantissas shift left by d (exact).  A goal block, a
+    block without free node and a block whose nodes and ring are all 0 keep
+    their exponent.  So within a precision level e_b only rises.
+    ``ceiling=True`` (an option, measured worse on room-32-32-4): a block
+    saturated in a level may not rise above its lowered exponent again.  When the
+    precision rises by a step (no re-pick possible at a check pass that
+    found maxima), a block saturated in the ending level lowers e_b by
+    δ = min(e_b, step) so that p + e_b stays (its words gain top bits, no
+    resolution is lost); every other block keeps e_b.  Hence p + e_b (the
+    block's resolution) never falls during a run.
+
+    Termination (and why the field is right).  Let x be the exact values
+    v / 2**(p+e_b).  (1) The update with conversions is a monotone map F of
+    x for fixed exponents (floor, shifts and the clamp are monotone).  (2) The
+    start (free nodes 0, goals 1) is a sub-solution x <= F(x), and a block
+    update of a sub-solution is a larger sub-solution (as for plan()).  (3) A
+    re-pick keeps x and makes block b's grid finer; its ring fits below the
+    new top, so no new clamp: the new F_b(x) >= the old one, and the other
+    blocks' view of b depends only on x: x is still a sub-solution.  The same
+    holds for a precision rise (p + e_b never falls, the clamp's top never
+    falls).  So x never decreases over the whole run and stays below the
+    exact solution.  Within a level there are at most B * e_max re-picks, and
+    between re-picks x rises in a finite set, so every level ends; the
+    number of levels at one precision is bounded (each one re-picks, raising
+    the sum of e_b), the schedule is finite: every run ends.  Tested by
+    :mod:`test_model_exponents` (x never falls, exponents in bounds, the end a
+    fixed point of F).
+
+    Cycles: the timing model of :func:`plan` at word precision p (a visit of
+    K iterations is K*(p+2) + VISIT_OVERHEAD; a check pass is B visits of
+    K = 1).  A re-pick that changes e_b costs one shift visit of K = 1 (one
+    iteration reads the block's words and writes them d positions earlier:
+    the write counter's offset; the leading-one positions come free from the
+    LSB-first streams of the update iterations, the last 1 written, and from
+    the MSB-first streams of a check iteration); a precision rise that
+    coarsens a saturated block costs it the same shift visit; a precision
+    rise without coarsening moves nothing, as in fixed point.
+
+    Local maxima compare exact values across borders; the result's ``h`` is
+    the field on one scale 2**-frac_bits (frac_bits = p + max e_b), so
+    :func:`trajectory`, :func:`ascent_next` and :func:`decision` work on it
+    unchanged.  ``mantissa`` (padded) and ``exponents`` (BR x BC) are the
+    stored state; ``repicks`` counts exponent changes, ``saturated`` the
+    blocks saturated in the last level.  ``trace``: None or a list that
+    receives a tuple after every visit,
+    re-pick, check and precision rise, with the cycles counted so far
+    (event, p, exponents copy, mantissa copy, cycles; for the tests).
+    """
+    if repick not in ("visit", "stable", "check"):
+        raise ValueError(f"repick {repick!r}: 'visit', 'stable' or 'check'")
+    g = _ExpGrid(obstacle, goals, block, iters, schedule, headroom, e_max, ceiling)
+    res, B, iters = g.res, g.B, g.iters
+    blocks = [(br, bc) for br in range(g.BR) for bc in range(g.BC)]
+
+    def note(event):
+        if trace is not None:
+            trace.append((event, g.p, g.E.copy(), np.array(g.hv, dtype=object), cycles))
+
+    def new_level():
+        return {"p": g.p, "sweeps": 0, "block_iterations": 0, "maxima": None, "repicks": 0,
+                "saturated": 0}
+
+    level = new_level()
+    cycles = RUN_OVERHEAD
+    maxima = 0
+    note("start")
+    while True:
+        changed = False
+        for br, bc in blocks:
+            i, stable = g.visit(br, bc)
+            res.block_iterations += i
+            level["block_iterations"] += i
+            cycles += visit_cycles(min(i + 1, iters) if stable else iters, g.p)
+            changed |= i > 1 or not stable
+            note("visit")
+            if (repick == "visit" or (repick == "stable" and stable and i == 1)) and g.repick(br, bc):
+                cycles += visit_cycles(1, g.p)
+                res.repicks += 1
+                level["repicks"] += 1
+                changed = True
+                note("repick")
+        res.sweeps += 1
+        level["sweeps"] += 1
+        if changed:
+            continue
+        cycles += B * visit_cycles(1, g.p)             # check pass
+        res.check_iterations += B
+        maxima = level["maxima"] = g.maxima()
+        level["saturated"] = int(g.sat.sum())
+        note("check")
+        if maxima == 0:
+            res.converged = True
+            break
+        moved = 0
+        for br, bc in blocks:
+            if g.repick(br, bc):
+                moved += 1
+        if moved:                                     # a new level at the same p
+            cycles += moved * visit_cycles(1, g.p)
+            res.repicks += moved
+            level["repicks"] += moved
+            res.levels.append(level)
+            level = new_level()
+            note("repick")
+            continue
+        shifted = g.raise_precision_exp()
+        if shifted is None:
+            break
+        cycles += len(shifted) * visit_cycles(1, g.p)
+        res.levels.append(level)
+        level = new_level()
+        note("raise")
+    res.levels.append(level)
+    res.saturated = int(g.sat.sum())
+    out = g.result(cycles, maxima)
+    out.mantissa = np.array(g.hv, dtype=object)
+    out.exponents = g.E.copy()
+    out.frac_bits = g.frac_bits()
+    out.padded_h = g.common()
+    out.h = out.padded_h[:g.H, :g.W].copy()
+    return out
+
+
+__all__ += ["E_MAX", "REPICK_HEADROOM", "convert_mantissa", "plan_exponents"]

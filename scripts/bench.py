@@ -51,8 +51,6 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "scripts"))
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 import fmax as fmax_mod  # noqa: E402

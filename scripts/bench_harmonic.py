@@ -28,17 +28,14 @@ make bench (scripts/bench.py) puts sections 1 and 2 into BENCHMARKS.md.
 
 import argparse
 import math
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tb" / "harmonic"))
 
-from harmonic_small_maps import corridor, spiral  # noqa: E402
+from tb.harmonic.harmonic_small_maps import corridor, spiral  # noqa: E402
 from models.harmonic import plan, plan_explore, reachable  # noqa: E402
 from sim.mapfile import load_map, load_scenarios  # noqa: E402
 

@@ -29,8 +29,6 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
 
 YOSYS = shutil.which("yosys") or "/usr/bin/yosys"
 NEXTPNR = shutil.which("nextpnr-ice40") or "/usr/bin/nextpnr-ice40"

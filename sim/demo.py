@@ -38,8 +38,6 @@ from pathlib import Path
 
 
 ROOT = Path(__file__).resolve().parents[1]
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
 
 from sim.cli import CliError  # noqa: E402
 from sim.mapfile import MapFormatError, load_map, load_scenarios  # noqa: E402

@@ -7,7 +7,9 @@ IN.csv has a header naming the .fll's input variables (any order) and one
 sample per row in the variables' own units; values outside a variable's range
 saturate.  The model engine is models/dflc.py (bit-exact with the RTL); the
 icarus / verilator engines emit the stream top for the .fll
-(``dflc_stream_<stem>_<hash>``) and run the samples through it in cocotb.
+(``dflc_stream_<stem>_<hash>``; ``dflc_stream_table1``, the module ``make
+verilog`` emits, for the shipped default) and run the samples through it in
+cocotb (build/sim/<engine>/<module>/, reused while the .fll is unchanged).
 JSON keys: outputs (floats, output units), codes (output codes), zero_strength
 (booleans: no rule fired, the output is the .fll's default), cycles_per_sample,
 latency (clock cycles; the RTL engines report what they measured, the model
@@ -92,14 +94,23 @@ def read_csv(path, names):
 
 
 def rtl_params(fll_path, config, div, parallel):
-    """Copy the .fll under build/dflc_fll/ as <stem>_<hash>.fll: a stem that
-    names the emitted module and changes with the file's content."""
+    """The emitted top's parameters.  A controller shipped in models/
+    (``dflc_<stem>.fll``, byte for byte) is the module ``make verilog`` emits,
+    ``dflc_stream_<stem>`` (one build, shared); any other .fll is copied under
+    build/dflc_fll/ as <stem>_<hash>.fll: a stem that names the emitted module
+    and changes with the file's content."""
     data = Path(fll_path).read_bytes()
-    stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(fll_path).stem) or "fll"
-    tag = f"{stem}_{hashlib.sha1(data).hexdigest()[:8]}"
-    d = ROOT / "build" / "dflc_fll"
-    d.mkdir(parents=True, exist_ok=True)
-    (d / f"{tag}.fll").write_bytes(data)
+    tag = None
+    for shipped in sorted((ROOT / "models").glob("dflc_*.fll")):
+        if shipped.read_bytes() == data:
+            tag = shipped.stem[len("dflc_"):]
+            break
+    if tag is None:
+        stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(fll_path).stem) or "fll"
+        tag = f"{stem}_{hashlib.sha1(data).hexdigest()[:8]}"
+        d = ROOT / "build" / "dflc_fll"
+        d.mkdir(parents=True, exist_ok=True)
+        (d / f"{tag}.fll").write_bytes(data)
     params = {"fll": tag}
     if div != "lut":
         params["div"] = div
@@ -114,6 +125,7 @@ def run_rtl(params, codes, sim):
         job, result = Path(tmp) / "job.json", Path(tmp) / "result.json"
         job.write_text(json.dumps({"params": params, "codes": codes.tolist()}))
         log = ROOT / "build" / "dflc_fll" / f"sim_{sim}.log"
+        log.parent.mkdir(parents=True, exist_ok=True)
         run("dflc_stream", params, sim, "sim.dflc_job",
             env={"DFLC_JOB": job, "DFLC_RESULT": result}, log_file=log)
         return json.loads(result.read_text())

@@ -2,7 +2,8 @@
 
     python -m sim harmonic MAP --goal R,C [--goal R,C ...] [--start R,C ...]
         [--block NxM] [--iters I] [--schedule P1,P2,... | P1:STEP:PMAX]
-        [--engine model|icarus|verilator] [--json OUT] [--plot OUT.png]
+        [--engine model|icarus|verilator] [--block-exponents]
+        [--json OUT] [--plot OUT.png]
 
 MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free) or
 an image (.pgm/.png: dark = obstacle).  Cells are ROW,COL from the top left,
@@ -21,6 +22,14 @@ design per map size and p_max, and simulate slowly (hundreds to thousands of
 cycles per second): use them on small maps.  Free cells no goal can reach
 cannot get a gradient; they are reported ("unreachable") and left out of
 the convergence criterion.
+
+--block-exponents (beyond the paper, issue 10; model engine only, an RTL
+engine with it is a one-line error): every block keeps an exponent e_b, a
+mantissa v of block b stands for v / 2**(p+e_b), so far from the goal the
+p-bit word still holds p significant bits (models.harmonic.plan_exponents
+states the exponent rule and why it terminates).  "precision" is then the
+word's p; the JSON gains "exponents" (the final e_b per block, BR x BC) and
+"frac_bits" (p + max e_b: the potential's resolution).
 
 Trajectories: steepest 4-neighbour ascent from each --start (ties to the
 first of N, E, W, S) until a goal, on the final field.
@@ -66,6 +75,9 @@ def add_arguments(parser):
                         help=f"precisions, increasing (default {DEFAULT_SCHEDULE})")
     parser.add_argument("--engine", choices=ENGINES, default="model",
                         help="model (default), or the planner RTL on icarus / verilator")
+    parser.add_argument("--block-exponents", action="store_true",
+                        help="one exponent per block (issue 10, beyond the paper; model engine only): "
+                             "the word length follows the block, not the map")
     parser.add_argument("--json", metavar="OUT", help="write the result as JSON")
     parser.add_argument("--plot", metavar="OUT.png", help="plot map, potential (log scale) and trajectories")
 
@@ -144,18 +156,27 @@ def _plan_defaults():
     return DEFAULT_BLOCK, int(inspect.signature(plan).parameters["iters"].default)
 
 
-def run_engine(engine, obstacle, goals, block, iters, schedule):
+def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=False):
     """Plan with the model or the RTL; returns a dict with the PlanResult
-    fields (h and unreachable on the unpadded map)."""
+    fields (h and unreachable on the unpadded map).  With block exponents
+    (model only) also ``exponents`` (BR x BC) and ``frac_bits`` (h is then on
+    the common scale 2**-frac_bits)."""
     keys = ("h", "p", "converged", "maxima", "unreachable", "sweeps", "block_iterations",
             "check_iterations", "node_updates", "cycles", "levels")
     if engine == "model":
         from models.harmonic import plan
         try:
-            r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule))
+            r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule),
+                     block_exponents=block_exponents)
         except ValueError as e:
             raise CliError(str(e)) from None
-        return {k: getattr(r, k) for k in keys}
+        out = {k: getattr(r, k) for k in keys}
+        if block_exponents:
+            out["exponents"], out["frac_bits"] = r.exponents, r.frac_bits
+        return out
+    if block_exponents:
+        raise CliError(f"--engine {engine}: --block-exponents is built in the model only "
+                       "(the planner RTL has no exponent option yet); use --engine model")
     try:
         from tb.harmonic.planner_bench import run_planner_rtl
     except ImportError:
@@ -211,16 +232,18 @@ class _Ticker:
         print(file=sys.stderr, flush=True)
 
 
-def plan_map(grid, goals, starts, block, iters, schedule, engine="model"):
+def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_exponents=False):
     """The whole command without I/O: returns the JSON-ready dict and the
-    field (h at precision p, unpadded map)."""
+    field (h at precision p, unpadded map; with block exponents h is on the
+    common scale 2**-frac_bits and p is that scale)."""
     from models.harmonic import ascent_next, pad_to_blocks, reachable, trajectory
 
     height, width = grid.shape
     padded = pad_to_blocks(grid, block)
     reach = reachable(grid, goals)
-    res = run_engine(engine, grid, goals, block, iters, schedule)
+    res = run_engine(engine, grid, goals, block, iters, schedule, block_exponents)
     h, p = np.asarray(res["h"], dtype=object)[:height, :width], int(res["p"])
+    scale = int(res["frac_bits"]) if block_exponents else p
     goal_mask = np.zeros(grid.shape, dtype=bool)
     for g in goals:
         goal_mask[g] = True
@@ -231,9 +254,9 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model"):
         tr["reachable"] = bool(reach[s])
         trajectories.append(tr)
     unreachable = [[int(r), int(c)] for r, c in np.argwhere(~grid & ~reach)]
-    unit = 1 << p                  # int / int is correctly rounded at any p
+    unit = 1 << scale              # int / int is correctly rounded at any p
     potential = [[int(v) / unit for v in row] for row in h]
-    return {
+    out = {
         "height": height, "width": width, "engine": engine, "precision": p,
         "converged": bool(res["converged"]), "sweeps": int(res["sweeps"]),
         "block_iterations": int(res["block_iterations"]), "node_updates": int(res["node_updates"]),
@@ -242,7 +265,11 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model"):
         "block": list(block), "iters": iters, "schedule": list(schedule),
         "padded": list(padded.shape), "levels": _levels_json(res.get("levels") or []),
         "potential": potential, "unreachable": unreachable, "trajectories": trajectories,
-    }, (h, p)
+    }
+    if block_exponents:
+        out["exponents"] = [[int(e) for e in row] for row in res["exponents"]]
+        out["frac_bits"] = scale
+    return out, (h, scale)
 
 
 def _levels_json(levels):
@@ -260,7 +287,7 @@ def plot(path, grid, result, title):
     import matplotlib.pyplot as plt
 
     pot = np.array(result["potential"], dtype=float)
-    floor = 2.0 ** -result["precision"]
+    floor = 2.0 ** -result.get("frac_bits", result["precision"])
     field = np.where(grid, np.nan, np.log10(np.maximum(pot, max(floor, 1e-300))))
     fig, axes = plt.subplots(1, 2, figsize=(12, 5.6))
     axes[0].imshow(grid, cmap="gray_r", interpolation="nearest")
@@ -299,13 +326,17 @@ def run(args):
     schedule = parse_schedule(args.schedule or DEFAULT_SCHEDULE)
 
     t0 = time.time()
-    result, _ = plan_map(grid, goals, starts, block, iters, schedule, args.engine)
+    bexp = bool(getattr(args, "block_exponents", False))
+    if bexp and args.engine != "model":
+        raise CliError(f"--engine {args.engine}: --block-exponents is built in the model only "
+                       "(the planner RTL has no exponent option yet); use --engine model")
+    result, _ = plan_map(grid, goals, starts, block, iters, schedule, args.engine, bexp)
     seconds = time.time() - t0
 
     lines = [
         f"{path.name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), block "
         f"{block[0]}x{block[1]} (padded to {result['padded'][0]}x{result['padded'][1]}), I = {iters}, "
-        f"engine {args.engine}",
+        f"engine {args.engine}" + (", block exponents" if bexp else ""),
         f"precision {result['precision']} ("
         + ("converged: no local maximum" if result["converged"]
            else f"NOT converged: {result['maxima']} local maxima left at the schedule's end")
@@ -314,6 +345,10 @@ def run(args):
         f"{result['block_iterations']} block iterations, {result['node_updates']} node updates, "
         f"{result['cycles']} cycles ({seconds:.1f} s)",
     ]
+    if bexp:
+        ex = result["exponents"]
+        lines.append(f"block exponents e_b: {min(map(min, ex))}..{max(map(max, ex))} "
+                     f"(fraction bits {result['precision']}..{result['frac_bits']})")
     if result["unreachable"]:
         lines.append(f"{len(result['unreachable'])} free cell(s) no goal can reach (no gradient there)")
     for tr in result["trajectories"]:

@@ -9,7 +9,6 @@ import contextlib
 import fcntl
 import os
 import random
-import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -20,9 +19,6 @@ TIMESCALE = ("1ns", "1ps")
 # Waivers for what Amaranth's Verilog raises by construction, with the reasons
 # (lint/waivers.vlt); `make lint` and every Verilator build use the same file.
 VERILATOR_WAIVERS = ROOT / "lint" / "waivers.vlt"
-
-if str(ROOT) not in sys.path:
-    sys.path.insert(0, str(ROOT))
 
 
 def tool_env():

@@ -6,6 +6,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .mf_gen import bits_for
+from .pipe import check_pipe
 
 __all__ = ["Divider", "DIV_TYPES"]
 
@@ -22,9 +23,15 @@ class Divider(wiring.Component):
     ``models.dflc.Dflc.divide``.  ``Sw = 0`` gives ``zero_code`` and ``zero``.
 
     Timing: ``v_in`` with the sums at t; ``y``, ``zero`` and ``v_out`` at
-    t + 3 + cpr for both types (lut: ROM read, multiply, cpr registers, round;
-    array: register, the array in cpr + 1 register-separated groups of rows,
-    select).  ``cpr`` (Table 2 cpr9_no, div_array) = 0 .. 4 extra registers.
+    t + 2 + cpr for both types.  ``cpr`` = Table 2 cpr9_no (div_array),
+    0 .. min(4, op_sz), default 1: lut: the sums registered with the ROM read,
+    the product through ``cpr`` registers, round and select into the output
+    register; array: the sums registered, the array cut into max(cpr, 1)
+    groups of rows each followed by a register (none for 0), select into the
+    output register.  The input register is fixed (the integrators' sums
+    change with the next sample's first rule, and the LUT's synchronous ROM
+    read needs the address one cycle ahead); so is the output register (it
+    holds y for the FIFO write).
 
     Ports
     -----
@@ -32,12 +39,10 @@ class Divider(wiring.Component):
     y : Out(op_sz), zero : Out(1), v_out : Out(1)
     """
 
-    def __init__(self, config, sw_w, swc_w, cpr=0):
+    def __init__(self, config, sw_w, swc_w, cpr=1):
         if config.div_type not in DIV_TYPES:
             raise ValueError(f"div_type = {config.div_type!r}: expected one of {DIV_TYPES}")
-        if not isinstance(cpr, int) or not 0 <= cpr <= min(4, config.op_sz - 1):
-            raise ValueError(f"cpr_div = {cpr!r}: extra divider pipeline registers must be 0 .. "
-                             f"{min(4, config.op_sz - 1)}")
+        check_pipe({"cpr9_no": cpr}, op_sz=config.op_sz)
         self.config, self.sw_w, self.swc_w, self.cpr = config, sw_w, swc_w, cpr
         super().__init__({"sw": In(sw_w), "swc": In(swc_w), "v_in": In(1),
                           "y": Out(config.op_sz), "zero": Out(1), "v_out": Out(1)})
@@ -46,9 +51,9 @@ class Divider(wiring.Component):
         m = Module()
         c = self.config
         f = c.frac
-        # valid chain: v_in, v1, v2 (+ cpr), then v_out
+        # valid chain: v_in, v1 (+ cpr), then v_out
         vs = [self.v_in]
-        for k in range(2 + self.cpr):
+        for k in range(1 + self.cpr):
             v = Signal(name=f"v{k + 1}")
             m.d.sync += v.eq(vs[-1])
             vs.append(v)
@@ -65,9 +70,12 @@ class Divider(wiring.Component):
             m.d.comb += rp.addr.eq(self.sw)              # R arrives with sw1, swc1
             prod = Signal(self.swc_w + f + r + 1)
             z = Signal()
-            with m.If(v1):
-                m.d.sync += [prod.eq((swc1 << f) * rp.data), z.eq(sw1 == 0)]
-            for k in range(self.cpr):                    # CPR: registers after the multiplier
+            if self.cpr == 0:
+                m.d.comb += [prod.eq((swc1 << f) * rp.data), z.eq(sw1 == 0)]
+            else:
+                with m.If(v1):
+                    m.d.sync += [prod.eq((swc1 << f) * rp.data), z.eq(sw1 == 0)]
+            for k in range(self.cpr - 1):                # cpr9: registers after the multiplier
                 prod_d, z_d = Signal.like(prod, name=f"prod_d{k}"), Signal(name=f"z_d{k}")
                 m.d.sync += [prod_d.eq(prod), z_d.eq(z)]
                 prod, z = prod_d, z_d
@@ -81,11 +89,11 @@ class Divider(wiring.Component):
             m.d.comb += z.eq(sw1 == 0)
             rem, q = num, Signal(c.op_sz, name="q_in")
             m.d.comb += q.eq(0)
-            # Restoring array, MSB first, cut into cpr + 1 groups of rows with
-            # registers between them (CPR), the last group registered at v2.
+            # Restoring array, MSB first, cut into max(cpr9, 1) groups of rows,
+            # each followed by a register (cpr9 of them).
             rows = list(reversed(range(c.op_sz)))
-            groups = [rows[len(rows) * g // (self.cpr + 1): len(rows) * (g + 1) // (self.cpr + 1)]
-                      for g in range(self.cpr + 1)]
+            ng = max(self.cpr, 1)
+            groups = [rows[len(rows) * g // ng: len(rows) * (g + 1) // ng] for g in range(ng)]
             for g, group in enumerate(groups):
                 bits = []
                 for i in group:
@@ -98,6 +106,9 @@ class Divider(wiring.Component):
                     rem = nrem
                 nq = Signal(c.op_sz, name=f"q{g}")
                 m.d.comb += nq.eq(q | sum(b << i for b, i in bits))
+                if self.cpr == 0:
+                    q = nq
+                    break
                 rq, rr, rd, rz = (Signal(c.op_sz, name=f"q_r{g}"), Signal(len(num), name=f"rem_r{g}"),
                                   Signal(len(den), name=f"den_r{g}"), Signal(name=f"z_r{g}"))
                 m.d.sync += [rq.eq(nq), rr.eq(rem), rd.eq(den), rz.eq(z)]

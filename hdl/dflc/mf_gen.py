@@ -4,6 +4,8 @@ from amaranth.hdl import Array, Const, Module, Signal, signed, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from .pipe import check_pipe, delay
+
 __all__ = ["MfGen", "bits_for"]
 
 
@@ -26,20 +28,27 @@ class MfGen(wiring.Component):
     2^ip_sz words of 2*dy_ip + bits(MF_ip_no) bits per input (4096 x 20 bits
     for Table 1), far beyond the paper's ROM budget.
 
-    Timing: two register stages, each loaded only when its valid input is
-    high, so the result stays put while the rule selector walks its 2^n
-    combinations.
+    Timing: ``psr + cpr`` register stages (default 1 + 1), the segment and
+    degree registers loaded only when their valid input is high, so the result
+    stays put while the rule selector walks its 2^n combinations.
 
-    ======  ==================================================================
-    cycle   what happens
-    ======  ==================================================================
-    t       ``x`` with ``v_in`` high
-    t+1     segment registered (comparators + table)
-    t+2     ``base``, ``mu0``, ``mu1`` registered, ``v_out`` high for 1 cycle
-    ======  ==================================================================
+    ==========  ==============================================================
+    cycle       what happens
+    ==========  ==============================================================
+    t           ``x`` with ``v_in`` high
+    t+psr       psr >= 1: ``psr - 1`` plain delays of ``x`` / ``v_in``, then
+                the code and its segment registered (comparators + table)
+    t+psr+1     ``base``, ``mu0``, ``mu1`` registered (the degree register,
+                loaded by the valid), then ``cpr - 1`` plain delays;
+    t+psr+cpr   ``v_out`` high for 1 cycle
+    ==========  ==============================================================
 
-    ``cpr`` (Table 2 cpr3_no, trap_gen_p) = 0 .. 4 extra registers after the
-    multiply-add delay all outputs (and ``v_out``) by as many cycles.
+    ``psr`` = Table 2 psr1_no (route ip_set -> psr1 -> trap_gen_p), 0 .. 4;
+    0: the comparators and the table feed the multiply-add combinationally.
+    ``cpr`` = Table 2 cpr3_no (trap_gen_p), 1 .. 4: the degree register is
+    mandatory (it holds the sample's degrees for its 2^n combinations while
+    the input stream moves on); the others follow the multiply-add (plain
+    registers that synthesis may retime into it).
 
     Ports
     -----
@@ -50,10 +59,9 @@ class MfGen(wiring.Component):
     v_out : Out(1)         new degrees this cycle
     """
 
-    def __init__(self, spec, ip_sz, dy_ip, cpr=0):
-        if not isinstance(cpr, int) or not 0 <= cpr <= 4:
-            raise ValueError(f"cpr_mf = {cpr!r}: extra MF generator pipeline registers must be 0 .. 4")
-        self.spec, self.ip_sz, self.dy_ip, self.cpr = spec, ip_sz, dy_ip, cpr
+    def __init__(self, spec, ip_sz, dy_ip, psr=1, cpr=1):
+        check_pipe({"psr1_no": psr, "cpr3_no": cpr})
+        self.spec, self.ip_sz, self.dy_ip, self.psr, self.cpr = spec, ip_sz, dy_ip, psr, cpr
         if len(spec.seg_start) < 1 or spec.seg_start[0] != 0:
             raise ValueError(f"input {spec.name}: segment table must start at code 0")
         self.base_w = bits_for(len(spec.mfs) - 2)
@@ -74,8 +82,6 @@ class MfGen(wiring.Component):
 
         # Stage 1: which segment (thermometer count of the boundaries passed).
         seg = Signal(range(max(nseg, 2)))      # >= 1 bit: no zero-width wire for one segment
-        m.d.comb += seg.eq(sum((self.x >= s).as_unsigned() for s in spec.seg_start[1:])
-                           if nseg > 1 else 0)
         # Tables padded to a power of two (the last segment repeated) so that
         # every value of ``seg`` selects an entry (a complete case in Verilog).
         pad = (1 << len(seg)) - nseg
@@ -90,11 +96,24 @@ class MfGen(wiring.Component):
         m1 = [Signal(signed(m_w), name=f"m{k}_1") for k in (0, 1)]
         b1 = [Signal(signed(b_w), name=f"b{k}_1") for k in (0, 1)]
         v1 = Signal()
-        m.d.sync += v1.eq(self.v_in)
-        with m.If(self.v_in):
-            m.d.sync += [x1.eq(self.x), base1.eq(t_base[seg])]
-            m.d.sync += [m1[k].eq(t_m[k][seg]) for k in (0, 1)]
-            m.d.sync += [b1[k].eq(t_b[k][seg]) for k in (0, 1)]
+        if self.psr == 0:       # no psr1 register: segment lookup straight from the input
+            x0, v0 = self.x, self.v_in
+            dom = m.d.comb
+        else:                   # psr1 - 1 plain delays, then the segment register
+            x0, v0 = delay(m, [self.x, self.v_in], self.psr - 1, "psr")
+            dom = m.d.sync
+        m.d.comb += seg.eq(sum((x0 >= s).as_unsigned() for s in spec.seg_start[1:])
+                           if nseg > 1 else 0)
+        dom += v1.eq(v0)
+        if self.psr == 0:
+            m.d.comb += [x1.eq(x0), base1.eq(t_base[seg])]
+            m.d.comb += [m1[k].eq(t_m[k][seg]) for k in (0, 1)]
+            m.d.comb += [b1[k].eq(t_b[k][seg]) for k in (0, 1)]
+        else:
+            with m.If(v0):
+                m.d.sync += [x1.eq(x0), base1.eq(t_base[seg])]
+                m.d.sync += [m1[k].eq(t_m[k][seg]) for k in (0, 1)]
+                m.d.sync += [b1[k].eq(t_b[k][seg]) for k in (0, 1)]
 
         # Stage 2: mu = (x * M + B) >> shift (exact by construction, see above).
         v2 = Signal()
@@ -106,12 +125,8 @@ class MfGen(wiring.Component):
                 p = Signal(signed(p_w), name=f"p{k}")
                 m.d.comb += p.eq(x1 * m1[k] + b1[k])
                 m.d.sync += mu2[k].eq(p[spec.shift:spec.shift + self.dy_ip])
-        # CPR: plain delay registers (the held stage-2 value passes unchanged).
-        outs = [v2, base2, *mu2]
-        for k in range(self.cpr):
-            nxt = [Signal.like(o, name=f"{o.name}_d{k}") for o in outs]
-            m.d.sync += [a.eq(b) for a, b in zip(nxt, outs)]
-            outs = nxt
+        # cpr3 - 1 plain delay registers (the held stage-2 value passes unchanged).
+        outs = delay(m, [v2, base2, *mu2], self.cpr - 1, "d")
         m.d.comb += [self.v_out.eq(outs[0]), self.base.eq(outs[1]), self.mu0.eq(outs[2]),
                      self.mu1.eq(outs[3])]
         return m

@@ -8,12 +8,16 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFO
 from amaranth.lib.wiring import In, Out
 
-from models.dflc import load_fll
+from models.dflc import DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
 
-from .core import CPR_KEYS, DflcCore, latency
+from ..params import Constraint, Param, check
+
+from .core import DflcCore, latency
+from .pipe import PIPE_KEYS, check_pipe
 from .mf_gen import bits_for
 
-__all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth", "split_params"]
+__all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth", "split_params",
+           "core_from_params"]
 
 ROOT = Path(__file__).resolve().parents[2]
 # models/: the shipped controllers; tb/dflc/fll/: test fixtures;
@@ -41,22 +45,31 @@ def config_for(fll="table1", ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div="lut"
                     div_type=div, sel_op=op)
 
 
-def fifo_depth(config, parallel, **cpr):
+def fifo_depth(config, parallel, **pipe):
+    """Output FIFO depth = the credit count: ceil(L / P) + 2 (L the core's
+    latency at these generics, P the clocks per sample), so that a consumer
+    that is always ready never throttles the input."""
     p = 1 if parallel else 1 << config.n
-    return -(-latency(config, parallel, **cpr) // p) + 2
+    return -(-latency(config, parallel, **pipe) // p) + 2
 
 
-def stream_latency(config, parallel=False, **cpr):
+def stream_latency(config, parallel=False, **pipe):
     """Cycles from the i_stream handshake to o_stream.valid (empty output FIFO)."""
-    return latency(config, parallel, **cpr) + 1
+    return latency(config, parallel, **pipe) + 1
 
 
 def split_params(params):
-    """Top parameters -> (config_for kwargs, parallel, cpr kwargs)."""
+    """Top parameters -> (config_for kwargs, parallel, pipeline generics)."""
     p = dict(params)
     par = bool(p.pop("par", 0))
-    cpr = {k: p.pop(k) for k in CPR_KEYS if k in p}
-    return p, par, cpr
+    pipe = {k: p.pop(k) for k in PIPE_KEYS if k in p}
+    return p, par, pipe
+
+
+def core_from_params(**params):
+    """``hdl.emit``'s ``dflc_core``: the core of an emitted parameter set."""
+    p, par, pipe = split_params(params)
+    return DflcCore(config_for(**p), parallel=par, **pipe)
 
 
 class DflcStream(wiring.Component):
@@ -77,31 +90,63 @@ class DflcStream(wiring.Component):
 
     Keyword parameters (``hdl.emit`` TOPS ``dflc_stream``): ``fll`` (stem or
     path), ``ip_sz``, ``dy_ip``, ``mf_op_sz``, ``op_sz``, ``div`` (lut /
-    array), ``op`` (override sel_op), ``par`` (1: parallel option),
-    ``cpr_mf``, ``cpr_mult``, ``cpr_div`` (extra pipeline registers, see
-    :class:`core.DflcCore`).
+    array), ``op`` (override sel_op), ``par`` (1: parallel option), and the
+    pipeline generics of Table 2 ``psr1_no`` .. ``psr4_no``, ``cpr1_no`` ..
+    ``cpr9_no`` (register counts, see :class:`core.DflcCore`; defaults
+    :data:`core.PIPE_DEFAULTS`).  With an explicit ``config`` the generics
+    come as the ``pipe`` dict.
     """
 
-    def __init__(self, config=None, parallel=False, cpr=None, **kw):
+    # Keyword parameters; the widths' limits are load_fll's (models.dflc.WIDTH_LIMITS).
+    PARAMS = (
+        Param("fll", str, "table1", doc="a .fll path, or a stem: table1 = models/dflc_table1.fll"),
+        *(Param(k, int, d, lo=WIDTH_LIMITS[k][0], hi=WIDTH_LIMITS[k][1], doc=doc,
+                message="{name} = {value!r}: must be an integer in {lo}..{hi}")
+          for k, d, doc in (("ip_sz", 12, "input code bits"), ("dy_ip", 8, "MF degree bits"),
+                            ("mf_op_sz", 12, "singleton code bits (MF_op_sz)"),
+                            ("op_sz", 12, "output code bits"))),
+        Param("div", str, "lut", choices=DIV_TYPES, doc="divider (div_type)",
+              message="div_type = {value!r}: expected one of {choices}"),
+        Param("op", str, None, choices=SEL_OPS, none_ok=True,
+              doc="antecedent operator override (sel_op; default: the .fll's)",
+              message="sel_op = {value!r}: expected one of {choices}"),
+        Param("par", bool, 0, doc="1: parallel option, one sample per clock"),
+        *DflcCore.PARAMS,
+    )
+    CONSTRAINTS = (
+        Constraint("op_sz >= mf_op_sz", lambda p: p["op_sz"] >= p["mf_op_sz"],
+                   "op_sz = {op_sz} < MF_op_sz = {mf_op_sz}: the output must hold a singleton code"),
+    )
+
+    def __init__(self, config=None, parallel=False, pipe=None, **kw):
         if config is None:
-            kw, par, cpr_kw = split_params(kw)
+            check(self.PARAMS, self.CONSTRAINTS, **{**{p.name: p.default for p in self.PARAMS}, **kw})
+            kw, par, pipe_kw = split_params(kw)
             parallel = parallel or par
-            cpr = {**cpr_kw, **(cpr or {})}
+            pipe = {**pipe_kw, **(pipe or {})}
             config = config_for(**kw)
         elif kw:
             raise TypeError(f"unexpected parameters {sorted(kw)} with an explicit config")
-        self.config, self.parallel, self.cpr = config, bool(parallel), dict(cpr or {})
-        self.depth = fifo_depth(config, self.parallel, **self.cpr)
+        check_pipe(pipe, op_sz=config.op_sz)
+        self.config, self.parallel, self.pipe = config, bool(parallel), dict(pipe or {})
+        self.depth = fifo_depth(config, self.parallel, **self.pipe)
         c = config
         super().__init__({
             "i_stream": In(stream.Signature(data.ArrayLayout(c.ip_sz, c.n))),
             "o_stream": Out(stream.Signature(data.StructLayout({"y": c.op_sz, "zero": 1}))),
         })
 
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest."""
+        return {"initiation_interval_cycles": 1 if self.parallel else 1 << self.config.n,
+                "latency_cycles": stream_latency(self.config, self.parallel, **self.pipe),
+                "latency": "i_stream handshake to o_stream.valid, output FIFO empty",
+                "fifo_depth": self.depth}
+
     def elaborate(self, platform):
         m = Module()
         c = self.config
-        m.submodules.core = core = DflcCore(c, self.parallel, **self.cpr)
+        m.submodules.core = core = DflcCore(c, self.parallel, **self.pipe)
         m.submodules.fifo = fifo = SyncFIFO(width=c.op_sz + 1, depth=self.depth)
         inflight = Signal(range(self.depth + 1))
         room = Signal()

@@ -1,12 +1,15 @@
 """The n x m cellular array of the EDT/BFS core (paper 004, section IV)."""
 
+from dataclasses import replace
+
 from amaranth.hdl import Cat, ClockSignal, Const, Instance, Module, Mux, ResetSignal, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from models.edt_bfs import OFFSETS
 
-from .cell import EdtCell, cell_widths
+from ..params import check
+from .cell import MAX_SIDE, EdtCell, cell_widths
 
 __all__ = ["EdtArray"]
 
@@ -57,12 +60,16 @@ class EdtArray(wiring.Component):
         outside the array reads 0.
     """
 
+    # Both sides >= 3: an interior cell is the prototype.
+    PARAMS = tuple(replace(p, lo=3, message="array {name} {value!r}: must be an integer in {lo}..{hi} "
+                                            "(an interior cell is the prototype)")
+                   for p in EdtCell.PARAMS)
+
     def __init__(self, height, width, path=None):
         self.height, self.width = height, width
         self.path = path or default_path("edt_array", height, width)
+        check(self.PARAMS, height=height, width=width)
         w = self.w = cell_widths(height, width)
-        if height < 3 or width < 3:
-            raise ValueError(f"array {height}x{width}: both sides must be >= 3 (an interior cell is the prototype)")
         super().__init__({
             "shift": In(1), "step_edt": In(1), "step_cfr": In(1), "step_bfs": In(1),
             "k": In(w["k"]), "dfar": In(w["di"]),
@@ -73,6 +80,10 @@ class EdtArray(wiring.Component):
             "rd_dy": Out(signed(w["dy"])), "rd_cfr": Out(1), "rd_visited": Out(1),
             "rd_parent": Out(4),
         })
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest."""
+        return {"load_cycles": self.width, "step_cycles": 1, "readout_latency_cycles": 0}
 
     def elaborate(self, platform):
         m = Module()

@@ -6,6 +6,8 @@ from amaranth.lib.wiring import In, Out
 
 from models.edt_bfs import OFFSETS, widths
 
+from ..params import Param, check
+
 __all__ = ["EdtCell", "cell_widths"]
 
 MAX_SIDE = 256      # elaboration limit: the read-out and the widths are sized for it
@@ -13,9 +15,7 @@ MAX_SIDE = 256      # elaboration limit: the read-out and the widths are sized f
 
 def cell_widths(height, width):
     """Register widths of a cell of an ``height`` x ``width`` array (models.edt_bfs.widths), checked."""
-    for name, v in (("height", height), ("width", width)):
-        if not isinstance(v, int) or not 1 <= v <= MAX_SIDE:
-            raise ValueError(f"array {name} {v!r}: must be an integer in 1..{MAX_SIDE}")
+    check(EdtCell.PARAMS, height=height, width=width)
     w = widths(height, width)
     # the checks the formulas promise (stated in models.edt_bfs.widths)
     assert w["delta_max"] < 1 << w["delta"], (w["delta_max"], w["delta"])
@@ -79,6 +79,10 @@ class EdtCell(wiring.Component):
     combinational from the registers and the step inputs.
     """
 
+    PARAMS = tuple(Param(n, int, lo=1, hi=MAX_SIDE, doc=f"array {n} (sets the widths)",
+                         message="array {name} {value!r}: must be an integer in {lo}..{hi}")
+                   for n in ("height", "width"))
+
     def __init__(self, height, width):
         self.height, self.width = height, width
         w = self.w = cell_widths(height, width)
@@ -99,6 +103,10 @@ class EdtCell(wiring.Component):
             "cfr": Out(1), "parent": Out(4), "changed": Out(1),
         })
         super().__init__(ports)
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest."""
+        return {"step_cycles": 1, "changed": "combinational from the registers and the step inputs"}
 
     def elaborate(self, platform):
         m = Module()

@@ -6,6 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from models.edt_bfs import OFFSETS
 
+from ..params import check
 from .array import EdtArray, default_path
 from .cell import cell_widths
 
@@ -84,8 +85,11 @@ class EdtBfs(wiring.Component):
     default); see :class:`EdtArray`.
     """
 
+    PARAMS = EdtArray.PARAMS        # the array's (it is elaborated inside)
+
     def __init__(self, height, width, path=None):
         self.height, self.width = height, width
+        check(self.PARAMS, height=height, width=width)
         w = self.w = cell_widths(height, width)
         self.path = path or default_path("edt_bfs", height, width)
         self._bfs_bits = max(1, w["bfs_max"].bit_length())
@@ -99,6 +103,13 @@ class EdtBfs(wiring.Component):
             "path_found": Out(1),
             "start_err": Out(1),
         })
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest (models.edt_bfs.job_cycles)."""
+        h, w = self.height, self.width
+        return {"job_cycles": f"{w} + iterations_edt + 1 + iterations_bfs + path_len + {h * w}",
+                "load_cycles": w, "iteration_cycles": 1, "readout_cycles": h * w,
+                "note": "source always valid, sink always ready; back-pressure adds cycles"}
 
     def elaborate(self, platform):
         m = Module()

@@ -4,6 +4,7 @@ from amaranth.hdl import Cat, Module, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import Constraint, Param, check
 from .border import Border
 from .cluster import COLS, NODES, ROWS, Cluster
 
@@ -56,22 +57,36 @@ class Block(wiring.Component):
         later); a write also updates the border storage of the edge nodes.
     """
 
+    # hdl.emit's names: br, bc are ``blocks`` = (BR, BC).
+    PARAMS = (
+        Param("n", int, lo=ROWS, doc=f"block rows, a multiple of {ROWS}",
+              message=f"block rows n={{value!r}}: must be a positive multiple of {ROWS}"),
+        Param("m", int, lo=COLS, doc=f"block columns, a multiple of {COLS}",
+              message=f"block columns m={{value!r}}: must be a positive multiple of {COLS}"),
+        Param("br", int, 1, lo=1, doc="block rows of the map (BR)",
+              message="blocks: BR={value!r} must be an integer >= 1"),
+        Param("bc", int, 1, lo=1, doc="block columns of the map (BC)",
+              message="blocks: BC={value!r} must be an integer >= 1"),
+        Param("p_max", int, 30, lo=2, doc="largest precision",
+              message="precision p_max={value!r} is not supported: p must be at least 2"),
+        Param("depth", int, 1024, lo=1, doc="words per cluster RAM"),
+    )
+    CONSTRAINTS = (
+        Constraint(f"n % {ROWS} == 0", lambda p: p["n"] % ROWS == 0,
+                   f"block rows n={{n!r}}: must be a positive multiple of {ROWS}"),
+        Constraint(f"m % {COLS} == 0", lambda p: p["m"] % COLS == 0,
+                   f"block columns m={{m!r}}: must be a positive multiple of {COLS}"),
+        Constraint("br * bc * (p_max + 2) <= depth",
+                   lambda p: p["br"] * p["bc"] * (p["p_max"] + 2) <= p["depth"],
+                   "a map of {br}x{bc} = {b} blocks at p_max={p_max} needs "
+                   "{b} * (p_max+2) = {words} words per cluster RAM, but the RAM depth is {depth}",
+                   lambda p: {"b": p["br"] * p["bc"], "words": p["br"] * p["bc"] * (p["p_max"] + 2)}),
+    )
+
     def __init__(self, n, m, blocks=(1, 1), p_max=30, depth=1024):
-        if not isinstance(n, int) or n < ROWS or n % ROWS:
-            raise ValueError(f"block rows n={n!r}: must be a positive multiple of {ROWS}")
-        if not isinstance(m, int) or m < COLS or m % COLS:
-            raise ValueError(f"block columns m={m!r}: must be a positive multiple of {COLS}")
         BR, BC = blocks
-        if not (isinstance(BR, int) and isinstance(BC, int) and BR >= 1 and BC >= 1):
-            raise ValueError(f"blocks={blocks!r}: must be (BR, BC), both >= 1")
-        if not isinstance(p_max, int) or p_max < 2:
-            raise ValueError(f"precision p_max={p_max!r} is not supported: p must be at least 2")
+        check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=BR, bc=BC, p_max=p_max, depth=depth)
         stride = p_max + 2
-        if BR * BC * stride > depth:
-            raise ValueError(
-                f"a map of {BR}x{BC} = {BR * BC} blocks at p_max={p_max} needs "
-                f"{BR * BC} * (p_max+2) = {BR * BC * stride} words per cluster RAM, "
-                f"but the RAM depth is {depth}")
         self.n, self.m, self.BR, self.BC = n, m, BR, BC
         self.p_max, self.depth, self.stride = p_max, depth, stride
         self.CR, self.CC = n // ROWS, m // COLS

@@ -103,6 +103,12 @@ class Node(wiring.Component):
     stable: Out(1)
     local_max: Out(1)
 
+    PARAMS = ()         # no parameters (hdl.emit --list)
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest."""
+        return {"iteration_cycles": "p+2", "flags_valid": "stable/local_max at ph2 (cycle 2) of the next iteration"}
+
     def elaborate(self, platform):
         m = Module()
         # Mem: the stored word is the node's value as its neighbours see it.

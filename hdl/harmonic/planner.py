@@ -1,6 +1,8 @@
 """The harmonic planner top: block, border nodes, Control and Decision
 behind one host interface of valid/ready streams (paper 000, section 5)."""
 
+from dataclasses import replace
+
 from amaranth.hdl import Cat, Const, Module, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
@@ -111,6 +113,11 @@ class Planner(wiring.Component):
         Words per cluster RAM; needs BR*BC*(p_max+2) <= depth.
     """
 
+    # Block's parameters (it checks them), at the planner's defaults.
+    PARAMS = tuple(replace(p, default={"n": 6, "m": 12, "br": 2, "bc": 2}.get(p.name, p.default))
+                   for p in Block.PARAMS)
+    CONSTRAINTS = Block.CONSTRAINTS
+
     def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024):
         self.block = Block(n, m, blocks, p_max, depth)      # checks the parameters
         self.n, self.m, self.BR, self.BC = n, m, *blocks
@@ -121,6 +128,12 @@ class Planner(wiring.Component):
             "i_stream": In(stream.Signature(self.cmd_layout)),
             "o_stream": Out(stream.Signature(self.resp_layout)),
         })
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest (see Controller's table)."""
+        return {"iteration_cycles": "p+2", "block_visit_cycles": "K*(p+2)+6 for K iterations",
+                "response": "one o_stream beat per i_stream command, in order",
+                "run_cycles": "reported by STATUS (cycles field)"}
 
     def elaborate(self, platform):
         m = Module()

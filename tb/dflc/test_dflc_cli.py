@@ -1,6 +1,8 @@
-"""``python -m sim dflc``: results equal the model, errors are one line, the RTL engine agrees."""
+"""``python -m sim dflc``: results equal the model, errors are one line, the RTL engines
+(Icarus and Verilator, one shared ``dflc_stream_table1`` build each) agree."""
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -10,6 +12,7 @@ import pytest
 
 from models.dflc import DEFAULT_FLL, Dflc
 from sim.cli import CliError, main
+from tb.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 FIXTURES = Path(__file__).resolve().parent / "fll"
@@ -90,14 +93,34 @@ def test_errors_are_one_line(tmp_path, capsys):
         assert __import__("re").search(match, err), (match, err)
 
 
-def test_icarus_engine_matches_model(tmp_path):
+def test_rtl_params_share_the_shipped_build(tmp_path):
+    """The shipped controller is the module ``make verilog`` emits (one build for
+    every run, the regression's too); any other .fll gets a copy named by its content."""
+    from sim.dflc import rtl_params
+    copy = write(tmp_path, "mine.fll", DEFAULT_FLL.read_text())
+    assert rtl_params(copy, None, "lut", False) == {"fll": "table1"}
+    assert rtl_params(DEFAULT_FLL, None, "array", True) == {"fll": "table1", "div": "array", "par": 1}
+    changed = write(tmp_path, "mine2.fll", DEFAULT_FLL.read_text() + "\n")
+    p = rtl_params(changed, None, "lut", False)
+    assert re.fullmatch(r"mine2_[0-9a-f]{8}", p["fll"])
+    assert (ROOT / "build" / "dflc_fll" / f"{p['fll']}.fll").read_text() == changed.read_text()
+
+
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_rtl_engine_matches_model(tmp_path, sim):
+    """``--engine icarus|verilator`` as a user runs it (a subprocess) on the default
+    .fll: the codes, flags, clocks per sample and latency the RTL shows are the
+    model's and the design's (dflc_stream_table1: one build per simulator)."""
     rng = np.random.default_rng(5)
     vals = rng.uniform(-200, 200, (24, 2))
+    vals[:2] = [[180, -180], [0, 0]]
     csv = write(tmp_path, "in.csv", "phi1,phi2\n" + "\n".join(f"{a},{b}" for a, b in vals) + "\n")
     out = tmp_path / "o.json"
-    r = cli("--input", csv, "--engine", "icarus", "--json", out)
+    r = cli("--input", csv, "--engine", sim, "--json", out)
     assert r.returncode == 0, r.stderr[-2000:]
     res = json.loads(out.read_text())
+    assert res["engine"] == sim and len(res["codes"]) == len(vals)
     y, codes, zero = Dflc.from_fll(DEFAULT_FLL).evaluate(vals)
     assert res["codes"] == codes.tolist() and res["zero_strength"] == zero.tolist()
+    assert res["outputs"] == y.tolist()
     assert res["cycles_per_sample"] == 4 and res["latency"] == 13

@@ -1,8 +1,9 @@
 """DFLC stream top (hdl/dflc/top.py) against models.dflc, bit-exact, with cocotb-bus.
 
-One simulator build: the test top ``dflc_multi_setregress`` (hdl/dflc/multi.py)
-holds one DflcStream per configuration; each cocotb test below runs on every
-instance in turn:
+Two builds per simulator: the test top ``dflc_multi_setregress``
+(hdl/dflc/multi.py) holds one DflcStream per configuration, and the paper's
+default runs alone as ``dflc_stream_table1`` (the build the CLI test shares);
+each cocotb test below runs on every instance of the build in turn:
 
 * ``sweep``: a dense sweep of the input space (per input: every segment
   boundary / MF breakpoint and its +-1 codes, the extremes, and a grid of 64
@@ -18,12 +19,16 @@ instance in turn:
   stalled; afterwards the top is ready, emits nothing, and a fresh batch comes
   out exactly.
 
-Configurations (hdl/dflc/multi.py SETS["regress"]): the paper's default (Table 1, min,
-LUT divider, n = 2, 9 triangles, sequential); n = 3 with 5/3/4 MFs, prod,
-restoring array and missing rules; trapezoids with gaps (zero firing
-strength), max, LUT, parallel; 5/4 MFs, probor, array, parallel; n = 1
-sequential; n = 4 (16 rules per sample); with extra CPR pipeline registers
-in all but the default instance.
+Configurations: the paper's default (Table 1, min, LUT divider, n = 2, 9
+triangles, sequential, default pipeline; ``dflc_stream_table1``) and
+(hdl/dflc/multi.py SETS["regress"]) n = 3 with
+5/3/4 MFs, prod, restoring array and missing rules, every pipeline generic at
+its minimum; trapezoids with gaps (zero firing strength), max, LUT, parallel,
+the front generics at 4; 5/4 MFs, probor, array, parallel, the singleton route
+longer than the weight route; n = 1 with the paper's Table 2 generics; n = 1,
+array, every generic at 4 (latency 45); n = 4 (16 rules per sample), the back
+generics at 4.  ``cycles`` asserts each instance's latency against
+``hdl.dflc.core.latency`` of its generics and its 2^n (or 1) clocks per sample.
 """
 
 import itertools
@@ -44,22 +49,38 @@ from models.dflc import Dflc
 from tb.runner import SIMULATORS, run, seed_from_env
 
 SET = "regress"
-ONLY = os.environ.get("DFLC_ONLY")          # e.g. DFLC_ONLY=t1: one instance only
+ONLY = os.environ.get("DFLC_ONLY")          # e.g. DFLC_ONLY=n3: one instance only
+# The builds under test: the test top with its instances, and the Table 1
+# default alone as ``make verilog`` emits it (``dflc_stream_table1``, the build
+# ``python -m sim dflc --engine icarus|verilator`` runs on the default .fll and
+# test_dflc_cli.py shares; alone, its long sweep does not simulate six idle
+# instances every clock).
+BUILDS = {"multi": ("dflc_multi", {"set": SET}), "table1": ("dflc_stream", {"fll": "table1"})}
+TOP = os.environ.get("DFLC_TOP", "multi")
+# Stream latency of every instance, by hand from hdl/dflc/core.py's formula
+# (multi.py's comments); the cycles test asserts both agree with the RTL.
+LATENCIES = {"multi": {"n3": 13, "tr": 28, "or": 20, "n1": 20, "n1m": 46, "n4": 37},
+             "table1": {"": 13}}
 _CONFIGS = {}
 
 
+def prefix(key):
+    return f"{key}_" if key else ""
+
+
 def instances(dut):
-    """(key, config, mode, model) of every instance of the test top (mode:
-    ``parallel`` and the CPR settings, as ``stream_latency`` takes them); all
-    other instances idle (valid low, ready high)."""
+    """(key, config, mode, model) of every instance of the build under test
+    (mode: ``parallel`` and the pipeline generics, as ``stream_latency`` takes
+    them); all other instances idle (valid low, ready high)."""
     if not _CONFIGS:
-        for key, params in SETS[SET].items():
+        sets = SETS[SET] if TOP == "multi" else {"": BUILDS[TOP][1]}
+        for key, params in sets.items():
             p, par, cpr = split_params(params)
             config = config_for(**p)
             _CONFIGS[key] = (config, {"parallel": par, **cpr}, Dflc(config))
     for key in _CONFIGS:
-        getattr(dut, f"{key}_i_stream__valid").value = 0
-        getattr(dut, f"{key}_o_stream__ready").value = 1
+        getattr(dut, f"{prefix(key)}i_stream__valid").value = 0
+        getattr(dut, f"{prefix(key)}o_stream__ready").value = 1
     for key, (config, par, model) in _CONFIGS.items():
         if ONLY is None or key in ONLY.split(","):
             yield key, config, par, model
@@ -76,9 +97,9 @@ def start_clock(dut):
 async def new_bench(dut, key, config, **kw):
     """The fast DflcStream bench without kw, the cocotb-bus StreamBench with."""
     if kw:
-        bench = StreamBench(dut, config, prefix=f"{key}_", **kw)
+        bench = StreamBench(dut, config, prefix=prefix(key), **kw)
     else:
-        bench = DflcStream(dut, config, prefix=f"{key}_")
+        bench = DflcStream(dut, config, prefix=prefix(key))
     await bench.reset()
     return bench
 
@@ -181,10 +202,14 @@ async def _random_stalls(dut, bench, config, model, rng, ready_p):
 @cocotb.test()
 async def cycles(dut):
     start_clock(dut)
+    checked = {}
     for key, config, par, model in instances(dut):
         rng = random.Random(seed() + 1)
         bench = await new_bench(dut, key, config)
-        await _cycles(dut, bench, config, par, model, rng)
+        checked[key] = await _cycles(dut, bench, config, par, model, rng)
+    assert len(checked) == len(list(instances(dut)))
+    if ONLY is None:    # the generics really spread the latency (multi.py's comments)
+        assert checked == LATENCIES[TOP], checked
 
 
 async def _cycles(dut, bench, config, par, model, rng):
@@ -200,7 +225,8 @@ async def _cycles(dut, bench, config, par, model, rng):
     assert set(np.diff(outs)) == {p}, f"output spacing {sorted(set(np.diff(outs)))}, expected {p}"
     lat = outs[0] - ins[0]
     assert lat == stream_latency(config, **par), f"latency {lat}, documented {stream_latency(config, **par)}"
-    dut._log.info(f"cycles {config.name}: {p} per sample, latency {lat}")
+    dut._log.info(f"cycles {config.name} {par}: {p} per sample, latency {lat}")
+    return lat
 
 
 @cocotb.test()
@@ -236,9 +262,11 @@ async def _reset_mid_stream(dut, bench, config, par, model, rng):
     assert len(bench.outputs) == len(fresh), "nothing from before the reset may appear"
 
 
+@pytest.mark.parametrize("build", BUILDS)
 @pytest.mark.parametrize("sim", SIMULATORS)
-def test_dflc_stream(sim):
-    env = {"DFLC_SEED": seed_from_env()}
+def test_dflc_stream(sim, build):
+    env = {"DFLC_SEED": seed_from_env(), "DFLC_TOP": build}
     if ONLY:
         env["DFLC_ONLY"] = ONLY
-    run("dflc_multi", {"set": SET}, sim, "test_dflc_stream", env=env)
+    name, params = BUILDS[build]
+    assert run(name, params, sim, "test_dflc_stream", env=env) == 4

@@ -187,7 +187,7 @@ def test_rtl_engine_without_driver(capsys, monkeypatch):
 def test_rtl_engine_refuses_what_the_rtl_cannot_run(capsys):
     """A block that is not whole 3x6 clusters, a schedule that is not
     arithmetic: one line from the driver / Planner checks, before any build."""
-    for extra, message in ((["--block", "4x4"], "multiple of 3"),
+    for extra, message in ((["--block", "4x6"], "multiple of 3"), (["--block", "3x4"], "multiple of 6"),
                            (["--block", "3x6", "--schedule", "4,8,16"], "arithmetic")):
         rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "icarus", *extra], capsys)
         assert rc == 2 and message in err and len(err.strip().splitlines()) == 1, err
@@ -211,3 +211,53 @@ def test_subprocess_ok_and_errors(tmp_path):
     bad = _sub(ROOM, "--goal", "3,3", "--engine", "fpga")
     assert bad.returncode == 2 and "Traceback" not in bad.stderr
     assert bad.stderr.strip().splitlines() == [bad.stderr.strip()] and "invalid choice: 'fpga'" in bad.stderr
+
+
+# --- --block-exponents (issue 10; model engine only) -------------------------
+
+RANDOM = str(ROOT / "maps" / "random-32-32-10.map")
+
+
+def test_block_exponents_json(tmp_path, capsys):
+    """The JSON gains "exponents" (BR x BC) and "frac_bits"; the field is the
+    model's, on the common scale; at p = 16, where fixed point still has
+    local maxima on this map, every start reaches the goal."""
+    from models.harmonic import plan
+    from sim.mapfile import load_map
+    out = tmp_path / "e.json"
+    args = [RANDOM, "--goal", "29,6", "--start", "0,31", "--start", "31,31", "--block", "6x12",
+            "--schedule", "16", "--json", str(out)]
+    rc, text, _ = _run([*args, "--block-exponents"], capsys)
+    assert rc == 0, text
+    r = json.loads(out.read_text())
+    res = plan(load_map(RANDOM), [(29, 6)], block=(6, 12), schedule=(16,), block_exponents=True)
+    assert r["precision"] == 16 and r["converged"] and r["cycles"] == res.cycles
+    assert r["exponents"] == res.exponents.tolist() and np.array(r["exponents"]).shape == (6, 3)
+    assert r["exponents"][4][0] == 0 and r["frac_bits"] == 16 + max(map(max, r["exponents"])) > 16
+    pot = np.array(r["potential"])
+    assert pot.shape == (32, 32) and pot[29, 6] == 1.0
+    assert np.array_equal(pot, res.potential())
+    assert all(t["reached_goal"] for t in r["trajectories"]) and len(r["trajectories"]) == 2
+    assert "block exponents e_b: 0.." in text
+    # the same command in fixed point: no exponents in the JSON, and p = 16 is not enough
+    rc, text, _ = _run(args, capsys)
+    r = json.loads(out.read_text())
+    assert rc == 1 and not r["converged"] and "exponents" not in r and "frac_bits" not in r
+
+
+def test_block_exponents_rtl_engine_is_one_line(capsys):
+    for engine in ("icarus", "verilator"):
+        rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", engine, "--block-exponents"], capsys)
+        assert rc == 2 and text == "" and len(err.strip().splitlines()) == 1, err
+        assert f"--engine {engine}: --block-exponents is built in the model only" in err
+
+
+def test_block_exponents_subprocess(tmp_path):
+    ok = _sub(ROOM, "--goal", "30,31", "--start", "3,3", "--block", "6x12", "--schedule", "16:16:128",
+              "--block-exponents", "--json", str(tmp_path / "r.json"))
+    assert ok.returncode == 0 and "reaches goal (30, 31)" in ok.stdout, ok.stderr
+    r = json.loads((tmp_path / "r.json").read_text())
+    assert len(r["exponents"]) == 6 and r["frac_bits"] > r["precision"]
+    bad = _sub(ROOM, "--goal", "3,3", "--engine", "verilator", "--block-exponents")
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+    assert len(bad.stderr.strip().splitlines()) == 1 and "model only" in bad.stderr

@@ -1,0 +1,163 @@
+"""Parameter specifications of the emitted tops: one declaration per parameter.
+
+A top component declares its parameters once, as a class attribute beside its
+``__init__``::
+
+    PARAMS = (Param("p_max", int, lo=2, doc="largest precision"),)
+    CONSTRAINTS = (Constraint("p_max + 2 <= depth", lambda p: ..., "message {p_max}"),)
+
+and its ``__init__`` checks its arguments with :func:`check` (same messages as
+before: the component's own one-line errors).  ``python -m hdl.emit --list``
+and the manifests read the very same declarations, so the ranges a user sees
+are the ranges the component enforces, never a second copy.
+"""
+
+from dataclasses import dataclass, field
+
+__all__ = ["Param", "Constraint", "REQUIRED", "check", "describe", "parse"]
+
+
+class _Required:
+    def __repr__(self):
+        return "REQUIRED"
+
+
+REQUIRED = _Required()
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter: ``type`` is int, str or bool; ``lo`` / ``hi`` bound an int
+    (inclusive, None = unbounded); ``choices`` lists the allowed values;
+    ``message`` is the component's error text, formatted with ``name``,
+    ``value``, ``lo``, ``hi``, ``choices`` (default: a generic one)."""
+
+    name: str
+    type: type = int
+    default: object = REQUIRED
+    lo: int | None = None
+    hi: int | None = None
+    choices: tuple | None = None
+    doc: str = ""
+    message: str | None = None
+    none_ok: bool = False           # None is a valid value (e.g. "derived from the others")
+
+    def allowed(self):
+        """The allowed values, in words (for --list and messages)."""
+        if self.choices is not None:
+            return "one of " + ", ".join(str(c) for c in self.choices)
+        if self.type is bool:
+            return "0 or 1"
+        if self.type is int:
+            if self.lo is not None and self.hi is not None:
+                return f"{self.lo}..{self.hi}"
+            if self.lo is not None:
+                return f">= {self.lo}"
+            if self.hi is not None:
+                return f"<= {self.hi}"
+            return "any integer"
+        return "any string"
+
+    def error(self, value):
+        text = self.message or "{name} = {value!r}: must be {allowed}"
+        return ValueError(text.format(name=self.name, value=value, lo=self.lo, hi=self.hi,
+                                      choices=self.choices, allowed=self.allowed()))
+
+    def check(self, value):
+        """``value`` if allowed, else the component's ValueError."""
+        if value is None and (self.none_ok or self.default is None):
+            return value
+        if self.type is bool:
+            if value not in (0, 1, True, False) or isinstance(value, float):
+                raise self.error(value)
+            return value
+        if self.type is int and (not isinstance(value, int) or isinstance(value, bool)):
+            raise self.error(value)
+        if self.type is str and not isinstance(value, str):
+            raise self.error(value)
+        if self.choices is not None and value not in self.choices:
+            raise self.error(value)
+        if self.lo is not None and value < self.lo or self.hi is not None and value > self.hi:
+            raise self.error(value)
+        return value
+
+    def parse(self, text):
+        """A command-line value (``name=text``) -> a checked value of the right type."""
+        if self.none_ok and text.lower() == "none":
+            return None
+        if self.type in (int, bool):
+            try:
+                value = int(text, 0)
+            except ValueError:
+                raise ValueError(f"{self.name}={text}: expected an integer ({self.allowed()})") from None
+        else:
+            value = text
+        return self.check(value)
+
+    def describe(self):
+        d = {"name": self.name, "type": self.type.__name__, "allowed": self.allowed(), "doc": self.doc}
+        d["default"] = None if self.default is REQUIRED else self.default
+        d["required"] = self.default is REQUIRED
+        if self.lo is not None:
+            d["min"] = self.lo
+        if self.hi is not None:
+            d["max"] = self.hi
+        if self.choices is not None:
+            d["choices"] = list(self.choices)
+        return d
+
+
+@dataclass(frozen=True)
+class Constraint:
+    """A rule across parameters: ``test(values) -> bool``; ``message`` is
+    formatted with the values (and whatever ``extra(values)`` adds)."""
+
+    text: str
+    test: object = field(compare=False)
+    message: str = ""
+    extra: object = field(default=None, compare=False)
+
+    def check(self, values):
+        if not self.test(values):
+            more = self.extra(values) if self.extra else {}
+            raise ValueError((self.message or f"parameters violate {self.text}").format(**values, **more))
+
+
+def check(params, constraints=(), **values):
+    """Check ``values`` against the declarations (each parameter, then the
+    constraints, in declaration order); returns them.  Raises the component's
+    ValueError (TypeError for an unknown name)."""
+    names = {p.name for p in params}
+    unknown = sorted(set(values) - names)
+    if unknown:
+        raise TypeError(f"unknown parameter{'s' * (len(unknown) > 1)} {', '.join(unknown)}; "
+                        f"expected {', '.join(p.name for p in params)}")
+    for p in params:
+        if p.name in values:
+            p.check(values[p.name])
+    if all(p.name in values for p in params):
+        for c in constraints:
+            c.check(values)
+    return values
+
+
+def describe(params, constraints=()):
+    return {"parameters": [p.describe() for p in params],
+            "constraints": [c.text for c in constraints]}
+
+
+def parse(params, assignments):
+    """``["name=value", ...]`` -> {name: value} (each value parsed and checked)."""
+    by_name = {p.name: p for p in params}
+    out = {}
+    for a in assignments:
+        name, eq, text = a.partition("=")
+        if not eq or not name:
+            raise ValueError(f"{a!r}: parameters are name=value")
+        if name not in by_name:
+            known = ", ".join(by_name) or "none"
+            raise ValueError(f"unknown parameter {name!r}; this top takes: {known}")
+        if name in out:
+            raise ValueError(f"parameter {name} given twice")
+        out[name] = by_name[name].parse(text)
+    return out

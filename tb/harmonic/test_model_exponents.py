@@ -1,0 +1,256 @@
+"""Block exponents (issue 10): models.harmonic.plan(..., block_exponents=True).
+
+* e_max = 0 (every exponent pinned at 0) is plan() exactly: values, p,
+  sweeps, iterations, check iterations, cycles.
+* Termination and the invariant behind it, on random maps with several
+  blocks, I, headrooms, re-pick modes and small exponent bounds: every run
+  ends; the exact values (mantissa / 2**(p+e_b)) never fall from one event to
+  the next; 0 <= e_b <= e_max; goal blocks keep e = 0; within a precision
+  level e_b only rises; p + e_b never falls.
+* The end of a level is a fixed point of the update with conversions,
+  recomputed independently with exact fractions (floor, clamp) node by node.
+* Every value stays below scipy's sparse Dirichlet solve (the sub-solution
+  claim of the termination argument).
+* Cycles: each event's cycle increment follows the timing model (visits,
+  check passes, shift visits of re-picks).
+* On random-32-32-10, p = 16 (a level at which the fixed-point planner still
+  has local maxima) converges with exponents, exact-value local maxima are
+  0, and the ascent reaches the goal from every reachable cell.
+* convert_mantissa and the option checks.
+"""
+
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from harmonic_small_maps import corridor, spiral
+from models.harmonic import (
+    VISIT_OVERHEAD, ascent_reaches, convert_mantissa, local_max, plan, reachable, visit_cycles,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def _random_map(rows, cols, seed, density=0.2):
+    rng = np.random.default_rng(seed)
+    ob = rng.random((rows, cols)) < density
+    free = np.argwhere(~ob)
+    goal = tuple(int(x) for x in free[rng.integers(len(free))])
+    return ob, [goal]
+
+
+def _exact(mant, E, p, n, m):
+    """Exact values (Fractions) of a padded mantissa array."""
+    out = np.empty(mant.shape, dtype=object)
+    for (r, c), v in np.ndenumerate(mant):
+        out[r, c] = Fraction(int(v), 1 << (p + int(E[r // n, c // m])))
+    return out
+
+
+def _scaled(mant, E, p, n, m, F):
+    """Exact values times 2**F (F >= every p + e_b): integers, comparable."""
+    shift = np.repeat(np.repeat(F - p - np.asarray(E, dtype=object), n, axis=0), m, axis=1)
+    return np.array(mant, dtype=object) << shift
+
+
+def _fixed_point_violations(res, p):
+    """Nodes whose mantissa differs from the update of their neighbours, each
+    neighbour's exact value floored into the node's units and clamped at the
+    word's top: an independent restatement of the conversion rule."""
+    n, m = res.block
+    mant, E, const = res.mantissa, res.exponents, res.padded_const
+    val = _exact(mant, E, p, n, m)
+    rows, cols = mant.shape
+    cap = (1 << (p + 1)) - 1
+    bad = checked = 0
+    for r in range(rows):
+        for c in range(cols):
+            if const[r, c]:
+                continue
+            unit = 1 << (p + int(E[r // n, c // m]))
+            total = 0
+            for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
+                if 0 <= rr < rows and 0 <= cc < cols:
+                    q = val[rr, cc] * unit
+                    total += min(q.numerator // q.denominator, cap)
+            checked += 1
+            bad += (total >> 2) != int(mant[r, c])
+    return bad, checked
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_pinned_exponents_are_plan(seed):
+    ob, goals = _random_map(11, 17, seed)
+    for block, iters, sched in (((3, 6), 3, (6, 12, 24, 48)), ((4, 4), 2, (8, 16, 32))):
+        ref = plan(ob, goals, block=block, iters=iters, schedule=sched)
+        res = plan(ob, goals, block=block, iters=iters, schedule=sched, block_exponents=True, e_max=0)
+        assert (res.h == ref.h).all() and (res.padded_h == ref.padded_h).all()
+        for k in ("p", "converged", "maxima", "sweeps", "block_iterations", "check_iterations", "cycles",
+                  "node_updates"):
+            assert getattr(res, k) == getattr(ref, k), k
+        assert [lv["block_iterations"] for lv in res.levels] == [lv["block_iterations"] for lv in ref.levels]
+        assert res.frac_bits == res.p and not res.exponents.any() and res.repicks == 0
+
+
+CASES = [
+    # (map, block, iters, schedule, options)
+    ("random", (3, 6), 3, (6, 10, 14), dict()),
+    ("random", (4, 4), 2, (4, 8, 12, 16), dict(headroom=0)),
+    ("random", (3, 3), 4, (5, 9), dict(headroom=2, repick="check")),
+    ("random", (4, 5), 1, (6, 12), dict(e_max=4)),
+    ("corridor", (3, 4), 3, (6, 12, 18), dict()),
+    ("spiral", (4, 4), 2, (6, 10, 14, 18), dict(e_max=7)),
+    ("random", (3, 6), 2, (6, 10, 14), dict(repick="stable", ceiling=True)),
+]
+
+
+def _case_map(kind, seed):
+    if kind == "corridor":
+        return corridor(22)
+    if kind == "spiral":
+        return spiral(11)
+    return _random_map(12, 15, seed)
+
+
+@pytest.mark.parametrize("case", range(len(CASES)))
+def test_termination_invariant(case):
+    kind, block, iters, sched, opts = CASES[case]
+    ob, goals = _case_map(kind, 10 + case)
+    trace = []
+    res = plan(ob, goals, block=block, iters=iters, schedule=sched, block_exponents=True, trace=trace, **opts)
+    n, m = block
+    e_max = opts.get("e_max", 255)
+    goal_blocks = {(r // n, c // m) for r, c in goals}
+    prev = None
+    compared = levels_seen = coarsened = 0
+    F = max(p + int(E.max()) for _, p, E, _, _ in trace)
+    for event, p, E, mant, _ in trace:
+        assert E.min() >= 0 and E.max() <= e_max
+        for b in goal_blocks:
+            assert E[b] == 0
+        val = _scaled(mant, E, p, n, m, F)
+        if prev is not None:
+            pev, pp, pE, pval = prev
+            if event == "raise":
+                coarsened += int((E < pE).sum())
+            assert (val >= pval).all(), f"a value fell at {event}"
+            assert ((p + E) >= (pp + pE)).all(), "a block lost resolution"
+            if event != "raise":
+                assert p == pp and (E >= pE).all(), "an exponent fell within a level"
+            else:
+                levels_seen += 1
+            compared += val.size
+        prev = (event, p, E, val)
+    assert compared > 0 and trace[-1][0] == "check"
+    # the run ended at a fixed point of the update with conversions
+    bad, checked = _fixed_point_violations(res, res.p)
+    assert bad == 0 and checked > 0
+    # the exponents were exercised: re-picks in every case, and a saturated
+    # block's exponent lowered at a precision rise in these cases
+    assert res.repicks > 0 and res.exponents.max() > 0
+    assert (coarsened > 0) == (case in (0, 1, 3, 6)), coarsened
+    if "e_max" in opts:
+        assert res.exponents.max() <= opts["e_max"]
+
+
+def test_below_dirichlet_solution():
+    """Sub-solution: every exact value is at most the exact harmonic solution."""
+    from scipy.sparse import lil_matrix
+    from scipy.sparse.linalg import spsolve
+
+    for seed in (4, 5):
+        ob, goals = _random_map(12, 18, seed)
+        res = plan(ob, goals, block=(3, 6), iters=3, schedule=(8, 16, 24), block_exponents=True)
+        const = res.const
+        free = np.argwhere(~const)
+        index = {tuple(rc): i for i, rc in enumerate(free)}
+        A = lil_matrix((len(free), len(free)))
+        rhs = np.zeros(len(free))
+        for i, (r, c) in enumerate(free):
+            A[i, i] = 1.0
+            for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
+                if 0 <= rr < ob.shape[0] and 0 <= cc < ob.shape[1]:
+                    if (rr, cc) in index:
+                        A[i, index[(rr, cc)]] = -0.25
+                    elif (rr, cc) in goals:
+                        rhs[i] += 0.25
+        x = spsolve(A.tocsr(), rhs)
+        unit = 1 << res.frac_bits
+        got = np.array([int(res.h[r, c]) / unit for r, c in free])
+        assert (got <= x * (1 + 1e-9) + 1e-300).all()
+        assert (got > 0).sum() == len(free) - int((~reachable(ob, goals) & ~ob).sum())
+
+
+def test_cycles_follow_timing_model():
+    ob, goals = _random_map(12, 15, 7)
+    trace = []
+    iters = 3
+    res = plan(ob, goals, block=(3, 5), iters=iters, schedule=(6, 10, 14), block_exponents=True,
+               trace=trace)
+    B = res.blocks[0] * res.blocks[1]
+    counted = {"visit": 0, "repick": 0, "check": 0, "raise": 0}
+    for (_, _, pE, _, pc), (event, p, E, _, c) in zip(trace, trace[1:]):
+        delta = c - pc
+        moved = int((E != pE).sum())
+        if event == "visit":
+            k, rem = divmod(delta - VISIT_OVERHEAD, p + 2)
+            assert rem == 0 and 1 <= k <= iters
+        elif event in ("repick", "raise"):
+            assert delta == moved * visit_cycles(1, p)
+            assert event == "raise" or moved > 0
+        else:
+            assert delta == B * visit_cycles(1, p)
+        counted[event] += 1
+    assert trace[-1][4] == res.cycles
+    assert counted["visit"] > 0 and counted["check"] > 0 and counted["repick"] > 0
+
+
+def test_exponents_converge_where_fixed_point_cannot():
+    from sim.mapfile import load_map
+    ob = load_map(ROOT / "maps" / "random-32-32-10.map")
+    goals = [(29, 6)]                                    # the longest scenario's goal
+    fixed = plan(ob, goals, schedule=(16,))
+    assert not fixed.converged and fixed.maxima > 0
+    res = plan(ob, goals, schedule=(16,), block_exponents=True)
+    assert res.converged and res.p == 16 and res.exponents.max() > 0
+    assert res.exponents[4, 0] == 0                      # the goal's block (6x12 blocks)
+    h = np.array(res.padded_h, dtype=object)
+    pad = np.zeros((h.shape[0] + 2, h.shape[1] + 2), dtype=object)
+    pad[1:-1, 1:-1] = h
+    nb = (pad[:-2, 1:-1], pad[1:-1, 2:], pad[1:-1, :-2], pad[2:, 1:-1])
+    assert local_max(h, res.padded_const, nb).sum() == 0
+    reach = reachable(ob, goals)
+    cells = reach & ~ob
+    ok = ascent_reaches(res.h, goals, cells)
+    assert ok[cells].all() and cells.sum() > 500
+    assert res.potential().max() == 1.0
+
+
+def test_convert_mantissa():
+    p = 6                                    # top = 127
+    assert convert_mantissa(0b1011011, -3, p) == (0b1011, False)
+    assert convert_mantissa(5, 0, p) == (5, False)
+    assert convert_mantissa(5, 4, p) == (80, False)
+    assert convert_mantissa(5, 5, p) == (127, True)
+    assert convert_mantissa(0, 40, p) == (0, False)
+    assert convert_mantissa(1, 40, p) == (127, True)
+    assert convert_mantissa(127, -9, p) == (0, False)
+    arr = np.array([0, 1, 3, 8], dtype=np.int64)
+    out, clamped = convert_mantissa(arr, 5, p)
+    assert list(out) == [0, 32, 96, 127] and clamped and out.dtype == np.int64
+
+
+def test_option_errors():
+    ob, goals = _random_map(6, 6, 1)
+    with pytest.raises(ValueError, match="events"):
+        plan(ob, goals, block_exponents=True, events=[(1, (0, 0), "obstacle")])
+    with pytest.raises(ValueError, match="block_exponents=True only"):
+        plan(ob, goals, headroom=1)
+    with pytest.raises(ValueError, match="repick"):
+        plan(ob, goals, block_exponents=True, repick="never")
+    with pytest.raises(ValueError, match="headroom=-1"):
+        plan(ob, goals, block_exponents=True, headroom=-1)
+    with pytest.raises(ValueError, match="e_max=-2"):
+        plan(ob, goals, block_exponents=True, e_max=-2)

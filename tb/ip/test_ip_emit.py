@@ -1,0 +1,247 @@
+"""python -m hdl.emit: --list, manifests against the signature and the Verilog, bad parameters, lint.
+
+The listed ranges are the components' own: every declared bound is checked
+against the component class itself (it must refuse the value just outside).
+"""
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from amaranth.hdl import Shape
+from amaranth.lib import wiring
+
+from hdl import emit
+from hdl.dflc.top import config_for, stream_latency
+from hdl.params import REQUIRED
+from models.dflc import WIDTH_LIMITS
+from tb.runner import ROOT, VERILATOR_WAIVERS, tool_env
+
+# A small valid parameter set of every top (the required parameters and some).
+BASE = {
+    "harmonic_node": {},
+    "harmonic_counters": {"p_max": 6},
+    "harmonic_cluster": {"depth": 64},
+    "harmonic_block": {"n": 3, "m": 6, "p_max": 14, "depth": 64},
+    "harmonic_planner": {"n": 3, "m": 6, "br": 1, "bc": 2, "p_max": 14, "depth": 64},
+    "dflc_stream": {"fll": "table1"},
+    "dflc_core": {"fll": "table1"},
+    "dflc_multi": {},
+    "edt_cell": {"height": 5, "width": 7},
+    "edt_array": {"height": 5, "width": 7},
+    "edt_bfs": {"height": 5, "width": 7},
+}
+
+
+def cli(*args, cwd=None):
+    env = {**os.environ, "AMARANTH_USE_YOSYS": "builtin"}
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT), env.get("PYTHONPATH", "")])
+    return subprocess.run([sys.executable, "-m", "hdl.emit", *args], capture_output=True, text=True,
+                          cwd=cwd or ROOT, env=env, timeout=300)
+
+
+def test_list_shows_every_top_and_parameter():
+    r = cli("--list", "--json")
+    assert r.returncode == 0, r.stderr
+    tops = json.loads(r.stdout)
+    assert set(tops) == set(emit.TOPS) == set(BASE)
+    for name, t in tops.items():
+        decl, _ = emit.params_of(name)
+        assert [p["name"] for p in t["parameters"]] == [p.name for p in decl], name
+        for p in t["parameters"]:
+            assert {"type", "default", "required", "allowed"} <= set(p), (name, p)
+    # the DFLC widths' limits are load_fll's; the harmonic p_max bound the counters'
+    ip = {p["name"]: p for p in tops["dflc_stream"]["parameters"]}
+    for k, (lo, hi) in WIDTH_LIMITS.items():
+        assert (ip[k]["min"], ip[k]["max"]) == (lo, hi)
+    assert ip["div"]["choices"] == ["array", "lut"] and ip["par"]["allowed"] == "0 or 1"
+    assert tops["harmonic_cluster"]["constraints"] == ["p_max + 2 <= depth"]
+    assert {p["name"]: p["min"] for p in tops["edt_bfs"]["parameters"]} == {"height": 3, "width": 3}
+    text = cli("--list").stdout
+    assert all(f"{name}:" in text for name in emit.TOPS)
+    assert "p_max: int, >= 2, required" in text
+
+
+def test_every_parameter_is_declared():
+    """Each top's factory takes exactly its declared parameters (a new
+    constructor argument needs its Param beside the constructor)."""
+    import inspect
+    for name, factory in emit.TOPS.items():
+        assert hasattr(emit.SPECS.get(name, factory), "PARAMS"), f"{name}: no PARAMS declaration"
+        sig = inspect.signature(factory)
+        if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()) and name != "dflc_core":
+            continue                    # DflcStream(**kw): checked by its own PARAMS
+        takes = {p.name for p in sig.parameters.values()
+                 if p.kind is p.POSITIONAL_OR_KEYWORD and p.name not in ("path", "config", "parallel", "cpr", "signature")}
+        declared = {p.name for p in emit.params_of(name)[0]}
+        if name == "dflc_core":         # par, cpr_* named, the config's widths through **kw
+            assert takes <= declared, (name, takes - declared)
+        else:
+            assert takes == declared, (name, takes ^ declared)
+
+
+def test_declared_bounds_are_the_components_checks():
+    """Every declared bound: the value just outside it is refused by the
+    component class itself (not by hdl.emit), with the parameter named."""
+    checked = 0
+    for name, base in BASE.items():
+        decl, _ = emit.params_of(name)
+        for p in decl:
+            if p.type is not int:
+                continue
+            for bad in ([p.lo - 1] if p.lo is not None else []) + ([p.hi + 1] if p.hi is not None else []):
+                params = {**base, p.name: bad}
+                with pytest.raises(ValueError, match=re.escape(str(bad))):
+                    emit.TOPS[name](**params)        # the component, not the command line
+                checked += 1
+    assert checked >= 25, checked
+
+
+BAD = [
+    (["nope"], "unknown top 'nope'"),
+    (["dflc_stream", "foo=1"], "unknown parameter 'foo'"),
+    (["dflc_stream", "ip_sz=x"], "ip_sz=x: expected an integer"),
+    (["dflc_stream", "ip_sz=17"], "ip_sz = 17: must be an integer in 2..16"),
+    (["dflc_stream", "op_sz=8"], "op_sz = 8 < MF_op_sz = 12"),
+    (["dflc_stream", "div=fast"], "div_type = 'fast': expected one of"),
+    (["dflc_stream", "fll=nosuch"], "fll = 'nosuch': no such .fll"),
+    (["harmonic_cluster", "depth=64", "p_max=63"], "p_max=63 needs words of p_max+2=65 bits"),
+    (["harmonic_block", "n=4", "m=6"], "block rows n=4: must be a positive multiple of 3"),
+    (["harmonic_block", "m=6"], "missing parameter n"),
+    (["harmonic_planner", "br=3", "bc=3", "p_max=200"], "9 * (p_max+2) = 1818 words per cluster RAM"),
+    (["edt_bfs", "height=2", "width=8"], "array height 2: must be an integer in 3..256"),
+    (["edt_cell", "height=300", "width=8"], "array height 300: must be an integer in 1..256"),
+    (["harmonic_counters", "p_max"], "parameters are name=value"),
+]
+
+
+@pytest.mark.parametrize("args,message", BAD[:3], ids=lambda a: "_".join(a) if isinstance(a, list) else None)
+def test_bad_parameters_subprocess(args, message):
+    r = cli(*args, "-o", "build/ip_bad")
+    assert r.returncode == 2
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and "Traceback" not in r.stderr, r.stderr
+    assert r.stdout == ""
+
+
+def test_bad_parameters(capsys, tmp_path):
+    n = 0
+    for args, message in BAD:
+        with pytest.raises(SystemExit) as e:
+            emit.main([*args, "-o", str(tmp_path)])
+        err = capsys.readouterr().err.strip().splitlines()
+        assert e.value.code == 2 and len(err) == 1 and message in err[0], (args, err)
+        n += 1
+    assert n == len(BAD) and not any(tmp_path.iterdir())      # nothing written
+
+
+# Non-default parameter sets: manifest against the signature and the Verilog, then lint.
+SETS = [
+    ("dflc_stream", {"ip_sz": 10, "op_sz": 14, "div": "array", "par": 1, "cpr9_no": 3}),
+    ("harmonic_cluster", {"depth": 64, "p_max": 30}),
+    ("edt_bfs", {"height": 5, "width": 7}),
+]
+
+
+def _verilog_ports(text, module):
+    """The port list of ``module`` (an independent reading of the emitted Verilog)."""
+    body = text[text.index(f"module {module}("):]
+    body = body[:body.index("endmodule")]
+    ports = {}
+    for line in body.splitlines():
+        m = re.match(r"\s*(input|output)\s+(?:signed\s+)?(?:\[(\d+):0\])?\s*([\w$\\]+)\s*;", line)
+        if m:
+            ports[m[3]] = (m[1], int(m[2]) + 1 if m[2] else 1)
+    return ports
+
+
+@pytest.mark.parametrize("name,params", SETS, ids=[s[0] for s in SETS])
+def test_manifest_and_lint(name, params, tmp_path):
+    r = cli(name, *[f"{k}={v}" for k, v in params.items()], "-o", str(tmp_path))
+    assert r.returncode == 0, r.stderr
+    module = emit.top_name(name, params)
+    vfile, jfile = tmp_path / f"{module}.v", tmp_path / f"{module}.json"
+    assert r.stdout.split() == [str(vfile), str(jfile)]
+    man = json.loads(jfile.read_text())
+    assert man["module"] == module and man["top"] == name
+    assert all(man["parameters"][k] == v for k, v in params.items())
+
+    # every port of the signature, with its direction and width
+    comp = emit.TOPS[name](**params)
+    comp._MustUse__silence = True
+    sig_ports = {"__".join(map(str, path)): ("input" if member.flow == wiring.Flow.In else "output",
+                                             Shape.cast(value.shape()).width)
+                 for path, member, value in comp.signature.flatten(comp)}
+    man_ports = {p["name"]: (p["direction"], p["width"]) for p in man["ports"]}
+    assert man_ports == sig_ports
+    # ... which are the Verilog module's ports, besides the clock and the reset
+    vports = _verilog_ports(vfile.read_text(), module)
+    assert vports.pop("clk") == ("input", 1) and vports.pop("rst") == ("input", 1)
+    assert vports == man_ports
+    assert man["clock"]["name"] == "clk" and man["reset"] == {**man["reset"], "name": "rst", "synchronous": True}
+
+    # streams: valid / ready / payload roles; the payload fields tile the payload
+    streams = {p["stream"] for p in man["ports"] if "stream" in p}
+    assert streams == set(man["streams"]) and bool(streams) == (name != "harmonic_cluster")
+    for s in streams:
+        roles = {p["role"]: p for p in man["ports"] if p.get("stream") == s}
+        assert set(roles) == {"valid", "ready", "payload"}
+        assert roles["valid"]["direction"] != roles["ready"]["direction"]
+        assert roles["payload"]["direction"] == roles["valid"]["direction"]
+        bits = sorted((f["lsb"], f["msb"]) for f in roles["payload"]["fields"])
+        assert bits[0][0] == 0 and bits[-1][1] == roles["payload"]["width"] - 1
+        assert all(b[0] == a[1] + 1 for a, b in zip(bits, bits[1:])), bits
+
+    # the guaranteed figures
+    t = man["timing"]
+    if name == "dflc_stream":
+        assert t["initiation_interval_cycles"] == 1           # par=1
+        c = config_for(ip_sz=10, op_sz=14, div="array")
+        assert t["latency_cycles"] == stream_latency(c, True, cpr9_no=3) == 1 + 8 + 2 + 1
+        payload = next(p for p in man["ports"] if p["name"] == "i_stream__payload")
+        assert [(f["lsb"], f["msb"]) for f in payload["fields"]] == [(0, 9), (10, 19)]
+    elif name == "harmonic_cluster":
+        assert t["iteration_cycles"] == "p+2"
+    else:
+        assert t["load_cycles"] == 7 and t["readout_cycles"] == 35
+
+    # lint clean, as make lint
+    tool_env()
+    lint = subprocess.run(["verilator", "--lint-only", "-Wall", str(VERILATOR_WAIVERS), str(vfile)],
+                          capture_output=True, text=True, timeout=300)
+    assert lint.returncode == 0, lint.stderr[-3000:]
+
+
+def test_default_sets_command(tmp_path, monkeypatch, capsys):
+    """``python -m hdl.emit OUT_DIR`` (make verilog) writes every default set, manifests too."""
+    monkeypatch.setattr(emit, "DEFAULT_SETS", [("harmonic_counters", {"p_max": 1022}), ("harmonic_node", {})])
+    assert emit.main([str(tmp_path)]) == 0
+    names = sorted(p.name for p in tmp_path.iterdir())
+    assert names == ["harmonic_counters_pmax1022.json", "harmonic_counters_pmax1022.v",
+                     "harmonic_node.json", "harmonic_node.v"]
+    assert capsys.readouterr().out.split() == [str(tmp_path / "harmonic_counters_pmax1022.v"),
+                                               str(tmp_path / "harmonic_node.v")]
+    # the emitted manifest is the one --manifests writes without emitting
+    assert ((tmp_path / "harmonic_counters_pmax1022.json").read_text()
+            == emit.manifest_text("harmonic_counters", {"p_max": 1022}))
+
+
+def test_committed_manifests_are_current():
+    """docs/manifests/ (linked from the docs) holds every default set's manifest, as generated today."""
+    docs = ROOT / "docs" / "manifests"
+    want = {f"{emit.top_name(n, p)}.json": (n, p) for n, p in emit.DEFAULT_SETS}
+    assert sorted(f.name for f in docs.glob("*.json")) == sorted(want)
+    stale = [f for f, (n, p) in want.items() if (docs / f).read_text() != emit.manifest_text(n, p)]
+    assert not stale, f"stale manifests {stale}: python -m hdl.emit --manifests docs/manifests"
+
+
+def test_every_default_set_is_valid():
+    for name, params in emit.DEFAULT_SETS:
+        decl, constraints = emit.params_of(name)
+        given = {p.name: params.get(p.name, p.default) for p in decl}
+        assert all(v is not REQUIRED for v in given.values()), (name, params)
+        emit.manifest(name, params)         # builds the component: its checks pass
