@@ -168,6 +168,18 @@ def hardware(jobs=2):
         return dict(zip([t[0] for t in TOPS], pool.map(one, TOPS)))
 
 
+# Tops that do not fit the HX8K, and the placed top whose clock their jobs use.
+CLOCK_FROM = {
+    "planner": ("block", "the planner top does not fit the HX8K (its multipliers become LUTs: the iCE40 HX has "
+                         "no DSP), so its jobs use the 6x12 block's clock, the array every iteration runs on; "
+                         "Control and Decision are not timed"),
+    "edt_8x8": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
+                            "registered in the harness as its neighbours' registers drive them in the array)"),
+    "edt_16x16": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
+                              "registered in the harness as its neighbours' registers drive them in the array)"),
+}
+
+
 # --- simulation helpers -------------------------------------------------------
 
 def sim_speed_from(start, sim, prefix):
@@ -219,6 +231,9 @@ def bundled(name):
     path = ROOT / "maps" / name
     obstacle = load_map(path)
     scen = sorted(path.parent.glob(path.stem + "-even-*.scen"))
+    if not scen:            # no scenario file: the first and the last free cell
+        start, goal = _free_corners(obstacle)
+        return obstacle, goal, start
     s = max(load_scenarios(scen[0], obstacle), key=lambda s: s.optimal_length)
     return obstacle, tuple(s.goal), tuple(s.start)
 
@@ -229,11 +244,17 @@ def hw_time(cycles, mhz):
 
 def row(hw, core, job, top_key, cycles, cycles_source, software_=None, sw_seconds=None,
         paper="-", note=""):
+    """One job: resources of ``top_key``'s top; its clock, or where that top
+    does not fit the HX8K the clock named in CLOCK_FROM (and the note says so)."""
     h = hw.get(top_key, {})
-    t = hw_time(cycles, h.get("fmax_mhz"))
+    mhz = h.get("fmax_mhz")
+    if mhz is None and top_key in CLOCK_FROM and hw.get(CLOCK_FROM[top_key][0], {}).get("fmax_mhz"):
+        mhz = hw[CLOCK_FROM[top_key][0]]["fmax_mhz"]
+        note = "; ".join(x for x in (note, CLOCK_FROM[top_key][1]) if x)
+    t = hw_time(cycles, mhz)
     return {"core": core, "job": job, "top": h.get("top") or top_key,
             "ff": h.get("ff"), "lut4": h.get("lut4"), "mult": h.get("mult"), "bram": h.get("bram"),
-            "fmax_mhz": h.get("fmax_mhz"), "cycles": cycles, "cycles_source": cycles_source,
+            "fmax_mhz": mhz, "cycles": cycles, "cycles_source": cycles_source,
             "hw_seconds": t, "software": software_, "sw_seconds": sw_seconds,
             "speedup": sw_seconds / t if t and sw_seconds else None, "paper": paper, "note": note}
 
@@ -281,8 +302,8 @@ def harmonic_jobs(hw, speeds, problems):
                         f"model (cycle-exact), {HARMONIC_BLOCK[0]}x{HARMONIC_BLOCK[1]} blocks, I = {HARMONIC_I}, "
                         f"p 16:16:{r.p}, {r.block_iterations} block iterations", sw["software"], sw["sw_seconds"],
                         "100x to 400x (270x: 9500-node maze, 4 blocks, p = 255)",
-                        "clock: the synthesized planner top's (6x12 blocks, 2x2, depth 256); this map needs "
-                        "more blocks and a deeper RAM"))
+                        "resources: the synthesized planner top's (6x12 blocks, 2x2, depth 256); this map "
+                        "needs more blocks and a deeper RAM"))
     # The model's cycle count confirmed on the planner RTL (3x6 blocks: it simulates in minutes).
     ob, goal, _ = bundled("empty-16-16.map")
     model = plan(ob, [goal], block=(3, 6), iters=HARMONIC_I, schedule=HARMONIC_SCHEDULE)
@@ -296,7 +317,7 @@ def harmonic_jobs(hw, speeds, problems):
         rows.append(row(hw, "harmonic", f"converged field, empty-16-16, 3x6 blocks, p = {model.p}", "planner",
                         cyc, f"planner RTL ({sim}); model {model.cycles}"
                         + ("" if cyc == model.cycles else " DIFFERENT"),
-                        paper="-", note="clock: the synthesized planner top's"))
+                        paper="-"))
     return rows
 
 
@@ -352,6 +373,8 @@ def _fll_inputs(fll):
 EDT_MAPS = ("room-32-32-4.map", "random-32-32-10.map", "maze-32-32-2.map",
             "room-64-64-8.map", "random-64-64-10.map")
 EDT_DFAR = 0            # cfr = every free pixel (d_i > 0)
+EDT_BIG_NOTE = ("resources: the 16x16 array's (the largest synthesized); a map's job needs an array of the "
+                "map's size, 4x (32x32) or 16x (64x64) the cells")
 
 
 def _free_corners(grid):
@@ -381,23 +404,23 @@ def edt_jobs(hw, speeds, problems):
             _job_speed(speeds, speed, sim, "edt_bfs", {"height": size, "width": size})
             if cyc is not None:
                 rows.append(row(hw, "edt_bfs", f"room-32-32-4 crop {size}x{size}: EDT, cfr, BFS, path, read-out",
-                                "edt_cell", cyc, f"EDT/BFS RTL ({sim}); model {model.cycles}"
+                                "edt_8x8" if size == 8 else "edt_16x16", cyc, f"EDT/BFS RTL ({sim}); model {model.cycles}"
                                 + ("" if cyc == model.cycles else " DIFFERENT"),
-                                note="clock: the cell's (the array does not fit the HX8K)"))
+                                note="" if size <= 16 else EDT_BIG_NOTE))
     for name in EDT_MAPS:
         ob, goal, start = bundled(name)
         model = plan_path(ob, [goal], start, EDT_DFAR)
         sw = software.edt_bfs(ob, [goal], EDT_DFAR)
         compute = model.iterations_edt + 1 + model.iterations_bfs
-        rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): whole job", "edt_cell",
+        rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): whole job", "edt_16x16",
                         model.cycles, f"model (cycle-exact): EDT {model.iterations_edt} + cfr 1 + BFS "
                         f"{model.iterations_bfs} iterations, path {len(model.path)}, load and read-out",
                         sw["software"], sw["sw_seconds"], "43.1 us at 232 MHz (Table I, BFS)",
-                        "clock: the cell's (the array does not fit the HX8K)"))
-        rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): EDT + cfr + BFS only", "edt_cell",
+                        EDT_BIG_NOTE))
+        rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): EDT + cfr + BFS only", "edt_16x16",
                         compute, "model (cycle-exact): the computing cycles, without load, path and read-out",
                         sw["software"], sw["sw_seconds"], "43.1 us at 232 MHz (Table I, BFS)",
-                        "clock: the cell's"))
+                        EDT_BIG_NOTE))
     return rows
 
 
