@@ -373,6 +373,7 @@ def _fll_inputs(fll):
 EDT_MAPS = ("room-32-32-4.map", "random-32-32-10.map", "maze-32-32-2.map",
             "room-64-64-8.map", "random-64-64-10.map")
 EDT_DFAR = 0            # cfr = every free pixel (d_i > 0)
+EDT_SIZES = (8, 16, 32)  # RTL jobs on crops of room-32-32-4 (Verilator refuses > 256 cells: not simulated)
 EDT_BIG_NOTE = ("resources: the 16x16 array's (the largest synthesized); a map's job needs an array of the "
                 "map's size, 4x (32x32) or 16x (64x64) the cells")
 
@@ -387,12 +388,12 @@ def edt_jobs(hw, speeds, problems):
     rows = []
     room = load_map(ROOT / "maps" / "room-32-32-4.map")
     # RTL jobs on crops of room-32-32-4 and on the whole map: equal to the model?
-    for size, sims in ((8, ("icarus", "verilator")), (16, ("icarus", "verilator")), (32, ("icarus", "verilator"))):
+    for size in EDT_SIZES:
         grid = room[:size, :size]
         start, goal = _free_corners(grid)
         path = write_map(OUT / "maps" / f"room-crop-{size}.map", grid)
         model = plan_path(grid, [goal], start, EDT_DFAR)
-        for sim in sims:
+        for sim in ("icarus", "verilator"):
             out, speed = sim_cli(["edt", str(path), "--dfar", str(EDT_DFAR), "--goal", f"{goal[0]},{goal[1]}",
                                   "--start", f"{start[0]},{start[1]}"], sim, f"edt_bfs_height{size}_width{size}")
             cyc = out.get("cycles")
@@ -426,24 +427,45 @@ def edt_jobs(hw, speeds, problems):
 
 # --- 4. simulation speed ---------------------------------------------------------
 
-# Tops without a job of their own; the jobs' tops are probed too.
-PROBES = [("harmonic_node", {}), ("harmonic_cluster", {"depth": 1024}), ("harmonic_block", TOPS[2][3]),
-          ("edt_cell", {"height": 16, "width": 16})]
+def probe_tops():
+    """(name, params) of every simulated top: the hardware tops' simulation
+    parameter sets and the jobs' tops."""
+    from sim.dflc import rtl_params
+    from models.dflc import load_fll
+    from tb.harmonic.planner_bench import planner_params
+    table1 = load_fll(ROOT / "models" / "dflc_table1.fll")
+    return [("harmonic_node", {}), ("harmonic_cluster", {"depth": 1024}), ("harmonic_block", TOPS[2][3]),
+            ("harmonic_planner", planner_params((16, 16), (3, 6), HARMONIC_SCHEDULE[-1])),
+            ("dflc_stream", rtl_params(ROOT / "models" / "dflc_table1.fll", table1, "lut", False)),
+            ("dflc_stream", rtl_params(ROOT / "models" / "dflc_table1.fll", table1, "lut", True)),
+            ("edt_cell", {"height": 16, "width": 16}),
+            *(("edt_bfs", {"height": s, "width": s}) for s in EDT_SIZES)]
+
+
 PROBE_CYCLES = {"icarus": 20_000, "verilator": 200_000}
+# Verilator builds too long for a benchmark run (the probe says why instead).
+VERILATOR_SKIP = {
+    "harmonic_block": "not run: the 6x12 block's Verilator build takes 10+ minutes (tb/harmonic/planner_bench.py)",
+    "edt_bfs_height32_width32": "not run: a 32x32 array's Verilator build takes about 18 minutes (hdl/edt_bfs/README.md)",
+}
 
 
 def probes(speeds):
-    """Idle-clock probe (tb/simspeed.py) of every top: the simulator's own
-    cost per cycle, no Python in the loop."""
+    """Idle-clock probe (tb/simspeed.py) of every simulated top: the
+    simulator's own cost per cycle, no Python in the loop."""
     from tb.runner import run
-    for name, params in PROBES:
-        speeds.setdefault(top_name(name, params), {"name": name, "params": params})
-    for module, entry in speeds.items():
+    for name, params in probe_tops():
+        module = top_name(name, params)
+        entry = speeds.setdefault(module, {"name": name, "params": params})
         for sim in ("icarus", "verilator"):
+            skip = VERILATOR_SKIP.get(module, VERILATOR_SKIP.get(name)) if sim == "verilator" else None
+            if skip:
+                entry.setdefault(sim, {})["probe_error"] = skip
+                continue
             res = OUT / f"probe_{module}_{sim}.json"
             log(f"idle-clock probe {module} on {sim}")
             try:
-                run(entry["name"], entry["params"], sim, "tb.simspeed",
+                run(name, params, sim, "tb.simspeed",
                     env={"SIMSPEED_CYCLES": PROBE_CYCLES[sim], "SIMSPEED_RESULT": res},
                     log_file=OUT / f"probe_{module}_{sim}.log")
             except Exception as e:  # noqa: BLE001 - the report says what happened
