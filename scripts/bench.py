@@ -1,323 +1,637 @@
-"""Benchmark: what the harmonic planner's schedule costs, and how many bits it needs.
+"""make bench: the performance report of every core, measured in one run.
 
-All numbers come from the golden model (models.harmonic: plan, plan_explore),
-whose cycle counts follow the planner RTL's timing table (a block visit of K
-iterations at precision p costs K*(p+2) + VISIT_OVERHEAD cycles, a check pass
-one iteration per block).
+Writes BENCHMARKS.md (tables, the papers' own figures beside ours) and
+build/bench/results.json (the same figures as data).  Everything is measured
+by this run on this machine; only the papers' column is copied.
 
-1. Paper 4.5.2 (Fig. 5-6): block-synchronous + increasing precision against
-   one block at fixed p_max, on the labyrinth maze-32-32-2 and on
-   random-32-32-10 (goal of the longest scenario).  p_max is the precision the
-   increasing schedule ends at (the least of 16, 32, ... without local
-   maxima), so both runs compute the same field (bit for bit: from below every
-   schedule ends in the same fixed point).  The one block needs an array of
-   the whole map's size, a block schedule an n x m array, so runs are compared
-   by work = cycles x nodes of the array (node-cycles): the time ratio on
-   equal hardware.  Then the schedule choices the paper leaves open: I, block
-   size, precision step, block order, skipping still blocks.
-2. Paper 3.2.2 (Fig. 3): bits of precision needed (least p whose fixed point
-   has no local maximum, p scanned one by one) against the longest distance L
-   to the goal, on the bundled maps, corridors and spirals.
-3. The model's cycle count confirmed on the planner RTL for one small map
-   (tb/harmonic/planner_bench.py; --rtl none skips it).
+1. Hardware, per top: Debian's yosys ``synth_xilinx -nowidelut`` cell counts
+   (xc2v for the harmonic and EDT/BFS cores, xc3s for the DFLC: the papers'
+   families; FF = FD*, LUT4 = LUT1..4 + INV, MULT = MULT18X18*, BRAM =
+   RAMB16*), and a clock from nextpnr-ice40 place and route of the same
+   Verilog in the registered harness of scripts/fmax.py, on an iCE40-HX8K:
+   not the papers' Virtex/Spartan.  A top whose xc2v LUT4 count exceeds the
+   HX8K's 7680 logic cells is not placed ("does not fit").  The EDT/BFS
+   arrays are synthesized with their hierarchy kept (the cell module once,
+   counted per instance), the other tops flattened.
+2. Cycles per job, from simulations: the cluster RTL's cycles per iteration
+   at p = 128 (tb/harmonic/iteration_job.py), the `python -m sim` commands'
+   RTL engines (planner, DFLC stream, EDT/BFS array) on Icarus and Verilator,
+   which must equal the cycle-exact models (the report says "DIFFERENT" and
+   the run exits 1 otherwise); whole-map cycle counts of maps too large to
+   simulate come from the models, whose cycle counts the regression proves
+   equal to the RTL's.  Time per job = cycles / the top's iCE40 clock.
+3. The software a user would pick instead (scripts/software.py), timed on
+   the same inputs: median of several repeats (the count is in the table).
+4. Simulation speed: simulated cycles per wall second, from the cocotb
+   results of the runs above (sim_time / wall time of the test, build
+   excluded), and an idle-clock probe (tb/simspeed.py) for tops without a job.
+5. The regression's wall time (build/regression.json, written by make test).
+6. The harmonic schedule study (scripts/bench_harmonic.py) and, when present,
+   the block-exponent comparison (scripts/bench_exponents.py).
 
-    python scripts/bench.py [--out build/bench/report.md] [--rtl icarus|verilator|none]
+Synthesis and place-and-route results are cached under build/bench/cache by
+the hash of the Verilog (a re-run only redoes what changed).
+
+    python scripts/bench.py [--md BENCHMARKS.md] [--json build/bench/results.json]
+                            [--skip study,simspeed,...]
 """
 
 import argparse
-import math
+import hashlib
+import json
+import os
+import platform
+import re
+import subprocess
+import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
-from tb.harmonic.harmonic_small_maps import corridor, spiral  # noqa: E402
-from models.harmonic import plan, plan_explore, reachable  # noqa: E402
+import fmax as fmax_mod  # noqa: E402
+import software  # noqa: E402
+import synth  # noqa: E402
+from hdl.emit import emit, top_name  # noqa: E402
 from sim.mapfile import load_map, load_scenarios  # noqa: E402
 
-CLOCK_HZ = 150e6
-RTL_BLOCK, RTL_ITERS = (6, 12), 6          # plan()'s defaults: a 2x2-cluster block
+OUT = ROOT / "build" / "bench"
+CACHE = OUT / "cache"
+PERIOD_NS = 10                  # every cocotb bench here clocks at 10 ns
+HX8K_LCS = 7680
+PY = sys.executable
+PARTS = ("hardware", "harmonic", "dflc", "edt", "simspeed", "study")
+
+# (key, core, emitted top, params, yosys family, hierarchical synth, paper's figures)
+TOPS = [
+    ("node", "harmonic", "harmonic_node", {}, "xc2v", False,
+     "11 FF, 22 LUT4, 361 MHz (XC2V6000-5, Table 1)"),
+    ("cluster", "harmonic", "harmonic_cluster", {"depth": 1024}, "xc2v", False,
+     "198 FF, 398 LUT4 + 1 BRAM, 300 MHz (Table 2)"),
+    ("block", "harmonic", "harmonic_block",
+     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024}, "xc2v", False,
+     "48x96 block: 50699 FF, 101396 LUT4, 150 MHz (Table 3)"),
+    ("planner", "harmonic", "harmonic_planner",
+     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}, "xc2v", False,
+     "Control 844 slices, Decision 3p+682 slices"),
+    ("dflc", "dflc", "dflc_core", {"fll": "table1"}, "xc3s", False,
+     "1303 LUT4, 8 MULT18X18, 12 ROM64X1 + 54 ROM256X1, 85 MHz (core alone)"),
+    ("dflc_par", "dflc", "dflc_core", {"fll": "table1", "par": 1}, "xc3s", False,
+     "(beyond the paper)"),
+    ("edt_cell", "edt_bfs", "edt_cell", {"height": 16, "width": 16}, "xc2v", False,
+     "1188 gates (Table II, 'BFS and NNT'), 232 MHz (Table I)"),
+    ("edt_8x8", "edt_bfs", "edt_array", {"height": 8, "width": 8}, "xc2v", True, "-"),
+    ("edt_16x16", "edt_bfs", "edt_array", {"height": 16, "width": 16}, "xc2v", True, "-"),
+]
+
+
+def log(msg):
+    print(f"[bench {time.strftime('%H:%M:%S')}] {msg}", flush=True)
+
+
+# --- 1. hardware --------------------------------------------------------------
+
+def _cached(kind, text, compute):
+    key = hashlib.sha1((kind + "\0" + text).encode()).hexdigest()[:20]
+    path = CACHE / f"{kind}_{key}.json"
+    if path.exists():
+        return json.loads(path.read_text())
+    value = compute()
+    CACHE.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(value))
+    return value
+
+
+def _stat_cells(log_text, hierarchical):
+    """Cell counts of the final yosys ``stat``: the whole design (summed over
+    the hierarchy, per instance) when ``hierarchical``."""
+    stat = log_text.rsplit("Printing statistics.", 1)[1]
+    if hierarchical and "=== design hierarchy ===" in stat:
+        stat = stat.split("=== design hierarchy ===", 1)[1]
+    cells = stat.split("Number of cells:", 1)[1].split("\n\n", 1)[0]
+    return {k: int(n) for k, n in re.findall(r"^\s+(\w+)\s+(\d+)$", cells, re.M)}
+
+
+def synthesize(top):
+    key, core, name, params, family, hier, _ = top
+    work = OUT / "synth"
+    work.mkdir(parents=True, exist_ok=True)
+    v = emit(name, params, work)
+    module = top_name(name, params)
+    script = (f"read_verilog {v}; synth_xilinx -family {family} -top {module} "
+              f"{'' if hier else '-flatten '}-noiopad -noclkbuf -nowidelut; stat")
+
+    def compute():
+        logf = work / f"{module}.{family}.log"
+        t0 = time.time()
+        res = subprocess.run([synth.YOSYS, "-q", "-l", str(logf), "-p", script],
+                             capture_output=True, text=True)
+        if res.returncode:
+            return {"error": "yosys failed: " + res.stderr.strip()[-300:]}
+        cells = _stat_cells(logf.read_text(), hier)
+        sums, _ = synth.group(cells)
+        mult = sum(n for c, n in cells.items() if c.startswith("MULT18X18"))
+        return {"ff": sums["FF"], "lut4": sums["LUT"], "mult": mult, "bram": sums["BRAM"],
+                "cells": cells, "seconds": round(time.time() - t0, 1)}
+
+    log(f"synth {module} ({family}{', hierarchical' if hier else ''})")
+    return _cached("synth", script + "\n" + v.read_text(), compute)
+
+
+# Place-and-route parameters where the synthesized ones do not fit the HX8K's
+# 32 block RAMs: the clock does not depend on the RAM depth beyond its address width.
+FMAX_PARAMS = {"block": {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}}
+
+
+def place(top, lut4):
+    key, core, name, params, family, hier, _ = top
+    params = FMAX_PARAMS.get(key, params)
+    module = top_name(name, params)
+    if lut4 is not None and lut4 > HX8K_LCS:
+        return {"fmax_mhz": None, "error": f"does not fit the HX8K ({lut4} LUT4 > {HX8K_LCS} logic cells)"}
+    text = emit(name, params, OUT / "synth").read_text()
+    log(f"place and route {module} (iCE40)")
+    return _cached("fmax", fmax_mod.PART_NAME + "\n" + text,
+                   lambda: fmax_mod.fmax(name, params, OUT / "fmax"))
+
+
+def hardware(jobs=2):
+    """{key: {ff, lut4, mult, bram, fmax_mhz, ...}} for every top of TOPS."""
+    def one(top):
+        s = synthesize(top)
+        return {**s, **place(top, s.get("lut4"))}
+    with ThreadPoolExecutor(max_workers=jobs) as pool:
+        return dict(zip([t[0] for t in TOPS], pool.map(one, TOPS)))
+
+
+# Tops that do not fit the HX8K, and the placed top whose clock their jobs use.
+CLOCK_FROM = {
+    "planner": ("block", "the planner top does not fit the HX8K (its multipliers become LUTs: the iCE40 HX has "
+                         "no DSP), so its jobs use the 6x12 block's clock, the array every iteration runs on; "
+                         "Control and Decision are not timed"),
+    "edt_8x8": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
+                            "registered in the harness as its neighbours' registers drive them in the array)"),
+    "edt_16x16": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
+                              "registered in the harness as its neighbours' registers drive them in the array)"),
+}
+
+
+# --- simulation helpers -------------------------------------------------------
+
+def sim_speed_from(start, sim, prefix):
+    """Cycles per wall second of the newest cocotb run of a top named
+    ``prefix``* on ``sim`` that finished after ``start``: sim time / test time."""
+    runs = [p for p in (ROOT / "build" / "sim" / sim).glob(f"{prefix}*/run_*/results.xml")
+            if p.stat().st_mtime >= start]
+    if not runs:
+        return None
+    path = max(runs, key=lambda p: p.stat().st_mtime)
+    text = path.read_text()
+    wall = float(re.search(r'<testcase [^>]*time="([\d.]+)"', text).group(1))
+    ns = float(re.search(r'name="sim_time_duration" value="([\d.]+)"', text).group(1))
+    return {"top": path.parent.parent.name, "cycles": int(ns / PERIOD_NS), "seconds": wall,
+            "cycles_per_second": ns / PERIOD_NS / wall if wall else None}
+
+
+def sim_cli(args, sim, prefix):
+    """Run ``python -m sim ARGS --engine SIM --json`` and return (json, speed)."""
+    out = OUT / "cli" / f"{args[0]}_{sim}_{hashlib.sha1(' '.join(args).encode()).hexdigest()[:8]}.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    start = time.time()
+    log(f"python -m sim {' '.join(args)} --engine {sim}")
+    res = subprocess.run([PY, "-m", "sim", *args, "--engine", sim, "--json", str(out)],
+                         cwd=ROOT, capture_output=True, text=True)
+    if not out.exists() or out.stat().st_mtime < start:
+        return {"error": (res.stderr.strip() or res.stdout.strip())[-300:]}, None
+    return json.loads(out.read_text()), sim_speed_from(start, sim, prefix)
+
+
+def write_map(path, grid):
+    """A bool grid as a Moving AI .map file (for the commands' MAP argument)."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rows = ["".join("@" if b else "." for b in row) for row in grid]
+    path.write_text(f"type octile\nheight {grid.shape[0]}\nwidth {grid.shape[1]}\nmap\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def _job_speed(speeds, speed, sim, name, params):
+    """Record a job's simulation speed under its top (name, params), which
+    the idle-clock probes then also measure."""
+    entry = speeds.setdefault(top_name(name, params), {"name": name, "params": params})
+    if speed:
+        entry.setdefault(sim, {}).update(job=speed["cycles_per_second"], job_cycles=speed["cycles"])
 
 
 def bundled(name):
-    """(obstacle, [goal]) with the goal of the map's longest scenario."""
+    """(obstacle, goal, start) of a bundled map: its longest scenario."""
     path = ROOT / "maps" / name
     obstacle = load_map(path)
-    scen = path.with_name(path.stem + "-even-10.scen")
-    if scen.exists():
-        goal = max(load_scenarios(scen, obstacle), key=lambda s: s.optimal_length).goal
-    else:
-        goal = tuple(int(x) for x in np.argwhere(~obstacle)[-1])
-    return obstacle, [goal]
+    scen = sorted(path.parent.glob(path.stem + "-even-*.scen"))
+    if not scen:            # no scenario file: the first and the last free cell
+        start, goal = _free_corners(obstacle)
+        return obstacle, goal, start
+    s = max(load_scenarios(scen[0], obstacle), key=lambda s: s.optimal_length)
+    return obstacle, tuple(s.goal), tuple(s.start)
 
 
-def work(res, block):
-    return res.cycles * block[0] * block[1]
+def hw_time(cycles, mhz):
+    return cycles / (mhz * 1e6) if cycles is not None and mhz else None
 
 
-def ideal(res, block):
-    """Work without the RTL's per-visit costs (confirmation iteration, visit
-    overhead, check passes): counted iterations x (p+2) x block nodes, the
-    paper's own measure of Fig. 5."""
-    return sum(lv["block_iterations"] * (lv["p"] + 2) for lv in res.levels) * block[0] * block[1]
+def row(hw, core, job, top_key, cycles, cycles_source, software_=None, sw_seconds=None,
+        paper="-", note=""):
+    """One job: resources of ``top_key``'s top; its clock, or where that top
+    does not fit the HX8K the clock named in CLOCK_FROM (and the note says so)."""
+    h = hw.get(top_key, {})
+    mhz = h.get("fmax_mhz")
+    if mhz is None and top_key in CLOCK_FROM and hw.get(CLOCK_FROM[top_key][0], {}).get("fmax_mhz"):
+        mhz = hw[CLOCK_FROM[top_key][0]]["fmax_mhz"]
+        note = "; ".join(x for x in (note, CLOCK_FROM[top_key][1]) if x)
+    t = hw_time(cycles, mhz)
+    return {"core": core, "job": job, "top": h.get("top") or top_key,
+            "ff": h.get("ff"), "lut4": h.get("lut4"), "mult": h.get("mult"), "bram": h.get("bram"),
+            "fmax_mhz": mhz, "cycles": cycles, "cycles_source": cycles_source,
+            "hw_seconds": t, "software": software_, "sw_seconds": sw_seconds,
+            "speedup": sw_seconds / t if t and sw_seconds else None, "paper": paper, "note": note}
 
 
-def longest_distance(obstacle, goals):
-    """Largest 4-connected BFS distance from a goal to a reachable free cell."""
-    from collections import deque
-    dist = -np.ones(obstacle.shape, dtype=int)
-    queue = deque()
-    for g in goals:
-        dist[g] = 0
-        queue.append(tuple(g))
-    while queue:
-        r, c = queue.popleft()
-        for rr, cc in ((r - 1, c), (r, c + 1), (r, c - 1), (r + 1, c)):
-            if 0 <= rr < obstacle.shape[0] and 0 <= cc < obstacle.shape[1] \
-                    and not obstacle[rr, cc] and dist[rr, cc] < 0:
-                dist[rr, cc] = dist[r, c] + 1
-                queue.append((rr, cc))
-    return int(dist.max())
+# --- 2-3. jobs: harmonic --------------------------------------------------------
+
+HARMONIC_MAPS = ("room-32-32-4.map", "random-32-32-10.map", "maze-32-32-4.map", "maze-32-32-2.map",
+                 "room-64-64-8.map", "random-64-64-10.map", "den312d.map")
+HARMONIC_SCHEDULE = tuple(range(16, 257, 16))      # the command line's default 16:16:256
+HARMONIC_BLOCK, HARMONIC_I = (6, 12), 6           # the synthesized planner's block, plan()'s I
 
 
-# --- 1. cycles ---------------------------------------------------------------
-
-def cycles_section(name):
-    obstacle, goals = bundled(name)
-    whole = obstacle.shape
-    t0 = time.time()
-    sched16 = tuple(range(16, 513, 16))
-    ref = plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS, schedule=sched16)
-    p_max = ref.p
-    base = plan(obstacle, goals, block=whole, iters=10**9, schedule=(p_max,))
-    assert (base.h == ref.h).all(), "schedules must reach the same field"
-    base_work = work(base, whole)
+def harmonic_jobs(hw, speeds, problems):
+    from models.harmonic import plan
+    from tb.harmonic.planner_bench import planner_params
+    from tb.runner import run
     rows = []
-
-    def row(label, res, block, extra=""):
-        if extra == "same_p=False":
-            extra = "a finer field than the others"
-        else:
-            assert (res.h == ref.h).all() and res.p == p_max, label
-        w = work(res, block)
-        rows.append(f"| {label} | {block[0]}x{block[1]} | {res.p} | {res.sweeps} | {res.block_iterations} | "
-                    f"{res.cycles} | {w / 1e6:.2f} | **{base_wk / w:.2f}** | "
-                    f"{ideal(base, whole) / ideal(res, block):.2f} | {extra} |")
-        return base_wk / w
-
-    base_wk = base_work
-    row("one block, fixed p_max (baseline)", base, whole)
-    inc = list(range(16, p_max + 1, 16))
-    # Without the increasing schedule the planner cannot know p_max in advance:
-    # it would run at the schedule's top, 256, for example.
-    row("one block, fixed p = 256 (p_max not known in advance)",
-        plan(obstacle, goals, block=whole, iters=10**9, schedule=(256,)), whole, "same_p=False")
-    row("one block, increasing 16:16", plan(obstacle, goals, block=whole, iters=10**9, schedule=inc), whole)
-    row("RTL blocks, fixed p_max", plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS,
-                                        schedule=(p_max,)), RTL_BLOCK)
-    paper = row("RTL blocks, increasing 16:16 (the paper's algorithm)", ref, RTL_BLOCK,
-                f"I = {RTL_ITERS}")
-
-    var = []
-
-    def vrow(what, res, block, note=""):
-        if res.p == p_max:
-            assert (res.h == ref.h).all(), what
-        else:       # a finer precision step may stop at a lower p
-            note = (note + "; " if note else "") + f"ends at p = {res.p}"
-        w = work(res, block)
-        visits = res.sweeps * res.blocks[0] * res.blocks[1] - sum(lv.get("skipped", 0) for lv in res.levels)
-        var.append((base_wk / w, f"| {what} | {res.cycles} | {w / 1e6:.2f} | {base_wk / w:.2f} | "
-                                 f"{res.block_iterations / visits:.2f} | {note} |"))
-        return base_wk / w
-
-    # I, on the RTL block
-    for it in (1, 2, 3, 4, 8, 16):
-        vrow(f"6x12, I = {it}", plan(obstacle, goals, block=RTL_BLOCK, iters=it, schedule=inc), RTL_BLOCK)
-    # block size (I = 2: the best I of the 6x12 rows on both maps, see the table)
-    for blk in ((3, 6), (4, 4), (8, 8), (16, 16)):
-        vrow(f"{blk[0]}x{blk[1]}, I = 2", plan(obstacle, goals, block=blk, iters=2, schedule=inc), blk)
-    # precision step
-    for step in (8, 32, 64):
-        sched = list(range(step, p_max + 1, step))
-        if not sched or sched[-1] != p_max:
-            sched.append(p_max)
-        vrow(f"6x12, I = 6, step {step}", plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS,
-                                               schedule=sched), RTL_BLOCK)
-    # block order and skipping still blocks
-    for blk, it in ((RTL_BLOCK, RTL_ITERS), ((3, 6), 2), ((4, 4), 2)):
-        for order in ("raster", "serpentine", "alternate", "goal"):
-            for skip in (False, True):
-                if order == "raster" and not skip and blk == RTL_BLOCK:
-                    continue                           # = the paper's row
-                res = plan_explore(obstacle, goals, block=blk, iters=it, schedule=inc, order=order, skip=skip)
-                skipped = sum(lv.get("skipped", 0) for lv in res.levels)
-                vrow(f"{blk[0]}x{blk[1]}, I = {it}, order {order}{', skip still blocks' if skip else ''}",
-                     res, blk, f"{skipped} visits skipped" if skip else "")
-    best = plan_explore(obstacle, goals, block=(4, 4), iters=2, schedule=inc, order="goal", skip=True)
-    for step in (8, 32):
-        sched = list(range(step, p_max + 1, step))
-        if not sched or sched[-1] != p_max:
-            sched.append(p_max)
-        vrow(f"4x4, I = 2, order goal, skip, step {step}",
-             plan_explore(obstacle, goals, block=(4, 4), iters=2, schedule=sched, order="goal", skip=True), (4, 4))
-    for it in (1, 3, 4):
-        vrow(f"4x4, I = {it}, order goal, skip",
-             plan_explore(obstacle, goals, block=(4, 4), iters=it, schedule=inc, order="goal", skip=True), (4, 4))
-    vrow("8x8, I = 2, order goal, skip",
-         plan_explore(obstacle, goals, block=(8, 8), iters=2, schedule=inc, order="goal", skip=True), (8, 8))
-
-    seconds = time.time() - t0
-    L = longest_distance(obstacle, goals)
-    lines = [
-        f"### {name} (goal {goals[0]}, longest distance L = {L}, p_max = {p_max})",
-        "",
-        "| run | block | final p | sweeps | block iterations | cycles | work (M node-cycles) | "
-        "speed-up vs baseline (equal hardware) | speed-up without the per-visit costs | note |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-        *rows,
-        "",
-        f"At {CLOCK_HZ / 1e6:.0f} MHz the paper's algorithm on the 6x12 array takes "
-        f"{ref.cycles / CLOCK_HZ * 1e3:.2f} ms; the baseline on a {whole[0]}x{whole[1]} array "
-        f"{base.cycles / CLOCK_HZ * 1e3:.3f} ms.",
-        "",
-        "Schedule variations (increasing 16:16 unless said; speed-up against the same baseline):",
-        "",
-        "| variation | cycles | work (M node-cycles) | speed-up | Î (iterations per block visit, Fig. 6) | note |",
-        "|---|---|---|---|---|---|",
-        *[text for _, text in var],
-        "",
-        f"Best variation: {max(var)[1].split('|')[1].strip()} ({max(var)[0]:.2f}x; "
-        f"the paper's algorithm as the RTL runs it: {paper:.2f}x).  Model time {seconds:.0f} s.",
-        "",
-    ]
-    return lines, {"map": name, "paper": paper, "best": max(var)[0], "best_what": max(var)[1].split('|')[1].strip(),
-                   "skip_4x4": base_wk / work(best, (4, 4))}
+    # One iteration at the paper's p = 128, measured on the cluster RTL.
+    start, res = time.time(), OUT / "iteration.json"
+    log("cluster RTL: cycles per iteration at p = 128 (icarus)")
+    run("harmonic_cluster", {"depth": 1024}, "icarus", "tb.harmonic.iteration_job",
+        env={"ITER_P": 128, "ITER_N": 4, "ITER_RESULT": res}, log_file=OUT / "iteration.log")
+    done = json.loads(res.read_text())["done_cycles"]
+    gaps = sorted(set(np.diff(done).tolist()))
+    per_iter = gaps[0] if len(gaps) == 1 else None
+    if per_iter != 130:
+        problems.append(f"cluster iteration at p=128 took {gaps} cycles, not p+2 = 130")
+    _job_speed(speeds, sim_speed_from(start, "icarus", "harmonic_cluster_depth1024"), "icarus",
+               "harmonic_cluster", {"depth": 1024})
+    rng = np.random.default_rng(36)
+    block = rng.random((36, 66)) < 0.1
+    sw = software.jacobi_iteration(block, [(35, 65)])
+    rows.append(row(hw, "harmonic", "one iteration, 36x66 block, p = 128", "block", per_iter,
+                    "cluster RTL (icarus), done-to-done", sw["software"] + " (10% random obstacles)",
+                    sw["sw_seconds"], "100 us/iteration on a 2 GHz Pentium 4; p+2 cycles at 150 MHz; 'up to 100x'",
+                    "clock: the 6x12 block top's (a 36x66 block is the same array, larger)"))
+    # Whole maps: the model's cycles (cycle-exact), one confirmed on the RTL below.
+    for name in HARMONIC_MAPS:
+        ob, goal, _ = bundled(name)
+        log(f"harmonic model on {name}")
+        r = plan(ob, [goal], block=HARMONIC_BLOCK, iters=HARMONIC_I, schedule=HARMONIC_SCHEDULE)
+        sw = software.dirichlet_solve(ob, [goal])
+        rows.append(row(hw, "harmonic", f"converged field, {name[:-4]} ({ob.shape[0]}x{ob.shape[1]}), p = {r.p}",
+                        "planner", r.cycles if r.converged else None,
+                        f"model (cycle-exact), {HARMONIC_BLOCK[0]}x{HARMONIC_BLOCK[1]} blocks, I = {HARMONIC_I}, "
+                        f"p 16:16:{r.p}, {r.block_iterations} block iterations", sw["software"], sw["sw_seconds"],
+                        "100x to 400x (270x: 9500-node maze, 4 blocks, p = 255)",
+                        "resources: the synthesized planner top's (6x12 blocks, 2x2, depth 256); this map "
+                        "needs more blocks and a deeper RAM"))
+    # The model's cycle count confirmed on the planner RTL (3x6 blocks: it simulates in minutes).
+    ob, goal, _ = bundled("empty-16-16.map")
+    model = plan(ob, [goal], block=(3, 6), iters=HARMONIC_I, schedule=HARMONIC_SCHEDULE)
+    for sim in ("icarus", "verilator"):
+        out, speed = sim_cli(["harmonic", "maps/empty-16-16.map", "--goal", f"{goal[0]},{goal[1]}"],
+                             sim, "harmonic_planner")
+        cyc = out.get("cycles")
+        if cyc != model.cycles:
+            problems.append(f"planner RTL on {sim}: {out.get('error') or cyc} cycles, model {model.cycles}")
+        _job_speed(speeds, speed, sim, "harmonic_planner", planner_params(ob.shape, (3, 6), HARMONIC_SCHEDULE[-1]))
+        rows.append(row(hw, "harmonic", f"converged field, empty-16-16, 3x6 blocks, p = {model.p}", "planner",
+                        cyc, f"planner RTL ({sim}); model {model.cycles}"
+                        + ("" if cyc == model.cycles else " DIFFERENT"),
+                        paper="-"))
+    return rows
 
 
-# --- 2. bits needed ------------------------------------------------------------
+# --- jobs: DFLC --------------------------------------------------------------------
 
-def bits_needed(obstacle, goals, p_limit=1022):
-    """Least p (scanned 2, 3, ...) whose fixed point has no local maximum.
-    One block, the precision raised by one bit per level: every level ends in
-    relax's fixed point at that p (the least fixed point), so this is the
-    least p of the single-block planner."""
-    res = plan(obstacle, goals, block=obstacle.shape, iters=10**9, schedule=range(2, p_limit + 1))
-    return res.p if res.converged else None
-
-
-def magnify(obstacle, goals, k):
-    big = np.kron(obstacle, np.ones((k, k), dtype=bool)).astype(bool)
-    return big, [(r * k, c * k) for r, c in goals]
-
-
-def bits_section():
-    cases = []
-    for name in ("empty-16-16.map", "room-32-32-4.map", "random-32-32-10.map", "maze-32-32-2.map", "den312d.map"):
-        cases.append((name, *bundled(name)))
-    for name in ("room-32-32-4.map", "random-32-32-10.map"):
-        ob, goals = bundled(name)
-        cases.append((name + " x2", *magnify(ob, goals, 2)))
-    for length in (8, 16, 32, 64):
-        cases.append((f"corridor {length}", *corridor(length)))
-    for size in (7, 11, 15, 19):
-        cases.append((f"spiral {size}x{size}", *spiral(size)))
+def dflc_jobs(hw, speeds, problems):
+    from hdl.dflc.top import stream_latency
+    from sim.dflc import rtl_params
+    from models.dflc import Dflc, load_fll
+    fll = ROOT / "models" / "dflc_table1.fll"
+    model = Dflc(load_fll(fll))
+    rng = np.random.default_rng(3)
+    n = 1000
+    lo = [v.minimum for v in _fll_inputs(fll)]
+    hi = [v.maximum for v in _fll_inputs(fll)]
+    values = rng.uniform(lo, hi, size=(n, len(lo)))
+    csv = OUT / "dflc_samples.csv"
+    csv.write_text(",".join(model.input_names) + "\n" + "\n".join(",".join(f"{x:.4f}" for x in r) for r in values) + "\n")
+    many = rng.uniform(lo, hi, size=(100_000, len(lo)))
+    log("pyfuzzylite on the Table 1 controller")
+    sw = software.fuzzylite_engine(fll, many)
     rows = []
-    for label, ob, goals in cases:
-        t0 = time.time()
-        p = bits_needed(ob, goals)
-        L = longest_distance(ob, goals)
-        n = int(reachable(ob, goals).sum())
-        rows.append((label, ob.size, n, L, p, time.time() - t0))
+    for key, par in (("dflc", False), ("dflc_par", True)):
+        want_cps = 1 if par else 1 << model.config.n
+        want_lat = stream_latency(model.config, par)
+        got = {}
+        for sim in ("icarus", "verilator"):
+            out, speed = sim_cli(["dflc", "--input", str(csv)] + (["--parallel"] if par else []), sim, "dflc_stream")
+            got[sim] = (out.get("cycles_per_sample"), out.get("latency"))
+            if got[sim] != (want_cps, want_lat):
+                problems.append(f"DFLC {key} on {sim}: {out.get('error') or got[sim]}, model {(want_cps, want_lat)}")
+            _job_speed(speeds, speed, sim, "dflc_stream", rtl_params(fll, model.config, "lut", par))
+        cps, lat = got["verilator"] if got["verilator"][0] else got["icarus"]
+        what = "parallel option" if par else "Table 1 controller"
+        src = (f"DFLC stream RTL (icarus, verilator): {cps} clocks/sample, latency {lat}"
+               + ("" if all(g == (want_cps, want_lat) for g in got.values()) else " DIFFERENT"))
+        paper = "-" if par else "4 clocks/sample (78.3 ns at 51.1 MHz in the SoC), 9 pipeline stages"
+        rows.append(row(hw, "dflc", f"one sample, {what}, single call", key, cps, src,
+                        sw["software"] + " (one call per sample)", sw["sw_seconds"], paper))
+        rows.append(row(hw, "dflc", f"one sample, {what}, vectorized", key, cps, src,
+                        sw["software"] + f" (numpy arrays of {sw['vectorized_samples']} samples)",
+                        sw["vectorized_seconds_per_sample"], paper))
+    return rows
+
+
+def _fll_inputs(fll):
+    import fuzzylite as fl
+    return fl.FllImporter().from_file(str(fll)).input_variables
+
+
+# --- jobs: EDT/BFS ------------------------------------------------------------------
+
+EDT_MAPS = ("room-32-32-4.map", "random-32-32-10.map", "maze-32-32-2.map",
+            "room-64-64-8.map", "random-64-64-10.map")
+EDT_DFAR = 0            # cfr = every free pixel (d_i > 0)
+EDT_SIZES = (8, 16, 32)  # RTL jobs on crops of room-32-32-4 (Verilator refuses > 256 cells: not simulated)
+EDT_BIG_NOTE = ("resources: the 16x16 array's (the largest synthesized); a map's job needs an array of the "
+                "map's size, 4x (32x32) or 16x (64x64) the cells")
+
+
+def _free_corners(grid):
+    free = np.argwhere(~grid)
+    return tuple(int(x) for x in free[0]), tuple(int(x) for x in free[-1])
+
+
+def edt_jobs(hw, speeds, problems):
+    from models.edt_bfs import plan_path
+    rows = []
+    room = load_map(ROOT / "maps" / "room-32-32-4.map")
+    # RTL jobs on crops of room-32-32-4 and on the whole map: equal to the model?
+    for size in EDT_SIZES:
+        grid = room[:size, :size]
+        start, goal = _free_corners(grid)
+        path = write_map(OUT / "maps" / f"room-crop-{size}.map", grid)
+        model = plan_path(grid, [goal], start, EDT_DFAR)
+        for sim in ("icarus", "verilator"):
+            out, speed = sim_cli(["edt", str(path), "--dfar", str(EDT_DFAR), "--goal", f"{goal[0]},{goal[1]}",
+                                  "--start", f"{start[0]},{start[1]}"], sim, f"edt_bfs_height{size}_width{size}")
+            cyc = out.get("cycles")
+            if cyc is None:
+                note = f"not simulated: {out.get('error')}"
+                log(f"EDT {size}x{size} on {sim}: {note}")
+            elif cyc != model.cycles:
+                problems.append(f"EDT/BFS {size}x{size} on {sim}: {cyc} cycles, model {model.cycles}")
+            _job_speed(speeds, speed, sim, "edt_bfs", {"height": size, "width": size})
+            if cyc is not None:
+                rows.append(row(hw, "edt_bfs", f"room-32-32-4 crop {size}x{size}: EDT, cfr, BFS, path, read-out",
+                                "edt_8x8" if size == 8 else "edt_16x16", cyc, f"EDT/BFS RTL ({sim}); model {model.cycles}"
+                                + ("" if cyc == model.cycles else " DIFFERENT"),
+                                note="" if size <= 16 else EDT_BIG_NOTE))
+    for name in EDT_MAPS:
+        ob, goal, start = bundled(name)
+        model = plan_path(ob, [goal], start, EDT_DFAR)
+        sw = software.edt_bfs(ob, [goal], EDT_DFAR)
+        compute = model.iterations_edt + 1 + model.iterations_bfs
+        rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): whole job", "edt_16x16",
+                        model.cycles, f"model (cycle-exact): EDT {model.iterations_edt} + cfr 1 + BFS "
+                        f"{model.iterations_bfs} iterations, path {len(model.path)}, load and read-out",
+                        sw["software"], sw["sw_seconds"], "43.1 us at 232 MHz (Table I, BFS)",
+                        EDT_BIG_NOTE))
+        rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): EDT + cfr + BFS only", "edt_16x16",
+                        compute, "model (cycle-exact): the computing cycles, without load, path and read-out",
+                        sw["software"], sw["sw_seconds"], "43.1 us at 232 MHz (Table I, BFS)",
+                        EDT_BIG_NOTE))
+    return rows
+
+
+# --- 4. simulation speed ---------------------------------------------------------
+
+def probe_tops():
+    """(name, params) of every simulated top: the hardware tops' simulation
+    parameter sets and the jobs' tops."""
+    from sim.dflc import rtl_params
+    from models.dflc import load_fll
+    from tb.harmonic.planner_bench import planner_params
+    table1 = load_fll(ROOT / "models" / "dflc_table1.fll")
+    return [("harmonic_node", {}), ("harmonic_cluster", {"depth": 1024}), ("harmonic_block", TOPS[2][3]),
+            ("harmonic_planner", planner_params((16, 16), (3, 6), HARMONIC_SCHEDULE[-1])),
+            ("dflc_stream", rtl_params(ROOT / "models" / "dflc_table1.fll", table1, "lut", False)),
+            ("dflc_stream", rtl_params(ROOT / "models" / "dflc_table1.fll", table1, "lut", True)),
+            ("edt_cell", {"height": 16, "width": 16}),
+            *(("edt_bfs", {"height": s, "width": s}) for s in EDT_SIZES)]
+
+
+PROBE_CYCLES = {"icarus": 20_000, "verilator": 200_000}
+# Verilator builds too long for a benchmark run (the probe says why instead).
+VERILATOR_SKIP = {
+    "harmonic_block": "not run: the 6x12 block's Verilator build takes 10+ minutes (tb/harmonic/planner_bench.py)",
+    "edt_bfs_height32_width32": "not run: a 32x32 array's Verilator build takes about 18 minutes (hdl/edt_bfs/README.md)",
+}
+
+
+def probes(speeds):
+    """Idle-clock probe (tb/simspeed.py) of every simulated top: the
+    simulator's own cost per cycle, no Python in the loop."""
+    from tb.runner import run
+    for name, params in probe_tops():
+        module = top_name(name, params)
+        entry = speeds.setdefault(module, {"name": name, "params": params})
+        for sim in ("icarus", "verilator"):
+            skip = VERILATOR_SKIP.get(module, VERILATOR_SKIP.get(name)) if sim == "verilator" else None
+            if skip:
+                entry.setdefault(sim, {})["probe_error"] = skip
+                continue
+            res = OUT / f"probe_{module}_{sim}.json"
+            log(f"idle-clock probe {module} on {sim}")
+            try:
+                run(name, params, sim, "tb.simspeed",
+                    env={"SIMSPEED_CYCLES": PROBE_CYCLES[sim], "SIMSPEED_RESULT": res},
+                    log_file=OUT / f"probe_{module}_{sim}.log")
+            except Exception as e:  # noqa: BLE001 - the report says what happened
+                entry.setdefault(sim, {})["probe_error"] = f"{type(e).__name__}: {str(e)[:200]}"
+                continue
+            r = json.loads(res.read_text())
+            entry.setdefault(sim, {})["probe"] = r["cycles"] / r["seconds"]
+
+
+# --- report ---------------------------------------------------------------------------
+
+def _fmt(x, unit=""):
+    if x is None:
+        return "—"
+    if isinstance(x, float):
+        if unit == "s":
+            for scale, u in ((1, "s"), (1e-3, "ms"), (1e-6, "µs"), (1e-9, "ns")):
+                if abs(x) >= scale:
+                    return f"{x / scale:.3g} {u}"
+            return f"{x / 1e-12:.3g} ps"
+        return f"{x:,.3g}" if abs(x) < 1000 else f"{x:,.0f}"
+    return f"{x:,}" if isinstance(x, int) else str(x)
+
+
+def markdown(data, hw, extra):
+    m = data["machine"]
     lines = [
-        "| map | nodes | reachable free | longest distance L | bits needed p | log2(reachable) (Connolly) | "
-        "p / log2(L) | p / L | model s |",
+        "# Benchmarks", "",
+        f"Generated by `make bench` (scripts/bench.py) on {data['date']}, {m}. "
+        "Every figure below was measured by that run except the papers' column. "
+        "build/bench/results.json holds the same figures as data.", "",
+        "## Hardware", "",
+        "Resources: Debian's yosys 0.23 `synth_xilinx -nowidelut` (xc2v = Virtex-II for the harmonic "
+        "and EDT/BFS cores, xc3s = Spartan-3 for the DFLC: the papers' families). Clock: nextpnr-ice40 "
+        f"place and route on an **{fmax_mod.PART_NAME.split(',')[0]}** (Lattice iCE40, not the papers' Virtex/"
+        "Spartan), the top between registered ports (scripts/fmax.py), so the figure is the core's "
+        "register-to-register timing.", "",
+        "| top | family | FF | LUT4 | MULT18X18 | BRAM | iCE40 clock (MHz) | iCE40 logic cells | paper |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    for label, size, n, L, p, s in rows:
-        lines.append(f"| {label} | {size} | {n} | {L} | {p} | {math.log2(n):.1f} | "
-                     f"{p / math.log2(L):.1f} | {p / L:.2f} | {s:.1f} |")
-    return lines, rows
+    for key, core, name, params, family, hier, paper in TOPS:
+        h = hw[key]
+        util = (h.get("utilization") or {}).get("ICESTORM_LC", "").replace(" ", "")
+        clock = _fmt(h.get("fmax_mhz")) if h.get("fmax_mhz") else h.get("error", "—")
+        lines.append(f"| {top_name(name, params)}{' (hierarchical)' if hier else ''} | {family} | {_fmt(h.get('ff'))} | "
+                     f"{_fmt(h.get('lut4'))} | {_fmt(h.get('mult'))} | {_fmt(h.get('bram'))} | {clock} | {util or '—'} | {paper} |")
+    lines += ["", "## Jobs: hardware time against the software a user would pick", "",
+              f"Hardware time = cycles / the top's iCE40 clock above. Software: median of "
+              f"{software.REPEATS} runs after a warm-up (pyfuzzylite single calls: 3 runs of 50 calls; "
+              "vectorized: 3 runs), on this machine.", "",
+              "| core | job | cycles | cycles from | clock (MHz) | hardware time | software | software time | "
+              "speed-up | paper |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in data["rows"]:
+        lines.append(f"| {r['core']} | {r['job']} | {_fmt(r['cycles'])} | {r['cycles_source']} | {_fmt(r['fmax_mhz'])} | "
+                     f"{_fmt(r['hw_seconds'], 's')} | {r['software'] or '—'} | {_fmt(r['sw_seconds'], 's')} | "
+                     f"{_fmt(r['speedup'])}{'×' if r['speedup'] else ''} | {r['paper']} |")
+    notes = sorted({r["note"] for r in data["rows"] if r["note"]})
+    if notes:
+        lines += ["", "Notes: " + "; ".join(notes) + "."]
+    lines += ["", "## Simulation speed", "",
+              "Simulated clock cycles per wall-clock second, build excluded. *Probe*: tb/simspeed.py, reset "
+              "and then the clock runs with the inputs at 0 for "
+              f"{PROBE_CYCLES['icarus']:,} (Icarus) or {PROBE_CYCLES['verilator']:,} (Verilator) cycles, one "
+              "wake-up of Python: the simulator's own cost. *Job*: the jobs above, sim time over the cocotb "
+              "test's wall time, with the Python drivers in the loop (what a test pays).", "",
+              "| top | Icarus probe | Icarus job | Verilator probe | Verilator job |", "|---|---|---|---|---|"]
+    for top, by in sorted(data["sim_cycles_per_second_detail"].items()):
+        cells = []
+        for sim in ("icarus", "verilator"):
+            d = by.get(sim, {})
+            cells.append(_fmt(d.get("probe")) if "probe" in d else d.get("probe_error", "—"))
+            cells.append(f"{_fmt(d['job'])} ({d['job_cycles']:,} cycles)" if d.get("job") else "—")
+        lines.append(f"| {top} | " + " | ".join(cells) + " |")
+    reg = data["regression_seconds"]
+    lines += ["", f"Full regression (`make test`, {data.get('regression_jobs') or '?'} pytest-xdist workers): "
+              + (f"{reg} s ({reg / 60:.1f} min), recorded {data.get('regression_date')}." if reg else
+                 "no record in build/regression.json (run `make test` first).")]
+    for title, text in extra:
+        lines += ["", f"## {title}", "", text.rstrip()]
+    if data["problems"]:
+        lines += ["", "## Problems", ""] + [f"- {p}" for p in data["problems"]]
+    return "\n".join(lines) + "\n"
 
 
-# --- 3. RTL confirmation -------------------------------------------------------
-
-def rtl_section(sim):
-    """The model's counters and cycles against the planner RTL on one small map
-    (the planner regression's parameter sets, so the build is shared)."""
-    try:
-        from tb.harmonic.planner_bench import run_planner_rtl
-    except ImportError:
-        return ["The planner RTL driver (tb/harmonic/planner_bench.py) is not in this checkout: not run.", ""]
-    rng = np.random.default_rng(5)
-    shape, block, sched, iters = (8, 17), (3, 6), (8, 16), 3
-    ob = rng.random(shape) < 0.2
-    ob[0, :] = ob[:, 0] = False
-    goals = [(0, 0)]
-    t0 = time.time()
-    model = plan(ob, goals, block=block, iters=iters, schedule=sched)
-    out = run_planner_rtl(ob, goals, block, iters, sched, sim)
-    keys = ("p", "converged", "sweeps", "block_iterations", "check_iterations", "cycles")
-    same = all(int(out[k]) == int(getattr(model, k)) for k in keys) and (out["h"] == model.h).all()
-    return [
-        "| map | block | I | schedule | simulator | model cycles | RTL cycles | sweeps | block iterations | "
-        "field and counters |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-        f"| random {shape[0]}x{shape[1]} (padded) | {block[0]}x{block[1]} | {iters} | {sched} | {sim} | "
-        f"{model.cycles} | {int(out['cycles'])} | {int(out['sweeps'])} | {int(out['block_iterations'])} | "
-        f"{'identical' if same else 'DIFFERENT'} |",
-        "",
-        f"({time.time() - t0:.0f} s)",
-        "",
-    ]
-
-
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default="build/bench/report.md")
-    ap.add_argument("--rtl", choices=("none", "icarus", "verilator"), default="icarus",
-                    help="confirm the cycle count on the planner RTL for one small map (default icarus)")
-    args = ap.parse_args()
-    t0 = time.time()
-    lines = [
-        "# Harmonic planner benchmarks (model; cycles per the planner RTL's timing table)",
-        "",
-        "## 1. Block-synchronous + increasing precision against one block at fixed p_max (paper 4.5.2)",
-        "",
-        "Work = cycles x nodes of the array that runs the schedule (the one block needs the whole map as "
-        "an array, the block schedule a 6x12 one; padding to whole blocks counted): the speed-up on equal "
-        "hardware.  Every run below ends in the same field, bit for bit.  The paper claims 2 to 4.",
-        "",
-    ]
-    summaries = []
+def study_sections():
+    """The harmonic schedule study and the block-exponent comparison, as markdown."""
+    import bench_harmonic
+    out = []
+    lines = []
+    parts = []
     for name in ("maze-32-32-2.map", "random-32-32-10.map"):
-        part, summary = cycles_section(name)
+        part, summary = bench_harmonic.cycles_section(name)
         lines += part
-        summaries.append(summary)
-        print("\n".join(part), flush=True)
+        parts.append(summary)
     lines += ["Summary: " + "; ".join(
         f"{s['map']}: the paper's algorithm {s['paper']:.2f}x, best variation {s['best']:.2f}x ({s['best_what']})"
-        for s in summaries), ""]
-    lines += ["## 2. Bits of precision needed against the longest distance to the goal (paper 3.2.2, Fig. 3)", ""]
-    part, _ = bits_section()
-    lines += part + [""]
-    print("\n".join(part), flush=True)
-    if args.rtl != "none":
-        try:
-            part = rtl_section(args.rtl)
-        except Exception as e:  # noqa: BLE001 - the report says what happened
-            part = [f"The RTL run failed: {type(e).__name__}: {e}", ""]
-        lines += ["## 3. The cycle count on the planner RTL", ""] + part
-        print("\n".join(part), flush=True)
-    lines.append(f"Bench time {time.time() - t0:.0f} s.")
-    text = "\n".join(lines) + "\n"
-    out = Path(args.out)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(text)
-    print(f"wrote {out}")
+        for s in parts), ""]
+    bits, _ = bench_harmonic.bits_section()
+    out.append(("Harmonic planner: block-synchronous schedule against one block (paper 4.5.2)", "\n".join(lines)))
+    out.append(("Harmonic planner: bits of precision against the longest distance (paper 3.2.2)", "\n".join(bits)))
+    try:
+        import bench_exponents
+    except ImportError:
+        return out
+    text, _ = bench_exponents.comparison()
+    out.append(("Harmonic planner: fixed point against block exponents", text))
+    return out
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--md", default=str(ROOT / "BENCHMARKS.md"))
+    ap.add_argument("--json", default=str(OUT / "results.json"))
+    ap.add_argument("--skip", default="", help=f"comma-separated parts to leave out: {','.join(PARTS)}")
+    args = ap.parse_args(argv)
+    skip = {s for s in args.skip.split(",") if s}
+    if skip - set(PARTS):
+        ap.error(f"--skip: unknown part(s) {sorted(skip - set(PARTS))}; parts: {','.join(PARTS)}")
+    OUT.mkdir(parents=True, exist_ok=True)
+    t0 = time.time()
+    hw = hardware() if "hardware" not in skip else {t[0]: {} for t in TOPS}
+    for (key, core, name, params, *_), h in zip(TOPS, hw.values()):
+        h["top"] = top_name(name, params)
+    speeds, problems, rows = {}, [], []
+    for part, fn in (("harmonic", harmonic_jobs), ("dflc", dflc_jobs), ("edt", edt_jobs)):
+        if part not in skip:
+            rows += fn(hw, speeds, problems)
+    if "simspeed" not in skip:
+        probes(speeds)
+    extra = study_sections() if "study" not in skip else []
+    reg_file = ROOT / "build" / "regression.json"
+    reg = json.loads(reg_file.read_text()) if reg_file.exists() else {}
+    data = {
+        "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
+        "machine": f"{platform.node()}: {platform.processor() or platform.machine()}, "
+                   f"{os.cpu_count()} CPUs, Python {platform.python_version()}, {_cpu_model()}",
+        "rows": rows,
+        "regression_seconds": reg.get("seconds") if reg.get("passed") else None,
+        "regression_jobs": reg.get("jobs"), "regression_date": reg.get("date"),
+        "sim_cycles_per_second": {top: {s: by.get(s, {}).get("probe") for s in ("icarus", "verilator")}
+                                  for top, by in speeds.items()},
+        "sim_cycles_per_second_detail": speeds,
+        "hardware": hw,
+        "problems": problems,
+        "bench_seconds": None,
+    }
+    data["bench_seconds"] = round(time.time() - t0)
+    Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+    Path(args.json).write_text(json.dumps(data, indent=1, default=str))
+    Path(args.md).write_text(markdown(data, hw, extra) + f"\nBench run time: {data['bench_seconds']} s.\n")
+    log(f"wrote {args.md} and {args.json} in {data['bench_seconds']} s")
+    for p in problems:
+        log(f"PROBLEM: {p}")
+    return 1 if problems else 0
+
+
+def _cpu_model():
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return "CPU model unknown"
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())
