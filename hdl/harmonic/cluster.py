@@ -113,10 +113,10 @@ class Cluster(wiring.Component):
     )
 
     def __init__(self, depth=1024, p_max=None, exponents=False):
-        check(self.PARAMS, depth=depth, exponents=exponents)
+        check(self.PARAMS, depth=depth)
         if p_max is None:
             p_max = depth - 2
-        check(self.PARAMS, self.CONSTRAINTS, depth=depth, p_max=p_max)
+        check(self.PARAMS, self.CONSTRAINTS, depth=depth, p_max=p_max, exponents=exponents)
         self.depth = depth
         self.p_max = p_max
         self.exponents = bool(exponents)
