@@ -50,7 +50,7 @@ RAM_DEPTH = 1024
 def bundled_maps(maps_dir=None, names=None):
     """[(name, obstacle, [goal])] for every maps/*.map (or those ``names``,
     stems), the goal of its longest scenario (its ``-even-*.scen`` file, as
-    scripts/bench.py picks it), else its last free cell."""
+    scripts/bench_harmonic.py picks it), else its last free cell."""
     out = []
     for path in sorted(Path(maps_dir or ROOT / "maps").glob("*.map")):
         if names and path.stem not in names:
