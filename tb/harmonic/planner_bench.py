@@ -184,7 +184,7 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     during pass s-1 (the bench watches the pass count).  ``progress(status)``
     is called from the job's STATUS polls (through the job's log, after the
     run, when the simulator runs in a subprocess: it gets the last status).
-    ``block_exponents``: the Planner's exponent option (``harmonic_planner_exp``,
+    ``block_exponents``: the Planner's exponent option (:func:`exponent_params`,
     no events); ``h``/``padded_h`` are then the mantissas and ``exponents``
     (BR x BC) the block exponents (models.harmonic.plan(..., rtl=True)).
     """
@@ -209,8 +209,8 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
             "events": [[int(s), [int(r), int(c)], str(k)] for s, (r, c), k in events],
             "exponents": bool(block_exponents),
         }))
-        top = register_exponent_top() if block_exponents else "harmonic_planner"
-        run(top, params, sim, "tb.harmonic.planner_job",
+        run("harmonic_planner", exponent_params(params) if block_exponents else params, sim,
+            "tb.harmonic.planner_job",
             env={"PLANNER_JOB": job, "PLANNER_RESULT": result}, log_file=work / "sim.log")
         out = json.loads(result.read_text())
     h = np.array([[int(v) for v in row] for row in out["h"]], dtype=object)
@@ -225,15 +225,9 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     return res
 
 
-def register_exponent_top():
-    """The Planner with its block-exponent option as a runner top,
-    ``harmonic_planner_exp`` (hdl/emit.py, not this core's file, lists only
-    the default Planner; the lead may move this one line there)."""
-    from hdl.emit import TOPS
-    from hdl.harmonic.planner import Planner
-    TOPS.setdefault("harmonic_planner_exp", lambda n, m, br, bc, p_max, depth: Planner(
-        n, m, (br, bc), p_max, depth, block_exponents=True))
-    return "harmonic_planner_exp"
+def exponent_params(params):
+    """The emitted Planner's parameters with its block-exponent option on."""
+    return {**params, "block_exponents": 1}
 
 
 def job_env():

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from models.harmonic import plan
-from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic, register_exponent_top
+from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic, exponent_params
 from tb.harmonic.planner_maps import MAPS
 from tb.harmonic.serial import start
 from tb.runner import SIMULATORS, run
@@ -82,12 +82,12 @@ async def planner_exponents_against_model(dut):
 
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_planner_exponents(sim):
-    run(register_exponent_top(), PARAMS, sim, "test_planner_exponents")
+    run("harmonic_planner", exponent_params(PARAMS), sim, "test_planner_exponents")
 
 
 def test_exponent_option_is_checked_and_default_off():
     from hdl.harmonic.planner import Planner, response_layout
-    with pytest.raises(ValueError, match="block_exponents=1"):
-        Planner(3, 6, (3, 3), 14, 256, block_exponents=1)
+    with pytest.raises(ValueError, match="block_exponents=2: must be True or False"):
+        Planner(3, 6, (3, 3), 14, 256, block_exponents=2)
     assert "exponent" not in dict(response_layout(14)) and "exponent" in dict(response_layout(14, exponents=True))
     assert not Planner(3, 6, (3, 3), 14, 256).exponents
