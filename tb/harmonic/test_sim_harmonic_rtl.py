@@ -31,6 +31,17 @@ def _map(shape, seed=5):
     return grid
 
 
+
+def _model_and_rtl(args, sim, tmp_path, capsys):
+    """``python -m sim harmonic ARGS`` with the model and with ``sim``: their JSON (plus "rc")."""
+    out = {}
+    for engine in ("model", sim):
+        rc = main(["harmonic", *args, "--engine", engine, "--json", str(tmp_path / f"{engine}.json")])
+        assert "Traceback" not in capsys.readouterr().err
+        out[engine] = json.loads((tmp_path / f"{engine}.json").read_text())
+        out[engine]["rc"] = rc
+    return out["model"], out[sim]
+
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_rtl_engine_matches_model(sim, tmp_path, capsys):
     shape, block, schedule, iters = CASES[sim]
@@ -38,18 +49,10 @@ def test_rtl_engine_matches_model(sim, tmp_path, capsys):
     path = tmp_path / "m.txt"
     path.write_text("\n".join("".join("#" if x else "." for x in row) for row in grid) + "\n")
     goal, starts = "0,0", ["0,%d" % (shape[1] - 1), "%d,0" % (shape[0] - 1)]
-    out = {}
-    for engine in ("model", sim):
-        args = ["harmonic", str(path), "--goal", goal, "--block", block, "--schedule", schedule,
-                "--iters", iters, "--engine", engine, "--json", str(tmp_path / f"{engine}.json")]
-        for s in starts:
-            args += ["--start", s]
-        rc = main(args)
-        err = capsys.readouterr().err
-        assert "Traceback" not in err
-        out[engine] = json.loads((tmp_path / f"{engine}.json").read_text())
-        out[engine]["rc"] = rc
-    model, rtl = out["model"], out[sim]
+    args = [str(path), "--goal", goal, "--block", block, "--schedule", schedule, "--iters", iters]
+    for s in starts:
+        args += ["--start", s]
+    model, rtl = _model_and_rtl(args, sim, tmp_path, capsys)
     assert rtl["engine"] == sim and rtl["padded"] != [rtl["height"], rtl["width"]]
     compared = 0
     for key in ("rc", "height", "width", "precision", "converged", "maxima", "sweeps", "block_iterations",
@@ -68,17 +71,9 @@ def test_rtl_engine_block_exponents_matches_model(sim, tmp_path, capsys):
     grid = _map((8, 17))
     path = tmp_path / "m.txt"
     path.write_text("\n".join("".join("#" if x else "." for x in row) for row in grid) + "\n")
-    out = {}
-    for engine in ("model", sim):
-        args = ["harmonic", str(path), "--goal", "0,0", "--start", "7,16", "--block", "3x6",
-                "--schedule", "6:4:14", "--iters", "3", "--engine", engine, "--block-exponents",
-                "--json", str(tmp_path / f"{engine}.json")]
-        rc = main(args)
-        err = capsys.readouterr().err
-        assert "Traceback" not in err
-        out[engine] = json.loads((tmp_path / f"{engine}.json").read_text())
-        out[engine]["rc"] = rc
-    model, rtl = out["model"], out[sim]
+    model, rtl = _model_and_rtl([str(path), "--goal", "0,0", "--start", "7,16", "--block", "3x6",
+                                 "--schedule", "6:4:14", "--iters", "3", "--block-exponents"],
+                                sim, tmp_path, capsys)
     assert rtl["engine"] == sim and max(map(max, model["exponents"])) > 0
     compared = 0
     for key in ("rc", "precision", "converged", "maxima", "sweeps", "block_iterations", "check_iterations",
