@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 from harmonic_small_maps import corridor, spiral
+from planner_maps import random_map
 from models.harmonic import (
     VISIT_OVERHEAD, ascent_reaches, convert_mantissa, local_max, plan, reachable, visit_cycles,
 )
@@ -33,12 +34,8 @@ from models.harmonic import (
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def _random_map(rows, cols, seed, density=0.2):
-    rng = np.random.default_rng(seed)
-    ob = rng.random((rows, cols)) < density
-    free = np.argwhere(~ob)
-    goal = tuple(int(x) for x in free[rng.integers(len(free))])
-    return ob, [goal]
+def _random_map(rows, cols, seed):
+    return random_map(rows, cols, seed, density=0.2)
 
 
 def _exact(mant, E, p, n, m):
