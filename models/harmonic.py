@@ -50,7 +50,7 @@ import numpy as np
 
 __all__ = [
     "one", "neighbours", "update", "local_max", "step", "relax",
-    "pad_to_blocks", "reachable", "PlanResult", "plan", "decision", "visit_cycles",
+    "pad_to_blocks", "reachable", "PlanResult", "plan", "decision", "steepest_triangle", "visit_cycles",
     "VISIT_OVERHEAD", "RUN_OVERHEAD", "SET_OVERHEAD", "TRIANGLES",
     "word_bits", "ram_image", "from_ram_image", "counters",
 ]
@@ -509,16 +509,30 @@ def decision(h, r, c):
     g_row = h_S - h or h - h_N: the direction of steepest ascent.
     """
     h = np.asarray(h, dtype=object)
-    rows, cols = h.shape
+    _check_node(h.shape, r, c)
+    cells = _neighbour_cells(h.shape, r, c)
+    return steepest_triangle(int(h[r, c]), {d: int(h[x]) if x else 0 for d, x in cells.items()})
+
+
+def _check_node(shape, r, c):
+    rows, cols = shape
     if not (0 <= r < rows and 0 <= c < cols):
         raise ValueError(f"node ({r}, {c}) is outside the {rows}x{cols} map")
-    centre = int(h[r, c])
 
-    def value(d):
+
+def _neighbour_cells(shape, r, c):
+    """{d: the N, E, S, W neighbour (rr, cc) of (r, c), None outside the map}."""
+    out = {}
+    for d in "NESW":
         rr, cc = r + _OFFSET[d][0], c + _OFFSET[d][1]
-        return int(h[rr, cc]) if 0 <= rr < rows and 0 <= cc < cols else 0
+        out[d] = (rr, cc) if 0 <= rr < shape[0] and 0 <= cc < shape[1] else None
+    return out
 
-    v = {d: value(d) for d in "NESW"}
+
+def steepest_triangle(centre, v):
+    """The Decision module's rule (5.3) on one node: ``centre`` and its
+    neighbours ``v`` = {"N", "E", "S", "W": value}; returns
+    ``(t, (g_row, g_col))`` as :func:`decision`."""
     best, best_t = -1, 0
     for t, (a, b) in enumerate(TRIANGLES):
         score = (centre - v[a]) ** 2 + (centre - v[b]) ** 2
@@ -864,6 +878,37 @@ def convert_mantissa(v, s, p):
         out = out.astype(arr.dtype) if not scalar else out
         clamped = bool(over.any())
     return (int(out) if scalar else out), clamped
+
+
+def decision_exponents(mantissa, exponents, block, p, r, c):
+    """The Decision module (5.3) on a block-exponent field, as the planner
+    RTL's exponent option computes it: node (r, c) of the padded
+    ``mantissa`` field (BR*n x BC*m), ``exponents`` (BR x BC), ``block`` =
+    (n, m), word precision ``p``.
+
+    Each neighbour in another block is first seen in the centre's units,
+    2**-(p + e_c), through the border conversion the node's update uses
+    (:func:`convert_mantissa`, s = e_c - e_neighbour); then the rule of
+    :func:`steepest_triangle`.  Returns ``(t, (g_row, g_col), e_c)``: the
+    gradient is in the centre's units, so its direction needs no exponent.
+
+    Error bound (what the conversion loses): a neighbour's converted value
+    v' and its exact value x (in the centre's units) satisfy
+    v' <= x < v' + 1 unless it was clamped (then v' = 2**(p+1)-1 <= x): a
+    finer neighbour (s < 0) loses its bits below the centre's LSB (floor),
+    a coarser one (s > 0) is exact below the clamp.  So each gradient
+    component is within one unit of the exact plane's, and the triangle can
+    differ from the exact one's only where scores are that close or a
+    neighbour clamps (tested against exact fractions on converged fields).
+    """
+    mantissa = np.asarray(mantissa, dtype=object)
+    n, m = block
+    _check_node(mantissa.shape, r, c)
+    e = int(exponents[r // n][c // m])
+    v = {d: convert_mantissa(int(mantissa[x]), e - int(exponents[x[0] // n][x[1] // m]), p)[0] if x else 0
+         for d, x in _neighbour_cells(mantissa.shape, r, c).items()}
+    t, g = steepest_triangle(int(mantissa[r, c]), v)
+    return t, g, e
 
 
 class _ExpGrid(_Grid):
@@ -1257,5 +1302,5 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     return out
 
 
-__all__ += ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "plan_exponents",
+__all__ += ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "decision_exponents", "plan_exponents",
             "shift_iterations"]

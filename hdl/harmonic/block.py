@@ -72,8 +72,8 @@ class Block(wiring.Component):
         Param("depth", int, 1024, lo=1, doc="words per cluster RAM"),
         Param("exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
               message="exponents={value!r}: must be True or False"),
-        Param("e_max", int, 255, lo=0, doc="largest block exponent (with exponents)",
-              message="e_max={value!r}: must be an integer >= 0"),
+        Param("e_max", int, 255, lo=1, doc="largest block exponent (with exponents)",
+              message="e_max={value!r}: must be an integer >= 1"),
     )
     CONSTRAINTS = (
         Constraint(f"n % {ROWS} == 0", lambda p: p["n"] % ROWS == 0,

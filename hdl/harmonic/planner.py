@@ -3,11 +3,11 @@ behind one host interface of valid/ready streams (paper 000, section 5)."""
 
 from dataclasses import replace
 
-from amaranth.hdl import Cat, Const, Module, Signal, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param, check
+from ..params import Constraint, Param, check
 from .block import Block
 from .cluster import COLS, ROWS
 from .controller import Controller
@@ -95,7 +95,9 @@ class Planner(wiring.Component):
                check_iterations, clear_passes, cycles.
     READ       block, row, col: ``const`` and ``value`` at the current p.
     DIRECTION  block, row, col: ``triangle`` (0 NE, 1 ES, 2 SW, 3 WN) and the
-               gradient (g_row, g_col) of :func:`models.harmonic.decision`.
+               gradient (g_row, g_col) of :func:`models.harmonic.decision`
+               (block exponents: of :func:`models.harmonic.decision_exponents`,
+               in the centre's units; ``exponent`` = its e_b).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
@@ -121,24 +123,38 @@ class Planner(wiring.Component):
         bit): exponent registers, the border conversion with its clamp scan,
         the re-pick and the in-place shift visits in the Control module;
         READ's response gains ``exponent`` (the node's block's e_b: the
-        value is the mantissa, value / 2**(p + e_b)).  DIRECTION is not
-        exponent-aware (raw mantissas across borders); no dynamic orders
-        during a run.  See hdl/harmonic/README.md, "Planner RTL option".
+        value is the mantissa, value / 2**(p + e_b)).  DIRECTION converts
+        each neighbour in another block into the centre's units first
+        (:func:`models.harmonic.convert_mantissa`, serially: one position
+        per cycle, at most p+1 cycles per neighbour) and answers in those
+        units, ``exponent`` = the centre's e_b.  No dynamic orders during a
+        run.  See hdl/harmonic/README.md, "Planner RTL option".
+    e_max, headroom : int
+        With ``block_exponents``: the largest e_b (1 ..) and the re-pick's
+        headroom h (0 .. p_max), ``plan_exponents``' ``e_max`` and
+        ``headroom`` (defaults 255 and 1, the model's).
     """
 
     # Block's parameters (it checks them), at the planner's defaults, and the
     # block-exponent option (issue 10; default off: the paper's design).
     PARAMS = (*(replace(p, default={"n": 6, "m": 12, "br": 2, "bc": 2}.get(p.name, p.default))
-                for p in Block.PARAMS if p.name not in ("exponents", "e_max")),
+                for p in Block.PARAMS if p.name != "exponents"),
               Param("block_exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
-                    message="block_exponents={value!r}: must be True or False"))
-    CONSTRAINTS = Block.CONSTRAINTS
+                    message="block_exponents={value!r}: must be True or False"),
+              Param("headroom", int, 1, lo=0, doc="top mantissa bits a re-pick leaves empty (with block_exponents)",
+                    message="headroom={value!r}: must be an integer >= 0"))
+    CONSTRAINTS = (*Block.CONSTRAINTS,
+                   Constraint("headroom <= p_max", lambda p: p["headroom"] <= p["p_max"],
+                              "headroom={headroom!r}: leaves no mantissa bit at p_max={p_max}"))
 
-    def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False):
-        check(self.PARAMS[-1:], block_exponents=block_exponents)
+    def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False, e_max=255,
+                 headroom=1):
+        check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=blocks[0], bc=blocks[1], p_max=p_max, depth=depth,
+              block_exponents=block_exponents, e_max=e_max, headroom=headroom)
         self.exponents = bool(block_exponents)
-        ekw = {"exponents": True} if self.exponents else {}
-        self.block = Block(n, m, blocks, p_max, depth, **ekw)      # checks the parameters
+        self.e_max, self.headroom = e_max, headroom
+        ekw = {"exponents": True, "e_max": e_max} if self.exponents else {}
+        self.block = Block(n, m, blocks, p_max, depth, **ekw)
         self.n, self.m, self.BR, self.BC = n, m, *blocks
         self.p_max, self.depth = p_max, depth
         self.cmd_layout = command_layout(blocks, n, m, p_max)
@@ -161,7 +177,8 @@ class Planner(wiring.Component):
         B = BR * BC
         m.submodules.block = blk = self.block
         X = self.exponents
-        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, **({"exponents": True} if X else {}))
+        xkw = {"exponents": True, "e_max": self.e_max, "headroom": self.headroom} if X else {}
+        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, **xkw)
         m.submodules.decision = dec = Decision(p_max)
         for name in ("run", "p", "enable", "clear", "sel", "sel_row", "sel_col", "br", "bc"):
             m.d.comb += getattr(blk, name).eq(getattr(ctl, f"blk_{name}"))
@@ -275,6 +292,28 @@ class Planner(wiring.Component):
         m.d.comb += p_bad.eq((cmd.p1 < 2) | (cmd.p_last > p_max) | (cmd.p1 > cmd.p_last)
                              | ((cmd.step == 0) & (cmd.p1 != cmd.p_last)))
 
+        def next_neighbour(first=m.If):
+            with first(q == 4):
+                m.next = "DECIDE_GO"
+            with m.Else():
+                m.d.sync += q.eq(q + 1)
+                m.next = "FETCH"
+
+        if X:
+            # DIRECTION with block exponents (models.harmonic.decision_exponents):
+            # the centre's e_c, then each neighbour converted by s = e_c - e_t.
+            E_W = ctl.e_rd.shape().width
+            dir_e = Signal(E_W)
+            cv = Signal(p_max + 1)
+            cv_n = Signal(range(p_max + 2))
+            cv_left = Signal()
+            cap = Signal(p_max + 1)             # 2**(p+1) - 1: the word's top
+            m.d.comb += [cap.eq(Cat(1, *[ctl.p >= i for i in range(1, p_max + 1)])),
+                         ctl.e_rd_block.eq(t_blk)]
+            s_sh = Signal(signed(E_W + 1))
+            s_abs = Signal(E_W)
+            m.d.comb += [s_sh.eq(dir_e - ctl.e_rd), s_abs.eq(Mux(s_sh < 0, -s_sh, s_sh))]
+
         accept = Signal()
         start_ok = Signal()
         with m.FSM() as fsm:
@@ -350,6 +389,12 @@ class Planner(wiring.Component):
             with m.State("FETCH"):          # READ: q = 0 only; DIRECTION: q = 0 .. 4
                 with m.If(t_in):
                     m.d.sync += [rd_base.eq(t_blk * S if B > 1 else 0), rd_ci.eq(t_ci), rd_bit.eq(t_bit)]
+                    if X:
+                        with m.If(q == 0):
+                            m.d.sync += [dir_e.eq(ctl.e_rd), cv_n.eq(0)]
+                        with m.Else():
+                            m.d.sync += [cv_left.eq(s_sh > 0),
+                                         cv_n.eq(Mux(s_abs > ctl.p + 1, ctl.p + 1, s_abs))]
                     m.next = "FETCH_WAIT"
                 with m.Else():
                     with m.Switch(q):
@@ -361,17 +406,42 @@ class Planner(wiring.Component):
                         m.next = "DECIDE_GO"
             with m.State("FETCH_WAIT"):
                 with m.If(rd_done):
+                    word = Cat(blk.host_rdata.bit_select(rd_bit, 1), rd_val[:-1])
+                    if X:
+                        # A neighbour in another block: into the centre's units first.
+                        m.d.sync += cv.eq(word)
                     with m.Switch(q):
-                        for i in range(5):
+                        for i in range(1 if X else 5):
                             with m.Case(i):
-                                m.d.sync += vals[i].eq(Cat(blk.host_rdata.bit_select(rd_bit, 1), rd_val[:-1]))
+                                m.d.sync += vals[i].eq(word)
                     with m.If(c.op == Op.READ):
                         m.next = "READ_RESP"
-                    with m.Elif(q == 4):
-                        m.next = "DECIDE_GO"
+                    if X:
+                        with m.Else():
+                            m.next = "CONVERT"
+                    else:
+                        next_neighbour(m.Elif)
+            if X:
+                with m.State("CONVERT"):
+                    # convert_mantissa serially, one position per cycle (at most
+                    # p+1: by then a left shift has clamped any non-zero value
+                    # and a right shift has dropped every bit).  Left: the word's
+                    # top bit p set means the next shift would pass 2**(p+1)-1:
+                    # clamp there.  q = 0 (the centre) has cv_n = 0.
+                    with m.If(cv_n == 0):
+                        with m.Switch(q):
+                            for i in range(5):
+                                with m.Case(i):
+                                    m.d.sync += vals[i].eq(cv)
+                        next_neighbour()
                     with m.Else():
-                        m.d.sync += q.eq(q + 1)
-                        m.next = "FETCH"
+                        m.d.sync += cv_n.eq(cv_n - 1)
+                        with m.If(~cv_left):
+                            m.d.sync += cv.eq(cv >> 1)
+                        with m.Elif(cv.bit_select(ctl.p, 1)):
+                            m.d.sync += [cv.eq(cap), cv_n.eq(0)]
+                        with m.Else():
+                            m.d.sync += cv.eq(cv << 1)
             with m.State("READ_RESP"):
                 respond(Code.OK, Op.READ)
                 m.d.sync += [resp.value.eq(vals[0]), resp.const.eq(rd_const)]
@@ -385,6 +455,8 @@ class Planner(wiring.Component):
                     respond(Code.OK, Op.DIRECTION)
                     m.d.sync += [resp.value.eq(vals[0]), resp.triangle.eq(dec.triangle),
                                  resp.g_row.eq(dec.g_row), resp.g_col.eq(dec.g_col)]
+                    if X:
+                        m.d.sync += resp.exponent.eq(dir_e)
                     m.next = "IDLE"
         # Strobes and enables as plain expressions of the state (continuous
         # assignments in the Verilog: defined from time 0 on every simulator).
@@ -406,6 +478,4 @@ class Planner(wiring.Component):
                          resp.g_row.eq(0), resp.g_col.eq(0)]
             if X:
                 m.d.sync += resp.exponent.eq(0)
-        if X:
-            m.d.comb += ctl.e_rd_block.eq(c.block)
         return m

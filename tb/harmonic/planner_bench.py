@@ -34,13 +34,14 @@ def _fields(layout):
 
 
 class PlannerBench:
-    def __init__(self, dut, n, m, blocks, p_max, exponents=False):
+    def __init__(self, dut, n, m, blocks, p_max, exponents=False, e_max=255):
         self.dut, self.n, self.m = dut, n, m
         self.BR, self.BC = blocks
         self.p_max = p_max
         self.exponents = bool(exponents)
         self.cmd_f = _fields(command_layout(blocks, n, m, p_max))
-        self.resp_f = _fields(response_layout(p_max, exponents=True) if exponents else response_layout(p_max))
+        self.resp_f = _fields(response_layout(p_max, exponents=True, e_max=e_max) if exponents
+                              else response_layout(p_max))
         self.commands = 0
         dut.i_stream__valid.value = 0
         dut.o_stream__ready.value = 1

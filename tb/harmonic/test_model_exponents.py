@@ -16,6 +16,12 @@
 * On random-32-32-10, p = 16 (a level at which the fixed-point planner still
   has local maxima) converges with exponents, exact-value local maxima are
   0, and the ascent reaches the goal from every reachable cell.
+* The exponent-aware Decision (decision_exponents) on converged fields,
+  against exact fractions: each gradient component within one unit of the
+  exact plane's (unless a neighbour clamps), a triangle other than the
+  exact Decision's only within the score slack that bound allows, and it
+  agrees with the exact Decision far more often than the raw mantissas do
+  where exponents differ (the negative control: Decision before the option).
 * convert_mantissa and the option checks.
 """
 
@@ -28,7 +34,8 @@ import pytest
 from harmonic_small_maps import corridor, spiral
 from planner_maps import random_map
 from models.harmonic import (
-    VISIT_OVERHEAD, ascent_reaches, convert_mantissa, local_max, plan, reachable, visit_cycles,
+    TRIANGLES, VISIT_OVERHEAD, ascent_reaches, convert_mantissa, decision, decision_exponents, local_max,
+    plan, reachable, visit_cycles,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -275,3 +282,69 @@ def test_rtl_variant_conservative_maxima():
     assert converged >= 2
     with pytest.raises(ValueError, match="rtl=True"):
         plan(ob, goals, block_exponents=True, rtl=True, repick="stable")
+
+
+def _decision_fields():
+    """Converged block-exponent fields (the RTL's variant): small random
+    maps with 3x6 blocks and random-32-32-10 at p = 16 with 6x12 blocks."""
+    from sim.mapfile import load_map
+    for seed in range(4):
+        ob, goals = random_map(9, 18, seed)
+        yield plan(ob, goals, block=(3, 6), iters=3, schedule=(6, 10, 14), block_exponents=True, rtl=True)
+    ob = load_map(ROOT / "maps" / "random-32-32-10.map")
+    yield plan(ob, [(29, 6)], schedule=(16,), block_exponents=True, rtl=True)
+
+
+def test_decision_exponents_against_exact():
+    seen = {"nodes": 0, "mixed": 0, "aware": 0, "raw": 0, "other_triangle": 0, "clamped": 0}
+    for res in _decision_fields():
+        n, m = res.block
+        p, E, mant = res.p, res.exponents, res.mantissa
+        F = p + int(E.max())
+        X = _scaled(mant, E, p, n, m, F)                 # exact values, times 2**F
+        cap = (1 << (p + 1)) - 1
+        for r, c in np.argwhere(~res.padded_const):
+            t, (g_row, g_col), e = decision_exponents(mant, E, (n, m), p, r, c)
+            assert e == E[r // n, c // m]
+            k = F - p - e                                # exact, in the centre's units: X / 2**k
+            h = Fraction(int(X[r, c]), 1 << k)
+            assert h == mant[r, c]
+            x = {}
+            for d, (dr, dc) in {"N": (-1, 0), "E": (0, 1), "S": (1, 0), "W": (0, -1)}.items():
+                rr, cc = r + dr, c + dc
+                inside = 0 <= rr < mant.shape[0] and 0 <= cc < mant.shape[1]
+                x[d] = Fraction(int(X[rr, cc]), 1 << k) if inside else Fraction(0)
+            clamp = any(v > cap for v in x.values())
+            te, _ = decision(X, r, c)
+
+            def exact(tri):
+                a, b = TRIANGLES[tri]
+                return ((x["S"] - h) if "S" in (a, b) else (h - x["N"]),
+                        (x["E"] - h) if "E" in (a, b) else (h - x["W"]))
+
+            def score(tri):
+                a, b = TRIANGLES[tri]
+                return (h - x[a]) ** 2 + (h - x[b]) ** 2
+
+            if not clamp:
+                er, ec = exact(t)
+                pair = TRIANGLES[t]
+                # v' <= x < v' + 1: an "x - h" component is above, an "h - x" one below
+                for got, want, up in ((g_row, er, "S" in pair), (g_col, ec, "E" in pair)):
+                    assert (0 <= want - got < 1) if up else (-1 < want - got <= 0), (r, c, got, want)
+                if te != t:
+                    # only as close as the one-unit errors allow: |a^2 - a'^2| < 2|a| + 1
+                    slack = sum(2 * abs(v) + 1 for tri in (t, te) for v in exact(tri))
+                    assert score(te) - score(t) < slack, (r, c, t, te)
+                    seen["other_triangle"] += 1
+            seen["nodes"] += 1
+            seen["clamped"] += clamp
+            nbe = {E[rr // n, cc // m] for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1))
+                   if 0 <= rr < mant.shape[0] and 0 <= cc < mant.shape[1]}
+            if nbe != {e}:
+                seen["mixed"] += 1
+                seen["aware"] += t == te
+                seen["raw"] += decision(mant, r, c)[0] == te
+    print(seen)
+    assert seen["mixed"] >= 300
+    assert seen["aware"] >= 0.9 * seen["mixed"] and seen["raw"] <= 0.8 * seen["mixed"], seen

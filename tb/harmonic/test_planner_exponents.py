@@ -2,52 +2,68 @@
 """The Planner's block-exponent option (``Planner(..., block_exponents=True)``)
 against ``models.harmonic.plan(..., block_exponents=True, rtl=True)``, bit-exact.
 
-One build per simulator: 3x3 blocks of 3x6 nodes (B = 9, every border
-kind), p_max 14.  One cocotb test runs three small maps (two random maps
-whose exponents move and saturate, a corridor) one after the other through
-the host streams: LOAD, START, STATUS to the end, READ every node (the
+Two builds per simulator, 3x3 blocks of 3x6 nodes (B = 9, every border
+kind), p_max 14.  ``default`` (e_max 255, headroom 1, the model's
+defaults): one cocotb test runs three small maps (two random maps whose
+exponents move and saturate, a corridor) one after the other through the
+host streams: LOAD, START, STATUS to the end, READ every node (the
 mantissa, the flag and the block's exponent): every mantissa, flag and e_b,
 the final p, converged, sweeps, block iterations, check iterations and the
-cycle count equal the model's.  It asserts that the runs exercised what
-they claim: re-picks (some e_b > 0), a precision rise with a saturated
-block (coarsening), and both converged and not-converged runs.
+cycle count equal the model's.  Then DIRECTION at every node whose
+neighbours lie in a block with another exponent, and at the map's corners:
+triangle, gradient, value and exponent equal
+``models.harmonic.decision_exponents``.  It asserts that the runs exercised
+what they claim: re-picks (some e_b > 0), a precision rise with a saturated
+block (coarsening), both converged and not-converged runs, and DIRECTIONs
+whose neighbours were shifted left, right and clamped.  ``bounded`` (the
+Planner's e_max = 10 and headroom = 0): one random map on which exponents
+stop at e_max, against the model with the same bounds.
+PLANNER_EXP_ONLY=0,2 runs only those maps of the default set.
 """
 
-import json
 import os
 
 import cocotb
 import numpy as np
 import pytest
 
-from models.harmonic import plan
+from models.harmonic import convert_mantissa, decision_exponents, plan
 from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic, exponent_params
 from tb.harmonic.planner_maps import MAPS
 from tb.harmonic.serial import start
 from tb.runner import SIMULATORS, run
 
 PARAMS = dict(n=3, m=6, br=3, bc=3, p_max=14, depth=256)
-# (map, seed, schedule, I)
-RUNS = [("random", 1, (6, 10, 14), 3), ("random", 3, (6, 10, 14), 3),
-        ("corridor", 0, (4, 8, 12), 2)]
+# name: (extra Planner parameters, [(map, seed, schedule, I)], what the runs must exercise)
+SETS = {
+    "default": ({}, [("random", 1, (6, 10, 14), 3), ("random", 3, (6, 10, 14), 3),
+                     ("corridor", 0, (4, 8, 12), 2)],
+                ("repick", "coarsen", "converged", "not_converged", "left", "right", "clamped")),
+    "bounded": ({"e_max": 10, "headroom": 0}, [("random", 1, (6, 10, 14), 3)],
+                ("at_e_max", "coarsen", "left", "right")),
+}
 ONLY = os.environ.get("PLANNER_EXP_ONLY")
 
 
-def _model(name, seed, sched, iters):
+def _model(name, seed, sched, iters, bounds):
     ob, goals = MAPS[name](9, 18, seed)
-    res = plan(ob, goals, block=(3, 6), iters=iters, schedule=sched, block_exponents=True, rtl=True)
+    res = plan(ob, goals, block=(3, 6), iters=iters, schedule=sched, block_exponents=True, rtl=True, **bounds)
     return ob, goals, res
 
 
 @cocotb.test()
 async def planner_exponents_against_model(dut):
     P = PARAMS
+    bounds, runs, claims = SETS[os.environ["PLANNER_EXP_SET"]]
     await start(dut)
-    bench = PlannerBench(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"], exponents=True)
-    seen = {"repick": 0, "coarsen": 0, "converged": 0, "not_converged": 0, "nodes": 0}
-    runs = [RUNS[int(i)] for i in ONLY.split(",")] if ONLY else RUNS
+    bench = PlannerBench(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"], exponents=True,
+                         e_max=bounds.get("e_max", 255))
+    seen = dict.fromkeys(("repick", "coarsen", "converged", "not_converged", "at_e_max", "nodes",
+                          "directions", "left", "right", "clamped"), 0)
+    if ONLY and not bounds:
+        runs = [runs[int(i)] for i in ONLY.split(",")]
     for name, seed, sched, iters in runs:
-        ob, goals, res = _model(name, seed, sched, iters)
+        ob, goals, res = _model(name, seed, sched, iters, bounds)
         goal = np.zeros(ob.shape, dtype=bool)
         for r, c in goals:
             goal[r, c] = True
@@ -72,17 +88,44 @@ async def planner_exponents_against_model(dut):
                               f"model\n{res.mantissa}")
         assert got == want, f"{tag}: RTL {got} model {want}"
         seen["nodes"] += h.size
+        await _directions(dut, bench, res, tag, seen)
         seen["repick"] += int(res.exponents.max() > 0)
         seen["coarsen"] += int(any(lv["saturated"] for lv in res.levels[:-1]))
         seen["converged" if res.converged else "not_converged"] += 1
+        seen["at_e_max"] += int((res.exponents == bounds.get("e_max")).sum())
     dut._log.info(f"compared: {seen}")
     if not ONLY:
-        assert all(seen[k] for k in seen), seen
+        assert all(seen[k] for k in (*claims, "nodes", "directions")), seen
+
+
+async def _directions(dut, bench, res, tag, seen):
+    """DIRECTION where the exponent conversion matters, against the model."""
+    n, m = res.block
+    mant, E, p = res.mantissa, res.exponents, res.p
+    rows, cols = mant.shape
+    cells = {(0, 0), (0, cols - 1), (rows - 1, 0), (rows - 1, cols - 1)}
+    for r, c in np.ndindex(rows, cols):
+        for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
+            if 0 <= rr < rows and 0 <= cc < cols and E[rr // n, cc // m] != E[r // n, c // m]:
+                cells.add((r, c))
+                s = int(E[r // n, c // m] - E[rr // n, cc // m])
+                seen["left" if s > 0 else "right"] += 1
+                seen["clamped"] += convert_mantissa(int(mant[rr, cc]), s, p)[1]
+    for r, c in sorted(cells):
+        b, x, y = bench.locate(r, c)
+        resp = await bench.command(Op.DIRECTION, block=b, row=x, col=y)
+        t, (gr, gc), e = decision_exponents(mant, E, (n, m), p, r, c)
+        got = (resp["code"], resp["triangle"], resp["g_row"], resp["g_col"], resp["value"], resp["exponent"])
+        want = (Code.OK, t, gr, gc, mant[r, c], e)
+        assert got == want, f"{tag}: DIRECTION ({r}, {c}): RTL {got} model {want}"
+        seen["directions"] += 1
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)
-def test_planner_exponents(sim):
-    run("harmonic_planner", exponent_params(PARAMS), sim, "test_planner_exponents")
+@pytest.mark.parametrize("name", SETS)
+def test_planner_exponents(sim, name):
+    run("harmonic_planner", exponent_params({**PARAMS, **SETS[name][0]}), sim, "test_planner_exponents",
+        env={"PLANNER_EXP_SET": name})
 
 
 def test_exponent_option_is_checked_and_default_off():
