@@ -78,6 +78,9 @@ TOPS = [
     ("planner", "harmonic", "harmonic_planner",
      {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}, "xc2v", False,
      "Control 844 slices, Decision 3p+682 slices"),
+    ("planner_exp", "harmonic", "harmonic_planner",
+     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256, "block_exponents": 1}, "xc2v", False,
+     "(beyond the paper: the block-exponent option, issue 10)"),
     ("dflc", "dflc", "dflc_core", {"fll": "table1"}, "xc3s", False,
      "1303 LUT4, 8 MULT18X18, 12 ROM64X1 + 54 ROM256X1, 85 MHz (core alone)"),
     ("dflc_par", "dflc", "dflc_core", {"fll": "table1", "par": 1}, "xc3s", False,
@@ -173,6 +176,8 @@ CLOCK_FROM = {
     "planner": ("block", "the planner top does not fit the HX8K (its multipliers become LUTs: the iCE40 HX has "
                          "no DSP), so its jobs use the 6x12 block's clock, the array every iteration runs on; "
                          "Control and Decision are not timed"),
+    "planner_exp": ("block", "as the planner top: the 6x12 block's clock (the exponent option's Control "
+                             "and border conversion are not timed)"),
     "edt_8x8": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
                             "registered in the harness as its neighbours' registers drive them in the array)"),
     "edt_16x16": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "

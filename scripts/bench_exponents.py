@@ -18,11 +18,11 @@ in the Control module, one register per block), so the capacity follows the
 p the map needs.  The capacity figure is for maps of the same kind: p grows
 with the map (Fig. 3), so a larger map of the kind needs at least this p.
 
-    python scripts/bench_exponents.py [--out build/bench/exponents.md] [--rtl]
+    python scripts/bench_exponents.py [--out build/bench/exponents.md] [--only MAP]
 
-``--rtl`` (``comparison(rtl=True)``): the block-exponent runs use the planner
-RTL's variant, plan(..., rtl=True) (the Maximum on converted values, the
-clamp scans, shift visits of ceil(d/3) iterations), the one
+Block exponents run twice: the model's rule, and the planner RTL's variant,
+plan(..., rtl=True) (the Maximum on converted values, the clamp scans,
+shift visits of ceil(d/3) iterations), the one
 Planner(..., block_exponents=True) matches bit for bit.
 
 `comparison()` returns (markdown text, rows as a list of dicts); the
@@ -85,37 +85,47 @@ def _row(name, obstacle, scheme, res, seconds):
     }
 
 
-def comparison(maps_dir=None, names=None, rtl=False):
-    """Run both schemes on every bundled map: (markdown, rows).  ``rtl``:
-    the block-exponent runs are the planner RTL's variant (plan(..., rtl=True))."""
+def comparison(maps_dir=None, names=None):
+    """Run fixed point, block exponents (the model's rule) and block
+    exponents as the planner RTL does them (plan(..., rtl=True)) on every
+    bundled map: (markdown, rows; three rows per map, in that order)."""
     rows = []
-    exp_kw = {"block_exponents": True, "rtl": True} if rtl else {"block_exponents": True}
+    schemes = (("fixed point", {}), ("block exponents", {"block_exponents": True}),
+               ("block exponents, RTL", {"block_exponents": True, "rtl": True}))
     for name, obstacle, goals in bundled_maps(maps_dir, names):
-        for scheme, kw in (("fixed point", {}), ("block exponents", exp_kw)):
+        for scheme, kw in schemes:
             t0 = time.time()
             res = plan(obstacle, goals, block=BLOCK, iters=ITERS, schedule=SCHEDULE, **kw)
             rows.append(_row(name, obstacle, scheme, res, time.time() - t0))
     lines = [
-        f"Block {BLOCK[0]}x{BLOCK[1]}, I = {ITERS}, schedule {STEP}:{STEP}:512 for both, goal of the "
-        "longest scenario; cycles by the planner RTL's timing model (block exponents: "
-        + ("the RTL's variant rtl=True: clamp scans, shift visits of ceil(d/3) iterations, Maximum on "
-           "converted values" if rtl else "+ one shift visit per re-pick") + f"); capacity: blocks of {BLOCK[0]}x{BLOCK[1]} a {RAM_DEPTH}-deep node RAM holds at "
-        "that p (floor(1024/(p+2))), and nodes.",
+        f"Block {BLOCK[0]}x{BLOCK[1]}, I = {ITERS}, schedule {STEP}:{STEP}:512 for all three, goal of the "
+        "longest scenario; cycles by the planner RTL's timing model (block exponents, the model's "
+        "rule: + one shift visit per re-pick; RTL: plan(..., rtl=True), what "
+        "Planner(block_exponents=True) does bit for bit: clamp scans, shift visits of ceil(d/3) "
+        f"iterations, Maximum on converted values); capacity: blocks of {BLOCK[0]}x{BLOCK[1]} a "
+        f"{RAM_DEPTH}-deep node RAM holds at that p (floor(1024/(p+2))), and nodes.",
         "",
         "| map | blocks | fixed p | exp p (max e_b) | fixed iterations | exp iterations | fixed cycles | "
-        "exp cycles | cycles fixed/exp | capacity fixed | capacity exp |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "exp cycles | exp cycles, RTL | cycles fixed/exp | fixed/exp, RTL | capacity fixed | capacity exp |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for fx, ex in zip(rows[0::2], rows[1::2]):
+    triples = list(zip(rows[0::3], rows[1::3], rows[2::3]))
+    for fx, ex, rt in triples:
         conv = "" if fx["converged"] and ex["converged"] else " (not converged)"
+        # the RTL variant's p and iterations, where they differ from the rule's
+        same = (rt["p"], rt["iterations"], rt["converged"]) == (ex["p"], ex["iterations"], ex["converged"])
+        rtl_note = "" if same else f" (p {rt['p']}, {rt['iterations']} iterations)"
         lines.append(
             f"| {fx['map']} ({fx['size']}){conv} | {fx['blocks']} | {fx['p']} | {ex['p']} ({ex['max_exponent']}) | "
             f"{fx['iterations']} | {ex['iterations']} | {fx['cycles']:,} | {ex['cycles']:,} | "
-            f"**{fx['cycles'] / ex['cycles']:.2f}** | {fx['capacity_blocks']} ({fx['capacity_nodes']:,}) | "
+            f"{rt['cycles']:,}{rtl_note} | **{fx['cycles'] / ex['cycles']:.2f}** | "
+            f"**{fx['cycles'] / rt['cycles']:.2f}** | {fx['capacity_blocks']} ({fx['capacity_nodes']:,}) | "
             f"{ex['capacity_blocks']} ({ex['capacity_nodes']:,}) |")
-    better = [fx["map"] for fx, ex in zip(rows[0::2], rows[1::2]) if ex["cycles"] < fx["cycles"]]
-    larger = [fx["map"] for fx, ex in zip(rows[0::2], rows[1::2]) if ex["capacity_nodes"] > fx["capacity_nodes"]]
-    lines += ["", f"Fewer cycles with block exponents: {', '.join(better) or 'none'}; larger capacity: "
+    better = [fx["map"] for fx, ex, _ in triples if ex["cycles"] < fx["cycles"]]
+    better_rtl = [fx["map"] for fx, _, rt in triples if rt["cycles"] < fx["cycles"]]
+    larger = [fx["map"] for fx, ex, _ in triples if ex["capacity_nodes"] > fx["capacity_nodes"]]
+    lines += ["", f"Fewer cycles with block exponents: {', '.join(better) or 'none'} "
+              f"(RTL variant: {', '.join(better_rtl) or 'none'}); larger capacity: "
               f"{', '.join(larger) or 'none'}."]
     return "\n".join(lines) + "\n", rows
 
@@ -125,10 +135,9 @@ def main(argv=None):
     ap.add_argument("--out", default=str(ROOT / "build" / "bench" / "exponents.md"))
     ap.add_argument("--maps", default=None, help="directory of .map files (default: maps/)")
     ap.add_argument("--only", action="append", default=None, metavar="NAME", help="map stem (repeatable)")
-    ap.add_argument("--rtl", action="store_true", help="block exponents as the planner RTL does them (rtl=True)")
     args = ap.parse_args(argv)
     t0 = time.time()
-    text, rows = comparison(args.maps, args.only, rtl=args.rtl)
+    text, rows = comparison(args.maps, args.only)
     text = "# Block exponents against fixed point (issue 10)\n\n" + text + \
         f"\n({time.time() - t0:.0f} s of model runs)\n"
     print(text)

@@ -57,6 +57,9 @@ TOPS = [  # (name, params, paper FF / LUT4 / MHz)
     # the planner top: that block + Control + Decision + host streams, p_max = 62
     ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256},
      "- (paper: Control 844 slices, Decision 3p+682 slices)"),
+    # the same planner with the block-exponent option (issue 10, beyond the paper)
+    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256, "block_exponents": 1},
+     "- (beyond the paper: block exponents, issue 10)"),
     # EDT/BFS (paper 004): synthesized with the hierarchy kept, see EDT_TOPS.
 ]
 # EDT/BFS arrays (paper 004; Table II: 1188 gates for "BFS and NNT", Table I:
