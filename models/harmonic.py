@@ -346,6 +346,37 @@ class _Grid:
             hv[r0:r0 + n, c0:c0 + m] = new
         return self.iters, False
 
+    def orders(self, events):
+        """The dynamic orders ``(s, (r, c), kind)`` checked, in pass order (a deque)."""
+        evs = sorted(((int(s), (int(r), int(c)), str(kind)) for s, (r, c), kind in events),
+                     key=lambda e: e[0])
+        for s, (r, c), kind in evs:
+            if kind not in ("obstacle", "goal"):
+                raise ValueError(f"event kind {kind!r}: expected 'obstacle' or 'goal'")
+            if not (0 <= r < self.rows and 0 <= c < self.cols) or s < 0:
+                raise ValueError(f"event at pass {s} on ({r}, {c}): outside the {self.rows}x{self.cols} map")
+        return deque(evs)
+
+    def apply(self, r, c, kind):
+        """One order's clear pass: (r, c) becomes constant (goal 2**p or
+        obstacle 0), every free node restarts from 0."""
+        self.const[r, c] = True
+        self.goal[r, c] = kind == "goal"
+        self.hv[~self.const] = 0
+        self.hv[r, c] = one(self.p) if kind == "goal" else 0
+
+    def apply_due(self, due, passes):
+        """Apply the orders of ``due`` whose pass has come (s <= passes); how many."""
+        k = 0
+        while due and due[0][0] <= passes:
+            _, (r, c), kind = due.popleft()
+            self.apply(r, c, kind)
+            k += 1
+        self.res.events_applied += k
+        if passes:
+            self.res.clear_passes += k
+        return k
+
     def maxima(self):
         """Local maxima of the free nodes (the check pass's Maximum flags)."""
         pad = self.pad
@@ -415,35 +446,17 @@ def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=(),
     count as maxima; the host walls them off with more obstacle orders.
 
     ``block_exponents=True``: the block-exponent variant, see
-    :func:`plan_exponents` (``exponent_options`` go there; no events).
+    :func:`plan_exponents` (``exponent_options`` go there).
     """
     if block_exponents:
-        if events:
-            raise ValueError("block exponents: dynamic orders (events) are not supported")
-        return plan_exponents(obstacle, goals, block=block, iters=iters, schedule=schedule,
+        return plan_exponents(obstacle, goals, block=block, iters=iters, schedule=schedule, events=events,
                               **exponent_options)
     if exponent_options:
         raise ValueError(f"{sorted(exponent_options)}: options of block_exponents=True only")
     g = _Grid(obstacle, goals, block, iters, schedule)
-    res, const, hv, B, iters = g.res, g.const, g.hv, g.B, g.iters
-    evs = sorted(((int(s), (int(r), int(c)), str(kind)) for s, (r, c), kind in events),
-                 key=lambda e: e[0])
-    for s, (r, c), kind in evs:
-        if kind not in ("obstacle", "goal"):
-            raise ValueError(f"event kind {kind!r}: expected 'obstacle' or 'goal'")
-        if not (0 <= r < g.rows and 0 <= c < g.cols) or s < 0:
-            raise ValueError(f"event at pass {s} on ({r}, {c}): outside the {g.rows}x{g.cols} map")
-
-    def apply(r, c, kind):
-        const[r, c] = True
-        hv[~const] = 0
-        hv[r, c] = one(g.p) if kind == "goal" else 0
-
-    due = deque(evs)
-    while due and due[0][0] == 0:
-        _, (r, c), kind = due.popleft()
-        apply(r, c, kind)
-        res.events_applied += 1
+    res, B, iters = g.res, g.B, g.iters
+    due = g.orders(events)
+    g.apply_due(due, 0)
 
     blocks = [(br, bc) for br in range(g.BR) for bc in range(g.BC)]
     level = {"p": g.p, "sweeps": 0, "block_iterations": 0, "maxima": None}
@@ -468,13 +481,9 @@ def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=(),
             maxima = g.maxima()
             level["maxima"] = maxima
         passes += 1
-        if due and due[0][0] <= passes:         # a pending order: a clear pass
-            while due and due[0][0] <= passes:
-                _, (r, c), kind = due.popleft()
-                apply(r, c, kind)
-                res.events_applied += 1
-                cycles += SET_OVERHEAD + B * visit_cycles(1, g.p)
-                res.clear_passes += 1
+        applied = g.apply_due(due, passes)      # pending orders: a clear pass each
+        if applied:
+            cycles += applied * (SET_OVERHEAD + B * visit_cycles(1, g.p))
             mode = "update"
             continue
         if mode == "update":
@@ -925,13 +934,25 @@ class _ExpGrid(_Grid):
         if self.e_max < 0:
             raise ValueError(f"e_max={self.e_max}: must be >= 0")
         self.E = np.zeros((self.BR, self.BC), dtype=np.int64)
-        n, m = self.n, self.m
-        self.goal_block = self.goal.reshape(self.BR, n, self.BC, m).any(axis=(1, 3))
-        free = ~self.const
-        self.free_block = free.reshape(self.BR, n, self.BC, m).any(axis=(1, 3))
         self.sat = np.zeros((self.BR, self.BC), dtype=bool)
         self.ceiling = np.full((self.BR, self.BC), self.e_max, dtype=np.int64)
+        self._block_masks()
         self._dtype_for_p()
+
+    def _block_masks(self):
+        n, m = self.n, self.m
+        self.goal_block = self.goal.reshape(self.BR, n, self.BC, m).any(axis=(1, 3))
+        self.free_block = (~self.const).reshape(self.BR, n, self.BC, m).any(axis=(1, 3))
+
+    def apply(self, r, c, kind):
+        """An order's clear pass with exponents: as in fixed point, and every
+        e_b back to 0 (no clamp, no ceiling): the state a run starts from,
+        at the current p.  (The goals keep 2**p: their blocks were at e = 0.)"""
+        super().apply(r, c, kind)
+        self.E[...] = 0
+        self.sat[...] = False
+        self.ceiling[...] = self.e_max
+        self._block_masks()
 
     def _dtype_for_p(self):
         """int64 while p <= 60 (sums of four (p+1)-bit mantissas fit), Python
@@ -1128,7 +1149,7 @@ def shift_iterations(d):
 
 
 def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
-                   e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False):
+                   e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False, events=()):
     """The block-synchronous planner (:func:`plan`) with one exponent per block.
 
     Number format: block b's node with stored mantissa v (p+1 bits, the word
@@ -1175,7 +1196,12 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     exact solution.  Within a level there are at most B * e_max re-picks, and
     between re-picks x rises in a finite set, so every level ends; the
     number of levels at one precision is bounded (each one re-picks, raising
-    the sum of e_b), the schedule is finite: every run ends.  Tested by
+    the sum of e_b), the schedule is finite: every run ends.  ``events``
+    (dynamic orders, as in :func:`plan`: at the end of pass s-1, a sweep or
+    a check pass; a clear pass each): the clear pass also sets every e_b
+    back to 0 and forgets the clamps, so the run restarts from the state a
+    run starts in, at the current p; finitely many orders, so every run
+    still ends.  Tested by
     :mod:`test_model_exponents` (x never falls, exponents in bounds, the end a
     fixed point of F).
 
@@ -1221,6 +1247,18 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     g = _ExpGrid(obstacle, goals, block, iters, schedule, headroom, e_max, ceiling, rtl)
     res, B, iters = g.res, g.B, g.iters
     blocks = [(br, bc) for br in range(g.BR) for bc in range(g.BC)]
+    due = g.orders(events)
+    g.apply_due(due, 0)
+    passes = 0
+
+    def clear_due():
+        """After a pass: the orders due now, each a clear pass; True if any."""
+        nonlocal cycles
+        k = g.apply_due(due, passes)
+        cycles += k * (SET_OVERHEAD + B * visit_cycles(1, g.p))
+        if k:
+            note("clear")
+        return k > 0
 
     def note(event):
         if trace is not None:
@@ -1254,7 +1292,8 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
                 note("repick")
         res.sweeps += 1
         level["sweeps"] += 1
-        if changed:
+        passes += 1
+        if clear_due() or changed:
             continue
         cycles += B * visit_cycles(1, g.p)             # check pass
         if rtl:
@@ -1263,6 +1302,9 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
         maxima = level["maxima"] = g.maxima()
         level["saturated"] = int(g.sat.sum())
         note("check")
+        passes += 1
+        if clear_due():
+            continue
         if maxima == 0:
             res.converged = True
             break

@@ -59,7 +59,8 @@ class Controller(wiring.Component):
     exponents, e_max, headroom : block exponents (issue 10; default off):
         the ``blk_s_*``, ``blk_scan*``, ``blk_lead_*``, ``blk_shift*`` ports,
         e_b registers (0..e_max), the re-pick with headroom h, shift visits
-        and the coarsening at a precision rise; ``e_rd`` = e of block
+        and the coarsening at a precision rise; an order's clear pass sets
+        every e_b back to 0; ``e_rd`` = e of block
         ``e_rd_block``; ``repicks`` counts re-picks
         (:func:`models.harmonic.plan_exponents`, ``rtl=True``).
 
@@ -149,6 +150,10 @@ class Controller(wiring.Component):
         def latch_order():
             m.d.sync += [act_br.eq(pend_br), act_bc.eq(pend_bc), act_row.eq(pend_row),
                          act_col.eq(pend_col), act_sat.eq(pend_sat), pend.eq(0)]
+            if X:
+                # With block exponents the clear pass restarts the exponents
+                # too (every free node is 0 again; plan_exponents' orders).
+                m.d.sync += [*(e.eq(0) for e in self._x["E"]), self._x["sat"].eq(0)]
 
         take_order = Signal()
         m.d.comb += take_order.eq(self.order & ~pend)

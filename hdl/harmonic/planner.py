@@ -127,8 +127,9 @@ class Planner(wiring.Component):
         each neighbour in another block into the centre's units first
         (:func:`models.harmonic.convert_mantissa`, serially: one position
         per cycle, at most p+1 cycles per neighbour) and answers in those
-        units, ``exponent`` = the centre's e_b.  No dynamic orders during a
-        run.  See hdl/harmonic/README.md, "Planner RTL option".
+        units, ``exponent`` = the centre's e_b.  SET's clear pass also
+        sets every e_b back to 0.  See hdl/harmonic/README.md, "Planner RTL
+        option".
     e_max, headroom : int
         With ``block_exponents``: the largest e_b (1 ..) and the re-pick's
         headroom h (0 .. p_max), ``plan_exponents``' ``e_max`` and
@@ -254,35 +255,27 @@ class Planner(wiring.Component):
         vals = [Signal(p_max + 1, name=f"dir_{s}") for s in ("c", "N", "E", "S", "W")]
         t_blk, t_row, t_col, t_in = Signal.like(c.block), Signal.like(c.row), Signal.like(c.col), Signal()
         m.d.comb += [t_blk.eq(c.block), t_row.eq(c.row), t_col.eq(c.col), t_in.eq(1)]
+        # q: (in-block test, the move inside the block, the test for a block
+        # beyond, the move into it); neither: outside the map (reads 0).
+        moves = {
+            1: (c.row != 0, [t_row.eq(c.row - 1)],                             # N
+                c_br != 0, [t_blk.eq(c.block - BC), t_row.eq(n - 1)]),
+            2: (c.col != mm - 1, [t_col.eq(c.col + 1)],                        # E
+                c_bc != BC - 1, [t_blk.eq(c.block + 1), t_col.eq(0)]),
+            3: (c.row != n - 1, [t_row.eq(c.row + 1)],                         # S
+                c_br != BR - 1, [t_blk.eq(c.block + BC), t_row.eq(0)]),
+            4: (c.col != 0, [t_col.eq(c.col - 1)],                             # W
+                c_bc != 0, [t_blk.eq(c.block - 1), t_col.eq(mm - 1)]),
+        }
         with m.Switch(q):
-            with m.Case(1):     # N
-                with m.If(c.row != 0):
-                    m.d.comb += t_row.eq(c.row - 1)
-                with m.Elif(c_br != 0):
-                    m.d.comb += [t_blk.eq(c.block - BC), t_row.eq(n - 1)]
-                with m.Else():
-                    m.d.comb += t_in.eq(0)
-            with m.Case(2):     # E
-                with m.If(c.col != mm - 1):
-                    m.d.comb += t_col.eq(c.col + 1)
-                with m.Elif(c_bc != BC - 1):
-                    m.d.comb += [t_blk.eq(c.block + 1), t_col.eq(0)]
-                with m.Else():
-                    m.d.comb += t_in.eq(0)
-            with m.Case(3):     # S
-                with m.If(c.row != n - 1):
-                    m.d.comb += t_row.eq(c.row + 1)
-                with m.Elif(c_br != BR - 1):
-                    m.d.comb += [t_blk.eq(c.block + BC), t_row.eq(0)]
-                with m.Else():
-                    m.d.comb += t_in.eq(0)
-            with m.Case(4):     # W
-                with m.If(c.col != 0):
-                    m.d.comb += t_col.eq(c.col - 1)
-                with m.Elif(c_bc != 0):
-                    m.d.comb += [t_blk.eq(c.block - 1), t_col.eq(mm - 1)]
-                with m.Else():
-                    m.d.comb += t_in.eq(0)
+            for i, (inside, step, beyond, jump) in moves.items():
+                with m.Case(i):
+                    with m.If(inside):
+                        m.d.comb += step
+                    with m.Elif(beyond):
+                        m.d.comb += jump
+                    with m.Else():
+                        m.d.comb += t_in.eq(0)
         _, _, t_ci, t_bit = locate(t_blk, t_row, t_col, "t")
         m.d.comb += [dec.h.eq(vals[0]), dec.h_N.eq(vals[1]), dec.h_E.eq(vals[2]),
                      dec.h_S.eq(vals[3]), dec.h_W.eq(vals[4])]

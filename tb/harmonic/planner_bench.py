@@ -185,12 +185,10 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     during pass s-1 (the bench watches the pass count).  ``progress(status)``
     is called from the job's STATUS polls (through the job's log, after the
     run, when the simulator runs in a subprocess: it gets the last status).
-    ``block_exponents``: the Planner's exponent option (:func:`exponent_params`,
-    no events); ``h``/``padded_h`` are then the mantissas and ``exponents``
+    ``block_exponents``: the Planner's exponent option (:func:`exponent_params`);
+    ``h``/``padded_h`` are then the mantissas and ``exponents``
     (BR x BC) the block exponents (models.harmonic.plan(..., rtl=True)).
     """
-    if block_exponents and events:
-        raise ValueError("block exponents: dynamic orders (events) are not supported")
     from tb.runner import run
     obstacle = np.asarray(obstacle, dtype=bool)
     H, W = obstacle.shape

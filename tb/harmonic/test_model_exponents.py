@@ -22,6 +22,11 @@
   exact Decision's only within the score slack that bound allows, and it
   agrees with the exact Decision far more often than the raw mantissas do
   where exponents differ (the negative control: Decision before the option).
+* Dynamic orders with exponents: an order's clear pass also restarts every
+  e_b, so the run after it equals a fresh run on the changed map from the
+  current precision (values, exponents, p, converged), and its cycles are
+  those up to the clear pass plus the fresh run's; an order while idle
+  (pass 0) is the map with that goal.
 * convert_mantissa and the option checks.
 """
 
@@ -34,8 +39,8 @@ import pytest
 from harmonic_small_maps import corridor, spiral
 from planner_maps import random_map
 from models.harmonic import (
-    TRIANGLES, VISIT_OVERHEAD, ascent_reaches, convert_mantissa, decision, decision_exponents, local_max,
-    plan, reachable, visit_cycles,
+    RUN_OVERHEAD, TRIANGLES, VISIT_OVERHEAD, ascent_reaches, convert_mantissa, decision, decision_exponents,
+    local_max, plan, reachable, visit_cycles,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -248,8 +253,8 @@ def test_convert_mantissa():
 
 def test_option_errors():
     ob, goals = _random_map(6, 6, 1)
-    with pytest.raises(ValueError, match="events"):
-        plan(ob, goals, block_exponents=True, events=[(1, (0, 0), "obstacle")])
+    with pytest.raises(ValueError, match="event kind 'wall'"):
+        plan(ob, goals, block_exponents=True, events=[(1, (0, 0), "wall")])
     with pytest.raises(ValueError, match="block_exponents=True only"):
         plan(ob, goals, headroom=1)
     with pytest.raises(ValueError, match="repick"):
@@ -348,3 +353,37 @@ def test_decision_exponents_against_exact():
     print(seen)
     assert seen["mixed"] >= 300
     assert seen["aware"] >= 0.9 * seen["mixed"] and seen["raw"] <= 0.8 * seen["mixed"], seen
+
+
+@pytest.mark.parametrize("rtl", [False, True])
+def test_orders_restart_exponents(rtl):
+    ob, goals = random_map(9, 18, 1)
+    kw = dict(block=(3, 6), iters=3, block_exponents=True, rtl=rtl)
+    sched = (6, 10, 14)
+    cell = (4, 14)                       # free; as an obstacle it cuts no cell off
+    ob2 = ob.copy()
+    ob2[cell] = True
+    assert not ob[cell] and cell not in goals
+    assert (reachable(ob2, goals) | ob2).sum() == (reachable(ob, goals) | ob).sum()
+    raised = 0
+    for s in (3, 19, 36):
+        trace = []
+        res = plan(ob, goals, schedule=sched, events=[(s, cell, "obstacle")], trace=trace, **kw)
+        i = next(k for k, t in enumerate(trace) if t[0] == "clear")
+        p_at = trace[i][1]
+        raised += int(trace[i - 1][2].max() > 0)          # exponents had moved before the order
+        assert not trace[i][2].any()                      # ... and restart at 0
+        fresh = plan(ob2, goals, schedule=[q for q in sched if q >= p_at], **kw)
+        assert (res.mantissa == fresh.mantissa).all() and (res.exponents == fresh.exponents).all()
+        assert (res.p, res.converged) == (fresh.p, fresh.converged)
+        assert res.cycles == trace[i][4] + fresh.cycles - RUN_OVERHEAD
+        assert res.clear_passes == res.events_applied == 1
+    assert raised >= 2
+    # pass 0: a goal ordered while idle is the map with that goal
+    g2 = (7, 3)
+    assert not ob[g2] and reachable(ob, goals)[g2]
+    res = plan(ob, goals, schedule=sched, events=[(0, g2, "goal")], **kw)
+    ref = plan(ob, [*goals, g2], schedule=sched, **kw)
+    assert (res.mantissa == ref.mantissa).all() and (res.exponents == ref.exponents).all()
+    assert (res.p, res.converged, res.cycles, res.sweeps) == (ref.p, ref.converged, ref.cycles, ref.sweeps)
+    assert res.clear_passes == 0 and res.events_applied == 1

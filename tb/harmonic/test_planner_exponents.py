@@ -4,8 +4,9 @@ against ``models.harmonic.plan(..., block_exponents=True, rtl=True)``, bit-exact
 
 Two builds per simulator, 3x3 blocks of 3x6 nodes (B = 9, every border
 kind), p_max 14.  ``default`` (e_max 255, headroom 1, the model's
-defaults): one cocotb test runs three small maps (two random maps whose
-exponents move and saturate, a corridor) one after the other through the
+defaults): one cocotb test runs four small runs (two random maps whose
+exponents move and saturate, a corridor, the first random map again with
+an obstacle and a goal ordered during the run) one after the other through the
 host streams: LOAD, START, STATUS to the end, READ every node (the
 mantissa, the flag and the block's exponent): every mantissa, flag and e_b,
 the final p, converged, sweeps, block iterations, check iterations and the
@@ -14,8 +15,10 @@ neighbours lie in a block with another exponent, and at the map's corners:
 triangle, gradient, value and exponent equal
 ``models.harmonic.decision_exponents``.  It asserts that the runs exercised
 what they claim: re-picks (some e_b > 0), a precision rise with a saturated
-block (coarsening), both converged and not-converged runs, and DIRECTIONs
-whose neighbours were shifted left, right and clamped.  ``bounded`` (the
+block (coarsening), both converged and not-converged runs, dynamic orders
+(SET during the run, taken in the pass meant: their clear passes restart
+the exponents), and DIRECTIONs whose neighbours were shifted left, right
+and clamped.  ``bounded`` (the
 Planner's e_max = 10 and headroom = 0): one random map on which exponents
 stop at e_max, against the model with the same bounds.
 PLANNER_EXP_ONLY=0,2 runs only those maps of the default set.
@@ -29,6 +32,7 @@ import pytest
 
 from models.harmonic import convert_mantissa, decision_exponents, plan
 from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic, exponent_params
+from tb.harmonic.planner_job import run_map
 from tb.harmonic.planner_maps import MAPS
 from tb.harmonic.serial import start
 from tb.runner import SIMULATORS, run
@@ -36,18 +40,20 @@ from tb.runner import SIMULATORS, run
 PARAMS = dict(n=3, m=6, br=3, bc=3, p_max=14, depth=256)
 # name: (extra Planner parameters, [(map, seed, schedule, I)], what the runs must exercise)
 SETS = {
-    "default": ({}, [("random", 1, (6, 10, 14), 3), ("random", 3, (6, 10, 14), 3),
-                     ("corridor", 0, (4, 8, 12), 2)],
-                ("repick", "coarsen", "converged", "not_converged", "left", "right", "clamped")),
-    "bounded": ({"e_max": 10, "headroom": 0}, [("random", 1, (6, 10, 14), 3)],
+    "default": ({}, [("random", 1, (6, 10, 14), 3, ()), ("random", 3, (6, 10, 14), 3, ()),
+                     ("corridor", 0, (4, 8, 12), 2, ()),
+                     ("random", 1, (6, 10, 14), 3, ((19, (4, 14), "obstacle"), (30, (7, 3), "goal")))],
+                ("repick", "coarsen", "converged", "not_converged", "left", "right", "clamped", "orders")),
+    "bounded": ({"e_max": 10, "headroom": 0}, [("random", 1, (6, 10, 14), 3, ())],
                 ("at_e_max", "coarsen", "left", "right")),
 }
 ONLY = os.environ.get("PLANNER_EXP_ONLY")
 
 
-def _model(name, seed, sched, iters, bounds):
+def _model(name, seed, sched, iters, events, bounds):
     ob, goals = MAPS[name](9, 18, seed)
-    res = plan(ob, goals, block=(3, 6), iters=iters, schedule=sched, block_exponents=True, rtl=True, **bounds)
+    res = plan(ob, goals, block=(3, 6), iters=iters, schedule=sched, events=events, block_exponents=True,
+               rtl=True, **bounds)
     return ob, goals, res
 
 
@@ -58,27 +64,21 @@ async def planner_exponents_against_model(dut):
     await start(dut)
     bench = PlannerBench(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"], exponents=True,
                          e_max=bounds.get("e_max", 255))
-    seen = dict.fromkeys(("repick", "coarsen", "converged", "not_converged", "at_e_max", "nodes",
+    seen = dict.fromkeys(("repick", "coarsen", "converged", "not_converged", "at_e_max", "orders", "nodes",
                           "directions", "left", "right", "clamped"), 0)
     if ONLY and not bounds:
         runs = [runs[int(i)] for i in ONLY.split(",")]
-    for name, seed, sched, iters in runs:
-        ob, goals, res = _model(name, seed, sched, iters, bounds)
+    for name, seed, sched, iters, events in runs:
+        ob, goals, res = _model(name, seed, sched, iters, events, bounds)
         goal = np.zeros(ob.shape, dtype=bool)
         for r, c in goals:
             goal[r, c] = True
-        await bench.load_map(ob | res.unreachable, goal)
-        p1, step, p_last = arithmetic(sched)
-        resp = await bench.command(Op.START, p1=p1, step=step, p_last=p_last, iters=iters)
-        assert resp["code"] == Code.OK, resp["code"]
-        st = await bench.wait_idle()
-        h, const = await bench.read_all(ob.shape)
-        tag = f"{name} seed {seed} schedule {sched} I={iters}"
-        got = {k: int(st[k]) for k in ("p", "converged", "sweeps", "block_iterations", "check_iterations",
-                                       "cycles")}
-        want = {"p": res.p, "converged": int(res.converged), "sweeps": res.sweeps,
-                "block_iterations": res.block_iterations, "check_iterations": res.check_iterations,
-                "cycles": res.cycles}
+        # load, START, each order during its pass (the response proves it), read back
+        st, h, const = await run_map(bench, ob | res.unreachable, goal, arithmetic(sched), iters, events)
+        tag = f"{name} seed {seed} schedule {sched} I={iters} orders {events}"
+        keys = ("p", "converged", "sweeps", "block_iterations", "check_iterations", "clear_passes", "cycles")
+        got = {k: int(st[k]) for k in keys}
+        want = {k: int(getattr(res, k)) for k in keys}
         dut._log.info(f"{tag}: RTL {got} exponents {bench.block_exponents.tolist()}")
         dut._log.info(f"{tag}: model {want} exponents {res.exponents.tolist()}")
         assert bench.block_exponents.tolist() == res.exponents.tolist(), (
@@ -93,6 +93,7 @@ async def planner_exponents_against_model(dut):
         seen["coarsen"] += int(any(lv["saturated"] for lv in res.levels[:-1]))
         seen["converged" if res.converged else "not_converged"] += 1
         seen["at_e_max"] += int((res.exponents == bounds.get("e_max")).sum())
+        seen["orders"] += res.clear_passes
     dut._log.info(f"compared: {seen}")
     if not ONLY:
         assert all(seen[k] for k in (*claims, "nodes", "directions")), seen
