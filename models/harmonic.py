@@ -373,7 +373,7 @@ class _Grid:
             self.apply(r, c, kind)
             k += 1
         self.res.events_applied += k
-        if passes:
+        if passes:                  # pass 0: sent while idle, before the run (not one of its passes)
             self.res.clear_passes += k
         return k
 

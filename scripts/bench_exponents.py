@@ -1,10 +1,10 @@
 """Benchmark (issue 10): block exponents against fixed point, on every bundled map.
 
-Both runs are the golden model (models.harmonic.plan), whose cycle counts
+All runs are the golden model (models.harmonic.plan), whose cycle counts
 follow the planner RTL's timing table (a block visit of K iterations at word
 precision p costs K*(p+2) + VISIT_OVERHEAD, a check pass one iteration per
-block); the block-exponent run adds one shift visit (K = 1) per exponent
-re-pick, as its docstring (plan_exponents) states.  Same block (6x12, the
+block); the block-exponent runs add the re-picks' shift visits, as its
+docstring (plan_exponents) states.  Same block (6x12, the
 RTL's 2x2-cluster block and plan()'s default), I = 6, the goal of each map's
 longest scenario (the last free cell where a map has no scenario file), and
 the same increasing precision schedule (STEP:STEP:512): the run stops at the

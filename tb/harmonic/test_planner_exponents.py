@@ -38,7 +38,7 @@ from tb.harmonic.serial import start
 from tb.runner import SIMULATORS, run
 
 PARAMS = dict(n=3, m=6, br=3, bc=3, p_max=14, depth=256)
-# name: (extra Planner parameters, [(map, seed, schedule, I)], what the runs must exercise)
+# name: (extra Planner parameters, [(map, seed, schedule, I, orders)], what the runs must exercise)
 SETS = {
     "default": ({}, [("random", 1, (6, 10, 14), 3, ()), ("random", 3, (6, 10, 14), 3, ()),
                      ("corridor", 0, (4, 8, 12), 2, ()),
@@ -133,5 +133,8 @@ def test_exponent_option_is_checked_and_default_off():
     from hdl.harmonic.planner import Planner, response_layout
     with pytest.raises(ValueError, match="block_exponents=2: must be True or False"):
         Planner(3, 6, (3, 3), 14, 256, block_exponents=2)
+    with pytest.raises(ValueError, match="headroom=15: leaves no mantissa bit at p_max=14"):
+        Planner(3, 6, (3, 3), 14, 256, block_exponents=True, headroom=15)
+    Planner(3, 6, (3, 3), 14, 256, block_exponents=True, headroom=14)      # the bound itself
     assert "exponent" not in dict(response_layout(14)) and "exponent" in dict(response_layout(14, exponents=True))
     assert not Planner(3, 6, (3, 3), 14, 256).exponents
