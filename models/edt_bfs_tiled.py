@@ -103,7 +103,8 @@ iteration per clock, synchronously over the tile:
 until an iteration lowers no hop (that iteration counted; parents change
 only when hop(p) = m + 1, and the last iteration sets every visited
 non-root's parent from the final values).  Goals in the cfr start at hop 0
-(roots: m + 1 <= 0 never holds, parent 0), everything else at NONE.  After
+(roots: m + 1 <= 0 never holds, parent 0), everything else at NONE; a root
+pushes its tile and the tiles of its cfr neighbours in other tiles.  After
 a visit, a border pixel q whose hop fell marks the tile of each 8-adjacent
 halo pixel x with cfr(x) and either hop(q) + 1 < hop(x) (x will fall) or
 hop(q) + 1 = hop(x) with q's index (seen from x) below parent(x) (x's
@@ -153,7 +154,8 @@ ready, counted from the command (exclusive) to the last beat:
                                         flags of W_1 are computed on the fly)
     scan       = tiles                  W_1 from the per-tile frontier flags
     EDT        = sum over levels (level + sum over the level's visits: visit)
-    goals      = goal * (number of goals)
+    goals      = sum over goals: goal (+ the tiles pushed: a goal in the cfr pushes its tile
+                                        and each other tile holding a cfr neighbour of it)
     BFS        = sum over visits: visit
     path       = latency + len(path)    (latency + 1 without a path; 0 without a start)
     readout    = latency + H * W        optional: every pixel, one per beat
@@ -192,7 +194,7 @@ class Timing:
     sched: int = 2        # pop the worklist, set up the window's addresses
     latency: int = 1      # RAM read latency before the first word of a burst
     level: int = 1        # EDT: swap the worklists of levels k and k+1
-    goal: int = 2         # per goal: read its word (cfr?), write hop 0 and push its tile
+    goal: int = 2         # per goal: read its word (cfr?), write hop 0 (then one beat per tile pushed)
 
     def __post_init__(self):
         for name in ("sched", "latency", "level", "goal"):
@@ -253,6 +255,7 @@ class EdtBfsTiledResult(EdtBfsResult):
     array: tuple = (0, 0)           # (T_r, T_c)
     tile_visits: int = 0
     stats: dict = field(default_factory=dict)
+    trace: list = field(default_factory=list)   # every visit: (phase, level, tile, iterations, marks)
 
 
 class Geometry:
@@ -420,10 +423,12 @@ class TileEngine:
                        "array_iterations_bfs": 0, "words_read": 0, "words_written": 0, "marks": 0}
         self.cycles = {"load": g.h * -(-g.w // g.p), "scan": g.tiles, "edt": 0, "goals": 0,
                        "bfs": 0, "path": 0, "readout": 0}
+        self.trace = []          # every visit in order: (phase, level (0 in the BFS), tile, iterations, marks)
 
-    def _account(self, phase, t, iterations, marks):
-        """One visit of tile t: counts and cycles (module docstring, cycle model)."""
+    def _account(self, phase, k, t, iterations, marks):
+        """One visit of tile t: trace, counts and cycles (module docstring, cycle model)."""
         g, tm = self.g, self.timing
+        self.trace.append((phase, k, t, iterations, marks))
         self.visits[t] += 1
         self.counts[f"visits_{phase}"] += 1
         self.counts[f"array_iterations_{phase}"] += iterations
@@ -517,7 +522,7 @@ class TileEngine:
                         nxt.push(t)
                     for i in dirs:
                         nxt.push(int(g.nbr[t, i]))
-                    self._account("edt", t, 1, int(me) + len(dirs))
+                    self._account("edt", k, t, 1, int(me) + len(dirs))
             work = list(nxt.fifo)
 
     # -- BFS -----------------------------------------------------------------------------------
@@ -566,13 +571,22 @@ class TileEngine:
         for r, c in goals:
             self.cycles["goals"] += self.timing.goal
             if self.cfr[r + 1, c + 1]:
+                # The root is no visit's change: its own tile and the tiles of its cfr
+                # neighbours in other tiles are pushed here, one per beat.
                 self.hop[r + 1, c + 1] = 0
-                work.push(g.tile_of(r, c))
+                tiles = [g.tile_of(r, c)]
+                for dr, dc in OFFSETS.values():
+                    rr, cc = r + dr, c + dc
+                    if self.cfr[rr + 1, cc + 1] and self.hop[rr + 1, cc + 1] and g.tile_of(rr, cc) not in tiles:
+                        tiles.append(g.tile_of(rr, cc))
+                for t in tiles:
+                    work.push(t)
+                self.cycles["goals"] += len(tiles)
         while (t := work.pop()) is not None:
             iterations, dirs = self.bfs_visit(t)
             for i in dirs:
                 work.push(int(g.nbr[t, i]))
-            self._account("bfs", t, iterations, len(dirs))
+            self._account("bfs", 0, t, iterations, len(dirs))
 
     def plain(self, a):
         """A padded array cut to the map (a view)."""
@@ -627,4 +641,4 @@ def plan_path_tiled(obstacle, goals, start, dfar, array=(8, 8), word_pixels=None
         iterations_edt=int(di[done].max()) + 1 if done.any() else 1,
         iterations_bfs=int(hop[visited].max()) + 1 if visited.any() else 1,
         cycles=sum(eng.cycles.values()), hop=np.where(visited, hop, -1), array=(g.tr, g.tc),
-        tile_visits=visits, stats=stats)
+        tile_visits=visits, stats=stats, trace=eng.trace)
