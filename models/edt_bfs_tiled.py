@@ -120,8 +120,11 @@ stay lengths of real paths and, for non-roots, hop(p) >= m(p) + 1 at all
 times; the visit's last iteration changes nothing, so hop(p) <= m(p) + 1, and
 it set parent(p) from those values.  Every fall is strict and values are
 bounded below, so the schedule ends.  When the worklist is empty, every pixel
-still satisfies the invariant against the final values: a neighbour q of p
-in another tile that fell after p's tile's last visit either offered
+still satisfies the invariant against the final values (a pixel of a tile
+never visited is NONE with no visited neighbour): a neighbour q of p in
+another tile that fell after p's tile's last visit (a root counts as a fall
+from NONE before every visit, and pushed the tiles of its neighbours) either
+offered
 hop(q) + 1 < hop(p), or equal from a smaller index than parent(p), and then
 marked p's tile (a contradiction), or left m(p) and the smallest minimising
 index as they were.  So the final state is a fixpoint of
@@ -214,13 +217,12 @@ def state_bits(height, width):
     :func:`models.edt_bfs.widths`), ``dx`` / ``dy`` are signed
     (|dx| <= H - 1), ``hop`` holds 0..H*W - 1 and NONE = all ones (>= H*W),
     ``parent`` 0..8.  done, obstacle, visited, cfr and delta are derived
-    (module docstring) and cost no bits.  ``edt``: the fields the EDT moves;
-    ``bfs``: the BFS's (di for the cfr, hop, parent).
+    (module docstring) and cost no bits.  Returns ``fields`` (name: bits)
+    and ``total``.
     """
     w = widths(height, width)
     f = {"di": _bits(w["k_di"] + 1), "dx": w["dx"], "dy": w["dy"], "hop": _bits(height * width), "parent": 4}
-    return {"fields": f, "total": sum(f.values()), "edt": f["di"] + f["dx"] + f["dy"],
-            "bfs": f["di"] + f["hop"] + f["parent"]}
+    return {"fields": f, "total": sum(f.values())}
 
 
 def ram_blocks(height, width, word_pixels, block_bits=EBR_BITS):
