@@ -23,23 +23,11 @@ from collections import deque
 
 import numpy as np
 import pytest
-import scipy.ndimage as ndi
 
 from images import FAMILIES, free_cells, sparse_points
 from models.edt_bfs import OFFSETS, edt, job_cycles, plan_path, widths
+from references import exact_di as _exact_di, scipy_edt as _scipy
 from tb.runner import seed_from_env
-
-
-def _exact_di(d2):
-    """Smallest k with d2 <= k^2 + k (d rounded to the nearest integer)."""
-    k = np.ceil(np.sqrt(d2 + 0.25) - 0.5).astype(np.int64)
-    k = np.where(k * k + k < d2, k + 1, k)          # guard float rounding
-    return np.where((k > 0) & ((k - 1) * (k - 1) + (k - 1) >= d2), k - 1, k)
-
-
-def _scipy(img):
-    dist, idx = ndi.distance_transform_edt(~img, return_indices=True)
-    return np.rint(dist ** 2).astype(np.int64), idx
 
 
 def _sweep(seed, count, sizes):
