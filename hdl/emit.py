@@ -31,7 +31,7 @@ from pathlib import Path
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 from amaranth.back import verilog  # noqa: E402
-from amaranth.hdl import Shape  # noqa: E402
+from amaranth.hdl import Const, Shape, ValueCastable  # noqa: E402
 from amaranth.lib import data, stream, wiring  # noqa: E402
 
 from .dflc.core import DflcCore  # noqa: E402
@@ -161,11 +161,33 @@ def _fields(shape, offset=0, prefix=""):
     return [entry]
 
 
+def _signature_ports(component):
+    """(path, member, value) of every port of the component's signature that
+    becomes a module port: a constant member (the ``ready`` of an
+    ``always_ready`` stream, the ``valid`` of an ``always_valid`` one) is
+    none.  Amaranth 0.5 refuses constants as ports
+    (amaranth-lang/amaranth#1574), so :func:`emit` passes these explicitly."""
+    return [(path, member, value) for path, member, value in component.signature.flatten(component)
+            if not isinstance(value, Const)]
+
+
+def _convert(component, module):
+    """The component's Verilog: ``verilog.convert`` with the ports it would
+    take from the signature itself, minus the constant members."""
+    from amaranth.hdl._ir import PortDirection     # what verilog.convert uses for a component's ports
+    ports = {}
+    for path, member, value in _signature_ports(component):
+        value = value.as_value() if isinstance(value, ValueCastable) else value
+        ports["__".join(map(str, path))] = (
+            value, PortDirection.Input if member.flow == wiring.Flow.In else PortDirection.Output)
+    return verilog.convert(component, name=module, emit_src=False, ports=ports)
+
+
 def ports_of(component):
     """The component's ports from its signature, in signature order."""
     sig = component.signature
     ports = []
-    for path, member_, value in sig.flatten(component):
+    for path, member_, value in _signature_ports(component):
         shape = value.shape()
         s = Shape.cast(shape)
         port = {"name": "__".join(str(p) for p in path),
@@ -190,11 +212,15 @@ def streams_of(component, ports):
             s = member.signature
             out[name] = {
                 "direction": "sink (into the core)" if member.flow == wiring.Flow.In else "source (out of the core)",
-                "valid": f"{name}__valid", "ready": f"{name}__ready", "payload": f"{name}__payload",
+                "valid": None if s.always_valid else f"{name}__valid",
+                "ready": None if s.always_ready else f"{name}__ready",
+                "payload": f"{name}__payload",
                 "payload_width": Shape.cast(s.members["payload"].shape).width,
                 "always_valid": s.always_valid, "always_ready": s.always_ready,
-                "protocol": "a beat moves on a rising clk edge with valid and ready both high; "
-                            "valid never depends on ready",
+                "protocol": ("a beat moves on a rising clk edge with valid and ready both high; "
+                             "valid never depends on ready") if not s.always_ready else
+                            ("always_ready, no ready port (no back-pressure): a beat moves on every "
+                             "rising clk edge with valid high; the consumer must take it"),
             }
     return out
 
@@ -257,7 +283,7 @@ def emit(name, params, out_dir, with_manifest=True):
     module = top_name(name, params)
     component = build(name, params)
     man = manifest(name, params, component) if with_manifest else None
-    text = verilog.convert(component, name=module, emit_src=False)
+    text = _convert(component, module)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{module}.v"

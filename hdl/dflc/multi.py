@@ -2,7 +2,6 @@
 
 from amaranth.hdl import Module
 from amaranth.lib import wiring
-from amaranth.lib.wiring import Flow
 
 from ..params import Param, check
 from .top import DflcStream, config_for, split_params
@@ -75,18 +74,6 @@ class DflcMulti(wiring.Component):
         m = Module()
         for key, top in self.tops.items():
             m.submodules[key] = top
-            for name, member in top.signature.members.items():
-                outer = getattr(self, f"{key}_{name}")
-                if member.flow == Flow.In:
-                    m.d.comb += _connect_in(outer, getattr(top, name))
-                else:
-                    m.d.comb += _connect_out(outer, getattr(top, name))
+            for name in top.signature.members:     # each instance's streams pass through
+                wiring.connect(m, wiring.flipped(getattr(self, f"{key}_{name}")), getattr(top, name))
         return m
-
-
-def _connect_in(outer, inner):
-    return [inner.payload.eq(outer.payload), inner.valid.eq(outer.valid), outer.ready.eq(inner.ready)]
-
-
-def _connect_out(outer, inner):
-    return [outer.payload.eq(inner.payload), outer.valid.eq(inner.valid), inner.ready.eq(outer.ready)]

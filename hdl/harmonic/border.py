@@ -2,11 +2,58 @@
 (paper 000, sections 5.1 and 5.4)."""
 
 from amaranth.hdl import Cat, Module, Mux, Signal, signed
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-__all__ = ["Border"]
+__all__ = ["Border", "BorderExponentsSignature", "SIDES"]
+
+SIDES = ("N", "S", "W", "E")        # the border sides, in the order of the per-side fields
+
+
+class BorderExponentsSignature(wiring.Signature):
+    """The border conversion of the block-exponent option (issue 10, beyond
+    the paper), seen from the Control module that drives it; the
+    :class:`Border` takes the flipped form (``conversion``).  See the
+    Border's "Block exponents" section for the timing.
+
+    Parameters
+    ----------
+    stride : int
+        RAM words per block (p_max + 2).
+    e_max : int
+        Largest block exponent.
+
+    Members
+    -------
+    s : Out(StructLayout N, S, W, E of signed(bits(e_max) + 1))
+        Per side, e_b - e_b' (the computed block's exponent minus the
+        neighbour's): the conversion's shift.
+    raw : Out(1)
+        The MSB-first streams read unconverted (update visits), for ``lead``.
+    scan : Out(1)
+        The clamp scan's strobe (once per visit, before the iterations).
+    scan_busy, clamped : In(1)
+        The scan is on; some border node of the block is clamped.
+    scan_len : In(range(stride + 1))
+        The scan's length L (its cycles after the strobe).
+    lead : In(StructLayout N, S, W, E of range(stride + 1))
+        Per side, the smallest offset 1..p+1 at which a raw MSB-first read
+        showed a 1 since the last ``scan`` (``stride``: none).
+    """
+
+    def __init__(self, stride, e_max):
+        self.stride, self.e_max = stride, e_max
+        L = range(stride + 1)
+        super().__init__({
+            "s": Out(data.StructLayout({side: signed(e_max.bit_length() + 1) for side in SIDES})),
+            "raw": Out(1), "scan": Out(1),
+            "scan_busy": In(1), "scan_len": In(L), "clamped": In(1),
+            "lead": In(data.StructLayout({side: L for side in SIDES})),
+        })
+
+    def __eq__(self, other):
+        return type(other) is type(self) and (self.stride, self.e_max) == (other.stride, other.e_max)
 
 
 class Border(wiring.Component):
@@ -79,14 +126,15 @@ class Border(wiring.Component):
                  ``scan_busy`` is never high; the scan costs nothing)
     ===========  ==========================================================
 
-    Exponent ports: ``p`` In (the run's precision), ``s_N, s_S, s_W, s_E``
-    In(signed), ``scan`` In(1), ``scan_busy`` Out(1), ``scan_len``
-    Out (max over the sides inside the map of clip(s, 0, p+1)), ``clamped``
-    Out(1); ``raw`` In(1): the MSB-first streams read unconverted (update
-    visits: the nodes do not use them), and ``lead_*`` Out: the smallest
-    offset (1..p+1) at which a raw MSB-first read of that side showed a 1
-    since the last ``scan`` strobe (``stride``: none seen), i.e. the bit
-    length p+2-lead of the largest neighbour value, for the re-pick.
+    Exponent ports: ``p`` In (the run's precision) and ``conversion``
+    In(:class:`BorderExponentsSignature`): ``s.N .. s.E`` In(signed),
+    ``scan`` In(1), ``scan_busy`` Out(1), ``scan_len`` Out (max over the
+    sides inside the map of clip(s, 0, p+1)), ``clamped`` Out(1); ``raw``
+    In(1): the MSB-first streams read unconverted (update visits: the nodes
+    do not use them), and ``lead.N .. lead.E`` Out: the smallest offset
+    (1..p+1) at which a raw MSB-first read of that side showed a 1 since
+    the last ``scan`` strobe (``stride``: none seen), i.e. the bit length
+    p+2-lead of the largest neighbour value, for the re-pick.
 
     Ports
     -----
@@ -116,12 +164,7 @@ class Border(wiring.Component):
         self.e_max = e_max
         extra = {}
         if self.exponents:
-            sw = signed(e_max.bit_length() + 1)
-            extra = {"p": In(range(stride)), "s_N": In(sw), "s_S": In(sw), "s_W": In(sw), "s_E": In(sw),
-                     "scan": In(1), "scan_busy": Out(1), "scan_len": Out(range(stride + 1)),
-                     "clamped": Out(1), "raw": In(1),
-                     "lead_N": Out(range(stride + 1)), "lead_S": Out(range(stride + 1)),
-                     "lead_W": Out(range(stride + 1)), "lead_E": Out(range(stride + 1))}
+            extra = {"p": In(range(stride)), "conversion": In(BorderExponentsSignature(stride, e_max))}
         super().__init__({
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
             "cntR": In(range(stride)), "r_cnt": In(range(stride)),
@@ -145,7 +188,7 @@ class Border(wiring.Component):
             ("right", self.n, self.w_right, self.en_right, "W", -1, self.bc != 0),
             ("left", self.n, self.w_left, self.en_left, "E", 1, self.bc != BC - 1),
         )
-        for name, width, data, en, side, offset, valid in sides:
+        for name, width, wdata, en, side, offset, valid in sides:
             seg = self.seg_cols if name in ("top", "bottom") else self.seg_rows
             src = Signal(range(self.depth), name=f"src_{side}")
             m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
@@ -164,7 +207,7 @@ class Border(wiring.Component):
                 m.submodules[f"ram_{name}_{k}"] = ram
                 wp = ram.write_port()
                 lsb, msb = ram.read_port(), ram.read_port()
-                m.d.comb += [wp.addr.eq(self.w_addr), wp.data.eq(data[sl]), wp.en.eq(en[k * seg])]
+                m.d.comb += [wp.addr.eq(self.w_addr), wp.data.eq(wdata[sl]), wp.en.eq(en[k * seg])]
                 if not self.exponents:
                     m.d.comb += [
                         lsb.addr.eq(src + self.cntR), msb.addr.eq(src + self.r_cnt),
@@ -186,25 +229,26 @@ class Border(wiring.Component):
         lens = []
         for side, valid in (("N", self.br != 0), ("S", self.br != self.BR - 1),
                             ("W", self.bc != 0), ("E", self.bc != self.BC - 1)):
-            s = getattr(self, f"s_{side}")
+            s = self.conversion.s[side]
             ln = Signal(range(self.stride + 1), name=f"scan_len_{side}")
             m.d.comb += ln.eq(Mux(~valid | (s <= 0), 0, Mux(s >= p1, p1, s)))
             lens.append(ln)
         acc = lens[0]
         for ln in lens[1:]:
             acc = Mux(ln > acc, ln, acc)
-        m.d.comb += self.scan_len.eq(acc)
+        x = self.conversion
+        m.d.comb += x.scan_len.eq(acc)
         busy = Signal()
         j = Signal(range(self.stride + 1))
         m.d.comb += [
-            self._pres.eq((self.scan & (self.scan_len != 0)) | busy),
-            self._jcur.eq(Mux(self.scan, 0, j)),
-            self.scan_busy.eq(busy | self._pres_r),
-            self.clamped.eq(Cat(*self._overs).any()),
+            self._pres.eq((x.scan & (x.scan_len != 0)) | busy),
+            self._jcur.eq(Mux(x.scan, 0, j)),
+            x.scan_busy.eq(busy | self._pres_r),
+            x.clamped.eq(Cat(*self._overs).any()),
         ]
         m.d.sync += [self._pres_r.eq(self._pres), self._jr.eq(self._jcur)]
         with m.If(self._pres):
-            m.d.sync += [j.eq(self._jcur + 1), busy.eq(self._jcur + 1 < self.scan_len)]
+            m.d.sync += [j.eq(self._jcur + 1), busy.eq(self._jcur + 1 < x.scan_len)]
 
     def _shift(self, m, side, width, ok, valid):
         """One side's converted streams: read offset cntR + s / r_cnt + s,
@@ -213,16 +257,17 @@ class Border(wiring.Component):
             self._pres, self._pres_r = Signal(), Signal()
             self._jcur, self._jr = Signal(range(self.stride + 1)), Signal(range(self.stride + 1))
             self._overs = []
-        s = getattr(self, f"s_{side}")
+        x = self.conversion
+        s = x.s[side]
         over = Signal(width, name=f"over_{side}")
         self._overs.append(over)
-        with m.If(self.scan):
+        with m.If(x.scan):
             m.d.sync += over.eq(0)
         top = self.p + 1
-        lead = getattr(self, f"lead_{side}")
+        lead = x.lead[side]
         raw_r, roff_r = Signal(name=f"raw_{side}_r"), Signal(range(self.stride), name=f"roff_{side}_r")
-        m.d.sync += [raw_r.eq(self.raw), roff_r.eq(self.r_cnt)]
-        with m.If(self.scan):
+        m.d.sync += [raw_r.eq(x.raw), roff_r.eq(self.r_cnt)]
+        with m.If(x.scan):
             m.d.sync += lead.eq(self.stride)
         streams = []
         for cnt, name in ((self.cntR, "h"), (self.r_cnt, "m")):
@@ -245,7 +290,7 @@ class Border(wiring.Component):
                     m.d.comb += port.addr.eq(src + addr)
                 else:
                     m.d.comb += port.addr.eq(Mux(self._pres, src + 1 + self._jcur,
-                                                 Mux(self.raw, src + self.r_cnt, src + addr)))
+                                                 Mux(x.raw, src + self.r_cnt, src + addr)))
                 out = Mux(flag_r, port.data, Mux(inr_r, port.data, 0) | over[sl])
                 m.d.comb += getattr(self, f"{name}_{side}")[sl].eq(Mux(ok, out, 0))
             with m.If(sel_s):

@@ -1,10 +1,19 @@
 """Decision module of the harmonic planner (paper 000, section 5.3)."""
 
 from amaranth.hdl import Module, Mux, Signal, signed
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-__all__ = ["Decision"]
+__all__ = ["Decision", "NEIGHBOURHOOD", "neighbourhood_layout"]
+
+NEIGHBOURHOOD = ("c", "N", "E", "S", "W")     # the node, then its neighbours (DIRECTION's read order)
+
+
+def neighbourhood_layout(p_max):
+    """The values the Decision module reads (5.3): ``c`` the node's h, and
+    ``N``, ``E``, ``S``, ``W`` its neighbours' h_N, h_E, h_S, h_W
+    (p_max + 1 bits each)."""
+    return data.StructLayout({k: p_max + 1 for k in NEIGHBOURHOOD})
 
 
 class Decision(wiring.Component):
@@ -34,7 +43,9 @@ class Decision(wiring.Component):
 
     Ports
     -----
-    start : In(1); h, h_N, h_E, h_S, h_W : In(p_max+1)
+    start : In(1); h : In(:func:`neighbourhood_layout`)
+        ``h.c`` the node's value (the paper's h), ``h.N``, ``h.E``, ``h.S``,
+        ``h.W`` its neighbours' (h_N, h_E, h_S, h_W)
     done : Out(1); triangle : Out(2); g_row, g_col : Out(signed(p_max+2))
     """
 
@@ -44,7 +55,7 @@ class Decision(wiring.Component):
         self.p_max = p_max
         w = p_max + 1
         super().__init__({
-            "start": In(1), "h": In(w), "h_N": In(w), "h_E": In(w), "h_S": In(w), "h_W": In(w),
+            "start": In(1), "h": In(neighbourhood_layout(p_max)),
             "done": Out(1), "triangle": Out(2),
             "g_row": Out(signed(w + 1)), "g_col": Out(signed(w + 1)),
         })
@@ -57,7 +68,7 @@ class Decision(wiring.Component):
         best = Signal(2 * w + 1)
         d = {s: Signal(signed(w + 1), name=f"d_{s}") for s in "NESW"}   # h' - h
         for s in "NESW":
-            m.d.comb += d[s].eq(getattr(self, f"h_{s}") - self.h)
+            m.d.comb += d[s].eq(self.h[s] - self.h.c)
         pairs = (("N", "E"), ("E", "S"), ("S", "W"), ("W", "N"))
         da, db = Signal(signed(w + 1)), Signal(signed(w + 1))
         with m.Switch(t):

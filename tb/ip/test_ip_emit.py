@@ -12,10 +12,11 @@ import sys
 from pathlib import Path
 
 import pytest
-from amaranth.hdl import Shape
+from amaranth.hdl import Const, Shape
 from amaranth.lib import wiring
 
 from hdl import emit
+from hdl.dflc.core import latency
 from hdl.dflc.top import config_for, stream_latency
 from hdl.params import REQUIRED
 from models.dflc import WIDTH_LIMITS
@@ -142,6 +143,7 @@ def test_bad_parameters(capsys, tmp_path):
 # Non-default parameter sets: manifest against the signature and the Verilog, then lint.
 SETS = [
     ("dflc_stream", {"ip_sz": 10, "op_sz": 14, "div": "array", "par": 1, "cpr9_no": 3}),
+    ("dflc_core", {"fll": "n3_prod", "div": "array"}),     # an always_ready stream (no ready port)
     ("harmonic_cluster", {"depth": 64, "p_max": 30}),
     ("edt_bfs", {"height": 5, "width": 7}),
 ]
@@ -170,12 +172,13 @@ def test_manifest_and_lint(name, params, tmp_path):
     assert man["module"] == module and man["top"] == name
     assert all(man["parameters"][k] == v for k, v in params.items())
 
-    # every port of the signature, with its direction and width
+    # every port of the signature, with its direction and width (a constant
+    # member, an always_ready stream's ready, is no port)
     comp = emit.TOPS[name](**params)
     comp._MustUse__silence = True
     sig_ports = {"__".join(map(str, path)): ("input" if member.flow == wiring.Flow.In else "output",
                                              Shape.cast(value.shape()).width)
-                 for path, member, value in comp.signature.flatten(comp)}
+                 for path, member, value in comp.signature.flatten(comp) if not isinstance(value, Const)}
     man_ports = {p["name"]: (p["direction"], p["width"]) for p in man["ports"]}
     assert man_ports == sig_ports
     # ... which are the Verilog module's ports, besides the clock and the reset
@@ -189,8 +192,11 @@ def test_manifest_and_lint(name, params, tmp_path):
     assert streams == set(man["streams"]) and bool(streams) == (name != "harmonic_cluster")
     for s in streams:
         roles = {p["role"]: p for p in man["ports"] if p.get("stream") == s}
-        assert set(roles) == {"valid", "ready", "payload"}
-        assert roles["valid"]["direction"] != roles["ready"]["direction"]
+        always_ready = man["streams"][s]["always_ready"]
+        assert set(roles) == {"valid", "payload"} | ({"ready"} if not always_ready else set())
+        assert man["streams"][s]["ready"] == (None if always_ready else roles["ready"]["name"])
+        if not always_ready:
+            assert roles["valid"]["direction"] != roles["ready"]["direction"]
         assert roles["payload"]["direction"] == roles["valid"]["direction"]
         bits = sorted((f["lsb"], f["msb"]) for f in roles["payload"]["fields"])
         assert bits[0][0] == 0 and bits[-1][1] == roles["payload"]["width"] - 1
@@ -206,6 +212,10 @@ def test_manifest_and_lint(name, params, tmp_path):
         assert [(f["lsb"], f["msb"]) for f in payload["fields"]] == [(0, 9), (10, 19)]
     elif name == "harmonic_cluster":
         assert t["iteration_cycles"] == "p+2"
+    elif name == "dflc_core":             # n = 3: 8 cycles per sample; no back-pressure on o_stream
+        assert t["initiation_interval_cycles"] == 8
+        assert t["latency_cycles"] == latency(config_for(fll="n3_prod", div="array"))
+        assert man["streams"]["o_stream"]["always_ready"] and not man["streams"]["i_stream"]["always_ready"]
     else:
         assert t["load_cycles"] == 7 and t["readout_cycles"] == 35
 
