@@ -25,47 +25,48 @@ The loop (:func:`run`) is the pseudo-code of section 4 as the Control module
       else the next precision of the schedule (a new level); after the last:
              not converged, stop
 
-Its variations are a *field* (the state it runs on, a strategy object) and
-three optional hooks, so :func:`~models.harmonic.plan`,
+Its variations are a *grid* (the field it runs on, a strategy object whose
+methods the loop calls) and four optional hooks, so :func:`~models.harmonic.plan`,
 :func:`~models.harmonic.plan_explore` and
 :func:`~models.harmonic.plan_exponents` share this one loop:
 
-==================  ============================================================
-hook                what it decides (fixed point / block exponents / explore)
-==================  ============================================================
-field.visit         one block visit, returns (counted i, stable): the Jacobi
-                    iterations on the field's storage (BlockGrid.visit /
-                    ExponentGrid.visit, the ring converted to the block's
-                    exponent)
-field.scan_cycles   cycles before an update or check visit (0 / the RTL
-                    variant's clamp scan)
-field.after_visit   work after a visit, in cycles, 0 for none (0 / the
-                    exponent re-pick's shift visit); non-zero counts as a
-                    change of the block
-field.check         the check pass: (local maxima, extra cycles)
-field.rescale       at a check pass with maxima, before raising p: cycles
-                    of a rescale at the same p, 0 for none (0 / re-pick)
-field.raise_precision  the next p and its data moves in cycles; None after
-                    the last (free / coarsening saturated blocks)
-field.apply_due     the dynamic orders due after a pass (their clear passes)
-order(sweep)        the blocks of a sweep in visit order (raster, the RTL's;
-                    plan_explore: serpentine, alternate, goal)
-visits              which visits a sweep skips and whether another sweep is
-                    needed (None: every block, another sweep while one
-                    changed; plan_explore: still-block skipping, dirty bits)
-timing              the Control module's cycle accounting (:class:`Timing`,
-                    the table below)
-trace               None or a list that gets (event, p, exponents,
-                    values, cycles) after every visit, re-pick, check, clear
-                    pass and precision rise
-==================  ============================================================
+=====================  =========================================================
+hook                   what it does (fixed point / block exponents / explore)
+=====================  =========================================================
+grid.visit             one block visit, returns (counted i, stable): the
+                       Jacobi iterations on the field's storage
+                       (BlockGrid.visit / ExponentGrid.visit, the ring
+                       converted to the block's exponent)
+grid.scan_cycles       cycles before an update or check visit (0 / the RTL
+                       variant's clamp scan)
+grid.after_visit       work after a visit, in cycles, 0 for none (0 / the
+                       exponent re-pick's shift visit); non-zero counts as a
+                       change of the block
+grid.check             the check pass: (local maxima, extra cycles)
+grid.rescale           at a check pass with maxima, before raising p: the
+                       cycles of a rescale at the same p, 0 for none (0 /
+                       the re-pick of every block)
+grid.raise_precision   the next p and its data moves in cycles; None after
+                       the last (0: free / coarsening saturated blocks)
+grid.apply_due         the dynamic orders due after a pass (a clear pass each)
+order(sweep)           the blocks of a sweep in visit order (raster, the
+                       RTL's; plan_explore: serpentine, alternate, goal)
+visits                 which visits a sweep skips and whether another sweep
+                       is needed (None: every block, another sweep while one
+                       changed a block; plan_explore: still-block skipping)
+timing                 the Control module's cycle accounting
+                       (:class:`Timing`, the tables below)
+trace                  None or a list that gets (event, p, exponents,
+                       values, cycles) after every visit, re-pick, check,
+                       clear pass and precision rise
+=====================  =========================================================
 
 Where later work goes: skipping still blocks in plan() and the RTL (issue 19)
 is a ``visits`` policy (:class:`EveryBlock` is the protocol) with its own
 skip cost, plus a :class:`Timing` whose ``update_visit`` drops the
 confirmation iteration and whose ``check_pass`` folds the check into a sweep;
 an exponent width chosen from the map (issue 22) is ExponentGrid's ``e_max``;
-a vectorized fast path replaces ``field.visit`` (a field class whose visit
+a vectorized fast path replaces ``grid.visit`` (a grid class whose visit
 runs on precomputed views, or batches independent blocks) without touching
 the loop.
 
@@ -239,7 +240,7 @@ class EveryBlock:
 
 
 def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None):
-    """Run the schedule on ``grid`` (a field, see the hook table above) and
+    """Run the schedule on ``grid`` (see the hook table above) and
     return its :class:`PlanResult`.
 
     ``events``: dynamic orders ``(s, (r, c), kind)``: passes are numbered
