@@ -138,7 +138,7 @@ class BlockGrid:
         self._views()
 
     def _dtype_for(self, p):
-        """Python ints before ``p`` exceeds int64's exact range (the same values)."""
+        """Python ints once ``p`` leaves int64's exact range (the same values)."""
         if self.pad.dtype != _dtype(p):
             self._store(self.pad.astype(_dtype(p)))
 
@@ -164,7 +164,11 @@ class BlockGrid:
         return {"p": self.p, "sweeps": 0, "block_iterations": 0, "maxima": None}
 
     def visit(self, b):
-        """Up to I Jacobi iterations of block ``b``; returns (counted i, stable)."""
+        """Up to I iterations of block ``b`` (the Block module's visit): eq. 2
+        floored, every node from the same old values (Jacobi), neighbours in
+        other blocks at their stored values (the border storage), stopping
+        after the first iteration that changes nothing; returns (counted i,
+        stable)."""
         old, north, south, west, east, fixed = self.view[b]
         for i in range(1, self.iters + 1):
             new = north + south
