@@ -250,7 +250,9 @@ def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None):
     SET command sent while idle: its cycles are not part of the run).
     ``order``: ``order(sweep)`` -> the blocks of the level's sweep number
     ``sweep`` in visit order; default ``grid.blocks`` (raster, the RTL's).
-    ``visits``: None (every block) or an :class:`EveryBlock` policy.
+    ``visits``: None (every block) or an :class:`EveryBlock` policy; it sees
+    the visits, not what ``grid.after_visit`` does (plan_explore uses one on
+    the fixed-point grid, where that is nothing).
     """
     res, B, iters = grid.res, grid.B, grid.iters
     if order is None:
