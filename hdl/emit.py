@@ -20,6 +20,14 @@ against the port list of the Verilog it wrote.  Bad parameters print the
 component's one-line message and exit with status 2.
 """
 
+if __name__ == "__main__":
+    # `python -m navcores.hdl.emit`, or `python -m hdl.emit` in a source tree:
+    # run the module under its package name, so that no class is loaded a
+    # second time as __main__'s (or as the top-level hdl's).
+    import sys
+    from navcores.hdl.emit import main
+    sys.exit(main())
+
 import argparse
 import inspect
 import json
@@ -371,6 +379,3 @@ def _fail(msg):
     print(f"python -m hdl.emit: error: {msg}", file=sys.stderr)
     sys.exit(2)
 
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -56,8 +56,8 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 import fmax as fmax_mod  # noqa: E402
 import software  # noqa: E402
 import synth  # noqa: E402
-from hdl.emit import emit, top_name  # noqa: E402
-from sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.hdl.emit import emit, top_name  # noqa: E402
+from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
 
 OUT = ROOT / "build" / "bench"
 CACHE = OUT / "cache"
@@ -273,7 +273,7 @@ HARMONIC_BLOCK, HARMONIC_I = (6, 12), 6           # the synthesized planner's bl
 
 
 def harmonic_jobs(hw, speeds, problems):
-    from models.harmonic import plan
+    from navcores.models.harmonic import plan
     from tb.harmonic.planner_bench import planner_params
     from tb.runner import run
     rows = []
@@ -329,9 +329,9 @@ def harmonic_jobs(hw, speeds, problems):
 # --- jobs: DFLC --------------------------------------------------------------------
 
 def dflc_jobs(hw, speeds, problems):
-    from hdl.dflc.top import stream_latency
-    from sim.dflc import rtl_params
-    from models.dflc import Dflc, load_fll
+    from navcores.hdl.dflc.top import stream_latency
+    from navcores.sim.dflc import rtl_params
+    from navcores.models.dflc import Dflc, load_fll
     fll = ROOT / "models" / "dflc_table1.fll"
     model = Dflc(load_fll(fll))
     rng = np.random.default_rng(3)
@@ -389,7 +389,7 @@ def _free_corners(grid):
 
 
 def edt_jobs(hw, speeds, problems):
-    from models.edt_bfs import plan_path
+    from navcores.models.edt_bfs import plan_path
     rows = []
     room = load_map(ROOT / "maps" / "room-32-32-4.map")
     # RTL jobs on crops of room-32-32-4 and on the whole map: equal to the model?
@@ -435,8 +435,8 @@ def edt_jobs(hw, speeds, problems):
 def probe_tops():
     """(name, params) of every simulated top: the hardware tops' simulation
     parameter sets and the jobs' tops."""
-    from sim.dflc import rtl_params
-    from models.dflc import load_fll
+    from navcores.sim.dflc import rtl_params
+    from navcores.models.dflc import load_fll
     from tb.harmonic.planner_bench import planner_params
     table1 = load_fll(ROOT / "models" / "dflc_table1.fll")
     return [("harmonic_node", {}), ("harmonic_cluster", {"depth": 1024}), ("harmonic_block", TOPS[2][3]),

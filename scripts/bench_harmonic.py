@@ -36,8 +36,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 
 from tb.harmonic.harmonic_small_maps import corridor, spiral  # noqa: E402
-from models.harmonic import plan, plan_explore, reachable  # noqa: E402
-from sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.harmonic import plan, plan_explore, reachable  # noqa: E402
+from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
 
 CLOCK_HZ = 150e6
 RTL_BLOCK, RTL_ITERS = (6, 12), 6          # plan()'s defaults: a 2x2-cluster block

@@ -43,7 +43,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
-from hdl.emit import emit  # noqa: E402
+from navcores.hdl.emit import emit  # noqa: E402
 
 YOSYS = shutil.which("yosys") or "/usr/bin/yosys"
 OUT_DIR = Path("build/synth")

@@ -46,7 +46,7 @@ def add_arguments(p):
 
 
 def load_config(path, div):
-    from models.dflc import FllError, load_fll
+    from navcores.models.dflc import FllError, load_fll
     try:
         return load_fll(path, div_type=div)
     except FllError as e:
@@ -126,7 +126,7 @@ def run_rtl(params, codes, sim):
         job.write_text(json.dumps({"params": params, "codes": codes.tolist()}))
         log = ROOT / "build" / "dflc_fll" / f"sim_{sim}.log"
         log.parent.mkdir(parents=True, exist_ok=True)
-        run("dflc_stream", params, sim, "sim.dflc_job",
+        run("dflc_stream", params, sim, "navcores.sim.dflc_job",
             env={"DFLC_JOB": job, "DFLC_RESULT": result}, log_file=log)
         return json.loads(result.read_text())
 
@@ -156,8 +156,8 @@ def plot_surface(model, out):
 
 
 def run(args):
-    from hdl.dflc.top import stream_latency
-    from models.dflc import Dflc
+    from navcores.hdl.dflc.top import stream_latency
+    from navcores.models.dflc import Dflc
     if not Path(args.fll).exists():
         raise CliError(f"{args.fll}: no such .fll file")
     config = load_config(args.fll, args.div)

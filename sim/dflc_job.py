@@ -13,7 +13,7 @@ from pathlib import Path
 
 import cocotb
 
-from hdl.dflc.top import config_for, split_params
+from navcores.hdl.dflc.top import config_for, split_params
 from tb.dflc.dflc_bench import DflcStream
 
 

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import cocotb
 
-from hdl.dflc.top import config_for
-from models.dflc import Dflc
-from sim.tracking import loop_from_job
+from navcores.hdl.dflc.top import config_for
+from navcores.models.dflc import Dflc
+from .tracking import loop_from_job
 from tb.dflc.dflc_bench import DflcStream
 
 DFLC_TOP = "dflc_stream"

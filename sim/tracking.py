@@ -19,16 +19,16 @@ from pathlib import Path
 
 import numpy as np
 
-from models.swam import Swam
-from models.tracker import ClosedLoop, TrackerParams, distance_to_chain, run_model
-from sim.cli import CliError
+from navcores.models.swam import Swam
+from navcores.models.tracker import ClosedLoop, TrackerParams, distance_to_chain, run_model
+from .cli import CliError
 
 ENGINES = ("model", "icarus", "verilator")
 DFLC_FLL = Path(__file__).resolve().parents[1] / "models" / "dflc_table1.fll"
 
 
 def load_dflc():
-    from models.dflc import Dflc
+    from navcores.models.dflc import Dflc
     return Dflc.from_fll(DFLC_FLL)
 
 
@@ -73,7 +73,7 @@ def run_loop_rtl(job, sim, log_file=None):
     """
     import logging
 
-    from sim.track_rtl import DFLC_PARAMS, DFLC_TOP
+    from .track_rtl import DFLC_PARAMS, DFLC_TOP
     from tb.runner import BUILD, run
     log_file = Path(log_file) if log_file else BUILD / "track" / f"{sim}_track_rtl.log"
     log_file.parent.mkdir(parents=True, exist_ok=True)
@@ -96,7 +96,7 @@ def run_loop_rtl(job, sim, log_file=None):
             with open(build_log, "ab") as fh:
                 os.dup2(fh.fileno(), 1)
                 os.dup2(fh.fileno(), 2)
-                run(DFLC_TOP, DFLC_PARAMS, sim, "sim.track_rtl",
+                run(DFLC_TOP, DFLC_PARAMS, sim, "navcores.sim.track_rtl",
                     env={"TRACK_JOB": work / "job.json", "TRACK_RESULT": work / "result.json"},
                     log_file=log_file)
         except (AssertionError, RuntimeError, SystemExit, OSError) as e:

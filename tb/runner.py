@@ -58,7 +58,7 @@ def run(name, params, sim, test_module, env=None, seed=None, log_file=None):
     """
     os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
     tool_env()
-    from hdl.emit import top_name
+    from navcores.hdl.emit import top_name
 
     if sim not in SIMULATORS:
         raise ValueError(f"unknown simulator {sim!r}; expected one of {SIMULATORS}")
@@ -85,7 +85,7 @@ def _build_and_test(name, params, sim, test_module, env, seed, log_file, module,
     from cocotb_tools.check_results import get_results
     from cocotb_tools.runner import get_runner
 
-    from hdl.emit import emit
+    from navcores.hdl.emit import emit
 
     waves = os.environ.get("WAVES") == "1"          # WAVES=1: dump a waveform
     source = emit(name, params, build_dir)

@@ -8,7 +8,7 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFO
 from amaranth.lib.wiring import In, Out
 
-from models.dflc import DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
+from navcores.models.dflc import DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
 
 from ..params import Constraint, Param, check
 

@@ -6,7 +6,7 @@ from amaranth.hdl import Cat, ClockSignal, Const, Instance, Module, Mux, ResetSi
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs import OFFSETS
 
 from ..params import check
 from .cell import MAX_SIDE, EdtCell, cell_widths, result_layout, state_layout
@@ -27,7 +27,7 @@ def _mux_tree(items, sel):
 
 def default_path(top, height, width):
     """The Verilog module name hdl.emit gives ``top`` at this size."""
-    from hdl.emit import top_name
+    from ..emit import top_name
     return top_name(top, {"height": height, "width": width})
 
 

@@ -157,7 +157,7 @@ class DflcStream:
 
     def __init__(self, dut, config=None, prefix=""):
         if config is None:                      # the default controller (Table 1, Table 2 widths)
-            from hdl.dflc.top import config_for
+            from navcores.hdl.dflc.top import config_for
             config = config_for()
         self.dut, self.config = dut, config
         self.mask = (1 << config.op_sz) - 1

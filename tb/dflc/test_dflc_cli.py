@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models.dflc import DEFAULT_FLL, Dflc
-from sim.cli import CliError, main
+from navcores.models.dflc import DEFAULT_FLL, Dflc
+from navcores.sim.cli import CliError, main
 from tb.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -61,7 +61,7 @@ def test_zero_strength_flag(tmp_path):
 def test_bad_csv(tmp_path, text, match):
     csv = write(tmp_path, "in.csv", text)
     with pytest.raises(CliError, match=match):
-        from sim.dflc import run
+        from navcores.sim.dflc import run
         import argparse
         run(argparse.Namespace(fll=str(DEFAULT_FLL), input=str(csv), engine="model", parallel=False,
                                div="lut", json=None, surface=None))
@@ -96,7 +96,7 @@ def test_errors_are_one_line(tmp_path, capsys):
 def test_rtl_params_share_the_shipped_build(tmp_path):
     """The shipped controller is the module ``make verilog`` emits (one build for
     every run, the regression's too); any other .fll gets a copy named by its content."""
-    from sim.dflc import rtl_params
+    from navcores.sim.dflc import rtl_params
     copy = write(tmp_path, "mine.fll", DEFAULT_FLL.read_text())
     assert rtl_params(copy, None, "lut", False) == {"fll": "table1"}
     assert rtl_params(DEFAULT_FLL, None, "array", True) == {"fll": "table1", "div": "array", "par": 1}

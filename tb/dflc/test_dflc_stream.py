@@ -43,9 +43,9 @@ from cocotb_bus.scoreboard import Scoreboard
 
 from cocotb.clock import Clock
 from dflc_bench import PERIOD_NS, DflcStream, StreamBench, pack
-from hdl.dflc.multi import SETS
-from hdl.dflc.top import config_for, split_params, stream_latency
-from models.dflc import Dflc
+from navcores.hdl.dflc.multi import SETS
+from navcores.hdl.dflc.top import config_for, split_params, stream_latency
+from navcores.models.dflc import Dflc
 from tb.runner import SIMULATORS, run, seed_from_env
 
 SET = "regress"

@@ -13,8 +13,8 @@ from amaranth.hdl import Shape
 from cocotb.clock import Clock
 from cocotb.triggers import ReadOnly, RisingEdge
 
-from hdl.edt_bfs.cell import cell_widths
-from hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
+from navcores.hdl.edt_bfs.cell import cell_widths
+from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
 
 __all__ = ["EdtBfsDriver", "compare", "pack", "unpack"]
 

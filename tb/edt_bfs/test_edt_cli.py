@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models.edt_bfs import plan_path
-from sim import edt as cmd
-from sim.cli import CliError, main
-from sim.mapfile import load_grid
+from navcores.models.edt_bfs import plan_path
+from navcores.sim import edt as cmd
+from navcores.sim.cli import CliError, main
+from navcores.sim.mapfile import load_grid
 from tb.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]

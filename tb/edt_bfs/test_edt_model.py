@@ -26,7 +26,7 @@ import pytest
 import scipy.ndimage as ndi
 
 from images import FAMILIES, free_cells, sparse_points
-from models.edt_bfs import OFFSETS, edt, job_cycles, plan_path, widths
+from navcores.models.edt_bfs import OFFSETS, edt, job_cycles, plan_path, widths
 from tb.runner import seed_from_env
 
 

@@ -10,8 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hdl.harmonic.cluster import COLS, ROWS
-from models.harmonic import from_ram_image
+from navcores.hdl.harmonic.cluster import COLS, ROWS
+from navcores.models.harmonic import from_ram_image
 from tb.harmonic.serial import SerialWord, next_cycle
 
 

@@ -15,7 +15,7 @@ import os
 import cocotb
 import numpy as np
 
-from hdl.harmonic.cluster import COLS, ROWS
+from navcores.hdl.harmonic.cluster import COLS, ROWS
 from tb.harmonic.cluster_bench import ClusterBench, Command
 from tb.harmonic.serial import start
 

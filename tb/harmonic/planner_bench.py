@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from hdl.harmonic.cluster import COLS, ROWS
-from hdl.harmonic.planner import Code, Op, command_layout, response_layout
-from models.harmonic import pad_to_blocks, reachable
+from navcores.hdl.harmonic.cluster import COLS, ROWS
+from navcores.hdl.harmonic.planner import Code, Op, command_layout, response_layout
+from navcores.models.harmonic import pad_to_blocks, reachable
 
 __all__ = ["PlannerBench", "planner_params", "run_planner_rtl", "Op", "Code"]
 

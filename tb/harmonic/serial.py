@@ -6,7 +6,7 @@ import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
 
-from models.harmonic import counters, word_bits
+from navcores.models.harmonic import counters, word_bits
 
 PERIOD_NS = 10
 

@@ -26,7 +26,7 @@ import cocotb
 import pytest
 from cocotb.triggers import FallingEdge, ReadOnly
 
-from models.harmonic import convert_mantissa
+from navcores.models.harmonic import convert_mantissa
 from tb.harmonic.serial import start
 from tb.runner import SIMULATORS, run
 
@@ -39,7 +39,7 @@ SIDES = (("N", "bottom", P["m"], (-1, 0)), ("S", "top", P["m"], (1, 0)),
 
 
 def _top(n, m, br, bc, p_max):
-    from hdl.harmonic.border import Border
+    from navcores.hdl.harmonic.border import Border
     return Border(n, m, (br, bc), p_max + 2, exponents=True)
 
 
@@ -194,7 +194,7 @@ def test_border_exponents(sim):
     # HARMONIC_BIG=1 runs this unit test on Verilator too.
     if sim == "verilator" and os.environ.get("HARMONIC_BIG") != "1":
         pytest.skip("Verilator run of the Border unit test: HARMONIC_BIG=1")
-    from hdl.emit import TOPS
+    from navcores.hdl.emit import TOPS
     TOPS["harmonic_border"] = _top     # a test-only top, registered only while it is built
     try:
         run("harmonic_border", P, sim, "test_border_exponents")

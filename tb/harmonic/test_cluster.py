@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 from cocotb.triggers import ClockCycles
 
-from hdl.harmonic.cluster import COLS, ROWS
-from models.harmonic import neighbours, one, ram_image, step
+from navcores.hdl.harmonic.cluster import COLS, ROWS
+from navcores.models.harmonic import neighbours, one, ram_image, step
 from tb.harmonic.cluster_bench import ClusterBench, Command
 from tb.harmonic.serial import next_cycle, start
 from tb.runner import SIMULATORS, run
@@ -206,12 +206,12 @@ def test_cluster(sim, name):
     ({"depth": 2}, "RAM depth must be an integer >= 4"),
 ])
 def test_elaboration_refuses(kwargs, message):
-    from hdl.harmonic.cluster import Cluster
+    from navcores.hdl.harmonic.cluster import Cluster
     with pytest.raises(ValueError, match=message):
         Cluster(**kwargs)
 
 
 def test_elaboration_limits_accepted():
-    from hdl.harmonic.cluster import Cluster
+    from navcores.hdl.harmonic.cluster import Cluster
     assert Cluster(depth=64, p_max=62).p_max == 62
     assert Cluster().p_max == 1022                  # the paper's 1Kx18 RAM, one block

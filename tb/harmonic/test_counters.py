@@ -11,7 +11,7 @@ import random
 import cocotb
 import pytest
 
-from models.harmonic import counters
+from navcores.models.harmonic import counters
 from tb.harmonic.serial import next_cycle, start
 from tb.runner import SIMULATORS, run
 

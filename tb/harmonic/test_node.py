@@ -21,7 +21,7 @@ import cocotb
 import numpy as np
 import pytest
 
-from models.harmonic import one, step
+from navcores.models.harmonic import one, step
 from tb.harmonic.serial import SerialWord, cnt_w, next_cycle, read_offsets, settle, start
 from tb.runner import SIMULATORS, run
 

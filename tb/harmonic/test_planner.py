@@ -29,7 +29,7 @@ import cocotb
 import numpy as np
 import pytest
 
-from models.harmonic import decision, plan
+from navcores.models.harmonic import decision, plan
 from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic
 from tb.harmonic.planner_job import run_map
 from tb.harmonic.planner_maps import MAPS, random_map
@@ -228,7 +228,7 @@ def test_block_elaborates_paper_sizes():
     recursive elaboration of 4608 nodes takes minutes: `make verilog` /
     scripts/synth.py cover emission at the tested sizes."""
     from amaranth.hdl import Fragment
-    from hdl.harmonic.block import Block
+    from navcores.hdl.harmonic.block import Block
     for n, m, blocks in ((36, 66, (2, 2)), (48, 96, (1, 1))):
         blk = Block(n, m, blocks, p_max=254, depth=1024)
         mod = blk.elaborate(None)
@@ -249,11 +249,11 @@ def test_block_elaborates_paper_sizes():
     (dict(n=6, m=12, p_max=1), "p_max=1 is not supported"),
 ])
 def test_block_refuses(kwargs, message):
-    from hdl.harmonic.block import Block
+    from navcores.hdl.harmonic.block import Block
     with pytest.raises(ValueError, match=message):
         Block(**kwargs)
 
 
 def test_block_fits_exactly():
-    from hdl.harmonic.block import Block
+    from navcores.hdl.harmonic.block import Block
     assert Block(6, 12, (4, 4), p_max=62, depth=1024).stride == 64      # 16 * 64 = 1024

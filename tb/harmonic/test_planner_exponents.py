@@ -30,7 +30,7 @@ import cocotb
 import numpy as np
 import pytest
 
-from models.harmonic import convert_mantissa, decision_exponents, plan
+from navcores.models.harmonic import convert_mantissa, decision_exponents, plan
 from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic, exponent_params
 from tb.harmonic.planner_job import run_map
 from tb.harmonic.planner_maps import MAPS
@@ -130,7 +130,7 @@ def test_planner_exponents(sim, name):
 
 
 def test_exponent_option_is_checked_and_default_off():
-    from hdl.harmonic.planner import Planner, response_layout
+    from navcores.hdl.harmonic.planner import Planner, response_layout
     with pytest.raises(ValueError, match="block_exponents=2: must be True or False"):
         Planner(3, 6, (3, 3), 14, 256, block_exponents=2)
     with pytest.raises(ValueError, match="headroom=15: leaves no mantissa bit at p_max=14"):

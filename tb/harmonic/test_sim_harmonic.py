@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.cli import main
+from navcores.sim.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 ROOM = str(ROOT / "maps" / "room-32-32-4.map")
@@ -222,8 +222,8 @@ def test_block_exponents_json(tmp_path, capsys):
     """The JSON gains "exponents" (BR x BC) and "frac_bits"; the field is the
     model's, on the common scale; at p = 16, where fixed point still has
     local maxima on this map, every start reaches the goal."""
-    from models.harmonic import plan
-    from sim.mapfile import load_map
+    from navcores.models.harmonic import plan
+    from navcores.sim.mapfile import load_map
     out = tmp_path / "e.json"
     args = [RANDOM, "--goal", "29,6", "--start", "0,31", "--start", "31,31", "--block", "6x12",
             "--schedule", "16", "--json", str(out)]

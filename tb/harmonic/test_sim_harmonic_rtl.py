@@ -12,7 +12,7 @@ import json
 import numpy as np
 import pytest
 
-from sim.cli import main
+from navcores.sim.cli import main
 from tb.runner import SIMULATORS
 
 # (map shape before padding, block, schedule, I): the padded map is the

@@ -15,10 +15,10 @@ import pytest
 from amaranth.hdl import Shape
 from amaranth.lib import wiring
 
-from hdl import emit
-from hdl.dflc.top import config_for, stream_latency
-from hdl.params import REQUIRED
-from models.dflc import WIDTH_LIMITS
+from navcores.hdl import emit
+from navcores.hdl.dflc.top import config_for, stream_latency
+from navcores.hdl.params import REQUIRED
+from navcores.models.dflc import WIDTH_LIMITS
 from tb.runner import ROOT, VERILATOR_WAIVERS, tool_env
 
 # A small valid parameter set of every top (the required parameters and some).

@@ -19,7 +19,7 @@ import math
 import numpy as np
 import pytest
 
-from models.swam import Swam, SwamError
+from navcores.models.swam import Swam, SwamError
 from tb.runner import seed_from_env
 
 
