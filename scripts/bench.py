@@ -274,8 +274,8 @@ HARMONIC_BLOCK, HARMONIC_I = (6, 12), 6           # the synthesized planner's bl
 
 def harmonic_jobs(hw, speeds, problems):
     from navcores.models.harmonic import plan
-    from tb.harmonic.planner_bench import planner_params
-    from tb.runner import run
+    from navcores.sim.rtl.planner_driver import planner_params
+    from navcores.sim.rtl.runner import run
     rows = []
     # One iteration at the paper's p = 128, measured on the cluster RTL.
     start, res = time.time(), OUT / "iteration.json"
@@ -437,7 +437,7 @@ def probe_tops():
     parameter sets and the jobs' tops."""
     from navcores.sim.dflc import rtl_params
     from navcores.models.dflc import load_fll
-    from tb.harmonic.planner_bench import planner_params
+    from navcores.sim.rtl.planner_driver import planner_params
     table1 = load_fll(ROOT / "models" / "dflc_table1.fll")
     return [("harmonic_node", {}), ("harmonic_cluster", {"depth": 1024}), ("harmonic_block", TOPS[2][3]),
             ("harmonic_planner", planner_params((16, 16), (3, 6), HARMONIC_SCHEDULE[-1])),
@@ -458,7 +458,7 @@ VERILATOR_SKIP = {
 def probes(speeds):
     """Idle-clock probe (tb/simspeed.py) of every simulated top: the
     simulator's own cost per cycle, no Python in the loop."""
-    from tb.runner import run
+    from navcores.sim.rtl.runner import run
     for name, params in probe_tops():
         module = top_name(name, params)
         entry = speeds.setdefault(module, {"name": name, "params": params})
@@ -470,7 +470,7 @@ def probes(speeds):
             res = OUT / f"probe_{module}_{sim}.json"
             log(f"idle-clock probe {module} on {sim}")
             try:
-                run(name, params, sim, "tb.simspeed",
+                run(name, params, sim, "navcores.sim.rtl.simspeed",
                     env={"SIMSPEED_CYCLES": PROBE_CYCLES[sim], "SIMSPEED_RESULT": res},
                     log_file=OUT / f"probe_{module}_{sim}.log")
             except Exception as e:  # noqa: BLE001 - the report says what happened

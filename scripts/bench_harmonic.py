@@ -250,7 +250,7 @@ def rtl_section(sim):
     """The model's counters and cycles against the planner RTL on one small map
     (the planner regression's parameter sets, so the build is shared)."""
     try:
-        from tb.harmonic.planner_bench import run_planner_rtl
+        from navcores.sim.rtl.planner_driver import run_planner_rtl
     except ImportError:
         return ["The planner RTL driver (tb/harmonic/planner_bench.py) is not in this checkout: not run.", ""]
     rng = np.random.default_rng(5)

@@ -120,13 +120,13 @@ def rtl_params(fll_path, config, div, parallel):
 
 
 def run_rtl(params, codes, sim):
-    from tb.runner import run
+    from .rtl.runner import run
     with tempfile.TemporaryDirectory() as tmp:
         job, result = Path(tmp) / "job.json", Path(tmp) / "result.json"
         job.write_text(json.dumps({"params": params, "codes": codes.tolist()}))
         log = ROOT / "build" / "dflc_fll" / f"sim_{sim}.log"
         log.parent.mkdir(parents=True, exist_ok=True)
-        run("dflc_stream", params, sim, "navcores.sim.dflc_job",
+        run("dflc_stream", params, sim, "navcores.sim.rtl.dflc_job",
             env={"DFLC_JOB": job, "DFLC_RESULT": result}, log_file=log)
         return json.loads(result.read_text())
 

@@ -60,12 +60,12 @@ def _check_args(args):
 
 def run_rtl(grid, goals, start, dfar, sim, work):
     """Run sim/edt_job.py on the core at the map's size; returns its decoded result."""
-    from tb.runner import run
+    from .rtl.runner import run
     job, result = work / "job.json", work / "result.json"
     job.write_text(json.dumps({"obstacle": grid.tolist(), "goals": [list(g) for g in goals],
                                "start": list(start) if start else None, "dfar": dfar}))
     h, w = grid.shape
-    run("edt_bfs", {"height": h, "width": w}, sim, "navcores.sim.edt_job",
+    run("edt_bfs", {"height": h, "width": w}, sim, "navcores.sim.rtl.edt_bfs_job",
         env={"EDT_JOB": job, "EDT_RESULT": result}, log_file=work / "sim.log")
     return json.loads(result.read_text())
 

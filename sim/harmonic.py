@@ -183,11 +183,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
             # exact local maxima of the final field (the RTL engines count the same)
             out["maxima"] = _maxima(obstacle, goals, block, r.padded_h)
         return out
-    try:
-        from tb.harmonic.planner_bench import run_planner_rtl
-    except ImportError:
-        raise CliError(f"--engine {engine}: not available (the planner RTL driver "
-                       "tb/harmonic/planner_bench.py is not in this checkout); use --engine model") from None
+    from .rtl.planner_driver import run_planner_rtl
     ticker = _Ticker(f"planner RTL on {engine}")
     try:
         out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine,

@@ -12,7 +12,7 @@ import pytest
 
 from navcores.models.dflc import DEFAULT_FLL, Dflc
 from navcores.sim.cli import CliError, main
-from tb.runner import SIMULATORS
+from navcores.sim.rtl.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 FIXTURES = Path(__file__).resolve().parent / "fll"

@@ -13,7 +13,7 @@ from navcores.models.edt_bfs import plan_path
 from navcores.sim import edt as cmd
 from navcores.sim.cli import CliError, main
 from navcores.sim.mapfile import load_grid
-from tb.runner import SIMULATORS
+from navcores.sim.rtl.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 MAP = ROOT / "maps" / "room-32-32-4.map"

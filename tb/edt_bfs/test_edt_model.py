@@ -27,7 +27,7 @@ import scipy.ndimage as ndi
 
 from images import FAMILIES, free_cells, sparse_points
 from navcores.models.edt_bfs import OFFSETS, edt, job_cycles, plan_path, widths
-from tb.runner import seed_from_env
+from navcores.sim.rtl.runner import seed_from_env
 
 
 def _exact_di(d2):

@@ -28,7 +28,7 @@ from cocotb.triggers import FallingEdge, ReadOnly
 
 from navcores.models.harmonic import convert_mantissa
 from tb.harmonic.serial import start
-from tb.runner import SIMULATORS, run
+from navcores.sim.rtl.runner import SIMULATORS, run
 
 P = dict(n=3, m=6, br=3, bc=3, p_max=12)
 STRIDE = P["p_max"] + 2

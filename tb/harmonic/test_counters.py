@@ -13,7 +13,7 @@ import pytest
 
 from navcores.models.harmonic import counters
 from tb.harmonic.serial import next_cycle, start
-from tb.runner import SIMULATORS, run
+from navcores.sim.rtl.runner import SIMULATORS, run
 
 P_MAX = 40
 

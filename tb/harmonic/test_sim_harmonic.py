@@ -177,13 +177,6 @@ def test_bad_input_is_one_line(tmp_path, capsys, args, message):
     assert re.search(message, lines[0]), lines[0]
 
 
-def test_rtl_engine_without_driver(capsys, monkeypatch):
-    """Without tb/harmonic/planner_bench.py the RTL engines say so in one line."""
-    monkeypatch.setitem(sys.modules, "tb.harmonic.planner_bench", None)    # import fails
-    rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "icarus"], capsys)
-    assert rc == 2 and "--engine icarus: not available" in err and len(err.strip().splitlines()) == 1
-
-
 def test_rtl_engine_refuses_what_the_rtl_cannot_run(capsys):
     """A block that is not whole 3x6 clusters, a schedule that is not
     arithmetic: one line from the driver / Planner checks, before any build."""

@@ -19,7 +19,7 @@ from navcores.hdl import emit
 from navcores.hdl.dflc.top import config_for, stream_latency
 from navcores.hdl.params import REQUIRED
 from navcores.models.dflc import WIDTH_LIMITS
-from tb.runner import ROOT, VERILATOR_WAIVERS, tool_env
+from navcores.sim.rtl.runner import ROOT, VERILATOR_WAIVERS, tool_env
 
 # A small valid parameter set of every top (the required parameters and some).
 BASE = {

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from tb.runner import ROOT, tool_env
+from navcores.sim.rtl.runner import ROOT, tool_env
 
 try:
     import fusesoc  # noqa: F401

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from navcores.models.swam import Swam, SwamError
-from tb.runner import seed_from_env
+from navcores.sim.rtl.runner import seed_from_env
 
 
 def random_chain(rng, n=None, spread=None):

@@ -11,7 +11,7 @@ import os
 import random
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]       # the source tree (sim/rtl/runner.py)
 BUILD = ROOT / "build"
 SIMULATORS = ("icarus", "verilator")
 TIMESCALE = ("1ns", "1ps")
