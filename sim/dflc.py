@@ -97,8 +97,8 @@ def rtl_params(fll_path, config, div, parallel):
     """The emitted top's parameters.  A controller shipped in models/
     (``dflc_<stem>.fll``, byte for byte) is the module ``make verilog`` emits,
     ``dflc_stream_<stem>`` (one build, shared); any other .fll is copied under
-    build/dflc_fll/ as <stem>_<hash>.fll: a stem that names the emitted module
-    and changes with the file's content."""
+    build/dflc_fll/ as <stem>_<hash>.fll, given by that path: its stem names
+    the emitted module and changes with the file's content."""
     data = Path(fll_path).read_bytes()
     tag = None
     for shipped in sorted((ROOT / "models").glob("dflc_*.fll")):
@@ -107,10 +107,10 @@ def rtl_params(fll_path, config, div, parallel):
             break
     if tag is None:
         stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(fll_path).stem) or "fll"
-        tag = f"{stem}_{hashlib.sha1(data).hexdigest()[:8]}"
-        d = ROOT / "build" / "dflc_fll"
-        d.mkdir(parents=True, exist_ok=True)
-        (d / f"{tag}.fll").write_bytes(data)
+        copy = ROOT / "build" / "dflc_fll" / f"{stem}_{hashlib.sha1(data).hexdigest()[:8]}.fll"
+        copy.parent.mkdir(parents=True, exist_ok=True)
+        copy.write_bytes(data)
+        tag = str(copy)
     params = {"fll": tag}
     if div != "lut":
         params["div"] = div

@@ -151,7 +151,7 @@ class DflcDriver:
     cycle: cheap enough for long sweeps and closed loops) with the output
     always ready; :class:`DflcStallDriver` adds the cocotb-bus driver, monitors
     and random stalls.  ``prefix`` selects an instance of a multi-configuration
-    test top (``hdl/dflc/multi.py``: ports ``<key>_i_stream__valid`` ...); ""
+    test top (``tb/dflc/multi.py``: ports ``<key>_i_stream__valid`` ...); ""
     for a plain ``dflc_stream_*`` top.  After ``run``, ``in_cycles`` /
     ``out_cycles`` hold the cycle of every input / output handshake.
     """

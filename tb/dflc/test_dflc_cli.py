@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from navcores.hdl.emit import top_name
 from navcores.models.dflc import DEFAULT_FLL, Dflc
 from navcores.sim.cli import CliError, main
 from navcores.sim.rtl.runner import SIMULATORS
@@ -102,8 +103,10 @@ def test_rtl_params_share_the_shipped_build(tmp_path):
     assert rtl_params(DEFAULT_FLL, None, "array", True) == {"fll": "table1", "div": "array", "par": 1}
     changed = write(tmp_path, "mine2.fll", DEFAULT_FLL.read_text() + "\n")
     p = rtl_params(changed, None, "lut", False)
-    assert re.fullmatch(r"mine2_[0-9a-f]{8}", p["fll"])
-    assert (ROOT / "build" / "dflc_fll" / f"{p['fll']}.fll").read_text() == changed.read_text()
+    copy = Path(p["fll"])
+    assert copy.parent == ROOT / "build" / "dflc_fll" and re.fullmatch(r"mine2_[0-9a-f]{8}", copy.stem)
+    assert copy.read_text() == changed.read_text()
+    assert top_name("dflc_stream", p) == f"dflc_stream_{copy.stem}"     # the module carries the stem
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)

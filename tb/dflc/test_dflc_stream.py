@@ -1,7 +1,7 @@
 """DFLC stream top (hdl/dflc/top.py) against models.dflc, bit-exact, with cocotb-bus.
 
 Two builds per simulator: the test top ``dflc_multi_setregress``
-(hdl/dflc/multi.py) holds one DflcStream per configuration, and the paper's
+(tb/dflc/multi.py) holds one DflcStream per configuration, and the paper's
 default runs alone as ``dflc_stream_table1`` (the build the CLI test shares);
 each cocotb test below runs on every instance of the build in turn:
 
@@ -21,7 +21,7 @@ each cocotb test below runs on every instance of the build in turn:
 
 Configurations: the paper's default (Table 1, min, LUT divider, n = 2, 9
 triangles, sequential, default pipeline; ``dflc_stream_table1``) and
-(hdl/dflc/multi.py SETS["regress"]) n = 3 with
+(tb/dflc/multi.py SETS["regress"]) n = 3 with
 5/3/4 MFs, prod, restoring array and missing rules, every pipeline generic at
 its minimum; trapezoids with gaps (zero firing strength), max, LUT, parallel,
 the front generics at 4; 5/4 MFs, probor, array, parallel, the singleton route
@@ -43,10 +43,10 @@ from cocotb_bus.scoreboard import Scoreboard
 
 from cocotb.clock import Clock
 from navcores.sim.rtl.dflc_driver import PERIOD_NS, DflcDriver, DflcStallDriver, pack
-from navcores.hdl.dflc.multi import SETS
 from navcores.hdl.dflc.top import config_for, split_params, stream_latency
 from navcores.models.dflc import Dflc
 from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
+from tb.dflc.multi import SETS, DflcMulti
 
 SET = "regress"
 ONLY = os.environ.get("DFLC_ONLY")          # e.g. DFLC_ONLY=n3: one instance only
@@ -55,7 +55,8 @@ ONLY = os.environ.get("DFLC_ONLY")          # e.g. DFLC_ONLY=n3: one instance on
 # ``python -m sim dflc --engine icarus|verilator`` runs on the default .fll and
 # test_dflc_cli.py shares; alone, its long sweep does not simulate six idle
 # instances every clock).
-BUILDS = {"multi": ("dflc_multi", {"set": SET}), "table1": ("dflc_stream", {"fll": "table1"})}
+# name, parameters, the factory of a test top (None: one of hdl.emit's tops)
+BUILDS = {"multi": ("dflc_multi", {"set": SET}, DflcMulti), "table1": ("dflc_stream", {"fll": "table1"}, None)}
 TOP = os.environ.get("DFLC_TOP", "multi")
 # Stream latency of every instance, by hand from hdl/dflc/core.py's formula
 # (multi.py's comments); the cycles test asserts both agree with the RTL.
@@ -268,5 +269,5 @@ def test_dflc_stream(sim, build):
     env = {"DFLC_SEED": seed_from_env(), "DFLC_TOP": build}
     if ONLY:
         env["DFLC_ONLY"] = ONLY
-    name, params = BUILDS[build]
-    assert run(name, params, sim, "test_dflc_stream", env=env) == 4
+    name, params, factory = BUILDS[build]
+    assert run(name, params, sim, "test_dflc_stream", env=env, factory=factory) == 4

@@ -30,7 +30,6 @@ BASE = {
     "harmonic_planner": {"n": 3, "m": 6, "br": 1, "bc": 2, "p_max": 14, "depth": 64},
     "dflc_stream": {"fll": "table1"},
     "dflc_core": {"fll": "table1"},
-    "dflc_multi": {},
     "edt_cell": {"height": 5, "width": 7},
     "edt_array": {"height": 5, "width": 7},
     "edt_bfs": {"height": 5, "width": 7},
