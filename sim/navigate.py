@@ -28,6 +28,7 @@ import numpy as np
 from navcores.models.navigation import cell_centre, collisions, safe_cells, shorten, split_monotone
 from navcores.models.swam import Swam
 from navcores.models.tracker import TrackerParams
+
 from .cli import CliError, check_cell, parse_cell
 from .mapfile import load_grid
 from .tracking import ENGINES, run_loop

@@ -23,6 +23,7 @@ from pathlib import Path
 
 from navcores.models.swam import Swam, SwamError
 from navcores.models.tracker import TrackerParams
+
 from .cli import CliError
 from .tracking import ENGINES, plot_track, read_path_csv, run_loop
 

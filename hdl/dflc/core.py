@@ -4,7 +4,7 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param, check
+from ..params import Param
 from .addr_gen import AddrGen
 from .cons_map import ConsMap
 from .divider import Divider

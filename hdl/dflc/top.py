@@ -14,7 +14,6 @@ from ..params import Constraint, Param, check
 
 from .core import DflcCore, latency
 from .pipe import PIPE_KEYS, check_pipe
-from .mf_gen import bits_for
 
 __all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth", "split_params",
            "core_from_params"]

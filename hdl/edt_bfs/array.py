@@ -9,7 +9,7 @@ from amaranth.lib.wiring import In, Out
 from navcores.models.edt_bfs import OFFSETS
 
 from ..params import check
-from .cell import MAX_SIDE, EdtCell, cell_widths, result_layout, state_layout
+from .cell import EdtCell, cell_widths, result_layout, state_layout
 
 __all__ = ["EdtArray", "default_cell_module"]
 

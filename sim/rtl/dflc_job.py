@@ -14,6 +14,7 @@ from pathlib import Path
 import cocotb
 
 from navcores.hdl.dflc.top import config_for, split_params
+
 from .dflc_driver import DflcDriver
 
 

@@ -38,13 +38,13 @@ import random
 import cocotb
 import numpy as np
 import pytest
+from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, RisingEdge
 from cocotb_bus.scoreboard import Scoreboard
 
-from cocotb.clock import Clock
-from navcores.sim.rtl.dflc_driver import PERIOD_NS, DflcDriver, DflcStallDriver, pack
 from navcores.hdl.dflc.top import config_for, split_params, stream_latency
 from navcores.models.dflc import Dflc
+from navcores.sim.rtl.dflc_driver import PERIOD_NS, DflcDriver, DflcStallDriver, pack
 from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
 from tb.dflc.multi import SETS, DflcMulti
 

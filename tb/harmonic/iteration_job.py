@@ -16,8 +16,8 @@ import cocotb
 import numpy as np
 
 from navcores.hdl.harmonic.cluster import COLS, ROWS
+from navcores.sim.rtl.clock import start
 from tb.harmonic.cluster_driver import ClusterDriver, Command
-from tb.harmonic.serial import start
 
 
 @cocotb.test()

@@ -1,12 +1,11 @@
-"""Testbench pieces shared by the harmonic tests: clock/reset
-(navcores.sim.rtl.clock), the RAM addresses of the Counters
-(models.harmonic.counters), and emulated serial words (a border node's or a
-neighbour's storage, one bit per RAM address)."""
+"""Testbench pieces shared by the harmonic tests: the RAM addresses of the
+Counters (models.harmonic.counters), emulated serial words (a border node's
+or a neighbour's storage, one bit per RAM address) and cycle steps.  The
+clock and reset: navcores.sim.rtl.clock.start."""
 
 from cocotb.triggers import FallingEdge, ReadOnly
 
 from navcores.models.harmonic import counters, word_bits
-from navcores.sim.rtl.clock import PERIOD_NS, start  # noqa: F401  (the tests' clock and reset)
 
 
 def cnt_w(c, p):

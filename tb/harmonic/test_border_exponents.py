@@ -27,7 +27,7 @@ import pytest
 from cocotb.triggers import FallingEdge, ReadOnly
 
 from navcores.models.harmonic import convert_mantissa
-from tb.harmonic.serial import start
+from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
 
 P = dict(n=3, m=6, br=3, bc=3, p_max=12)

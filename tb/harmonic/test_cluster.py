@@ -23,9 +23,10 @@ from cocotb.triggers import ClockCycles
 
 from navcores.hdl.harmonic.cluster import COLS, ROWS
 from navcores.models.harmonic import neighbours, one, ram_image, step
-from tb.harmonic.cluster_driver import ClusterDriver, Command
-from tb.harmonic.serial import next_cycle, start
+from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
+from tb.harmonic.cluster_driver import ClusterDriver, Command
+from tb.harmonic.serial import next_cycle
 
 # Parameter sets of the regression: the cocotb side learns its set from the
 # environment the pytest side passes.

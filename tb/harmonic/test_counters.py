@@ -12,8 +12,9 @@ import cocotb
 import pytest
 
 from navcores.models.harmonic import counters
-from tb.harmonic.serial import next_cycle, start
+from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
+from tb.harmonic.serial import next_cycle
 
 P_MAX = 40
 

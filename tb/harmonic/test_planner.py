@@ -30,11 +30,11 @@ import numpy as np
 import pytest
 
 from navcores.models.harmonic import decision, plan
+from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.planner_driver import Code, Op, PlannerDriver, arithmetic
 from navcores.sim.rtl.planner_job import run_map
-from tb.harmonic.planner_maps import MAPS, random_map
-from tb.harmonic.serial import start
 from navcores.sim.rtl.runner import SIMULATORS, run
+from tb.harmonic.planner_maps import MAPS, random_map
 
 SETS = {
     # 3x3 blocks of one cluster: every border kind (B+-1, B+-k, the map edge)

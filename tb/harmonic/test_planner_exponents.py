@@ -31,11 +31,11 @@ import numpy as np
 import pytest
 
 from navcores.models.harmonic import convert_mantissa, decision_exponents, plan
+from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.planner_driver import Code, Op, PlannerDriver, arithmetic, exponent_params
 from navcores.sim.rtl.planner_job import run_map
-from tb.harmonic.planner_maps import MAPS
-from tb.harmonic.serial import start
 from navcores.sim.rtl.runner import SIMULATORS, run
+from tb.harmonic.planner_maps import MAPS
 
 PARAMS = dict(n=3, m=6, br=3, bc=3, p_max=14, depth=256)
 # name: (extra Planner parameters, [(map, seed, schedule, I, orders)], what the runs must exercise)

@@ -20,8 +20,8 @@ import pytest
 
 from navcores.models.swam import Swam
 from navcores.models.tracker import ClosedLoop, TrackerParams, canonical_inputs, distance_to_chain, run_model
-from navcores.sim.tracking import load_dflc
 from navcores.sim.rtl.runner import seed_from_env
+from navcores.sim.tracking import load_dflc
 
 LINE = Swam([(0.0, 0.0), (1.0, 0.5)])
 _t = np.linspace(0, 1, 30)
