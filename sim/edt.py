@@ -59,7 +59,7 @@ def _check_args(args):
 
 
 def run_rtl(grid, goals, start, dfar, sim, work):
-    """Run sim/edt_job.py on the core at the map's size; returns its decoded result."""
+    """Run sim/rtl/edt_bfs_job.py on the core at the map's size; returns its decoded result."""
     from .rtl.runner import run
     job, result = work / "job.json", work / "result.json"
     job.write_text(json.dumps({"obstacle": grid.tolist(), "goals": [list(g) for g in goals],
