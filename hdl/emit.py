@@ -403,4 +403,3 @@ def main(argv=None):
 def _fail(msg):
     print(f"python -m hdl.emit: error: {msg}", file=sys.stderr)
     sys.exit(2)
-

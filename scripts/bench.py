@@ -51,6 +51,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))       # tb/ (not installed): the cluster's iteration job, run in the simulator
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 import fmax as fmax_mod  # noqa: E402

@@ -28,12 +28,14 @@ make bench (scripts/bench.py) puts sections 1 and 2 into BENCHMARKS.md.
 
 import argparse
 import math
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))       # tb/ (not installed): the test maps
 
 from tb.harmonic.harmonic_small_maps import corridor, spiral  # noqa: E402
 from navcores.models.harmonic import plan, plan_explore, reachable  # noqa: E402

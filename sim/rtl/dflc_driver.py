@@ -15,11 +15,12 @@ The top for a .fll is emitted with ``navcores.hdl.emit.emit("dflc_stream",
 gives the matching config.
 
 :class:`DflcStallDriver` holds the cocotb-bus pieces: :class:`StreamSource` (a
-BusDriver that presents one sample per transaction and holds it until the handshake, with optional random
-idle cycles), :class:`StreamMonitor` (a BusMonitor recording every output
-handshake with its cycle), :class:`ReadyToggler` (random back-pressure on
-``o_stream.ready``) and :class:`InputMonitor` (the input handshakes with their
-cycles, for the cycle properties).
+BusDriver that presents one sample per transaction and holds it until the
+handshake, with optional random idle cycles), :class:`StreamMonitor` (a
+BusMonitor recording every output handshake with its cycle),
+:class:`ReadyToggler` (random back-pressure on ``o_stream.ready``) and
+:class:`InputMonitor` (the input handshakes with their cycles, for the cycle
+properties).
 """
 
 import random
