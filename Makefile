@@ -56,10 +56,11 @@ test: $(STAMP) icarus cxx
 	  $$( [ $$rc = 0 ] && echo true || echo false ) $(JOBS) "$$(date -u +%FT%TZ)" > build/regression.json; \
 	exit $$rc
 
-## make sim MODULE=<name> [SIM=icarus|verilator]: one module's tests (tb/*/test_<name>.py)
+## make sim MODULE=<name> [SIM=icarus|verilator]: one module's tests (tb/*/test_<name>.py, tb/test_<name>.py)
+TESTS = $(wildcard tb/test_*.py tb/*/test_*.py)
 sim: $(STAMP) icarus cxx
-	@test -n "$(wildcard tb/*/test_$(MODULE).py)" || { echo "no tb/*/test_$(MODULE).py; modules: $(patsubst test_%.py,%,$(notdir $(wildcard tb/*/test_*.py)))"; exit 1; }
-	$(PYTEST) $(wildcard tb/*/test_$(MODULE).py) -k "$(SIM) or not icarus and not verilator"
+	@test -n "$(filter %/test_$(MODULE).py,$(TESTS))" || { echo "no tb/*/test_$(MODULE).py; modules: $(patsubst test_%.py,%,$(notdir $(TESTS)))"; exit 1; }
+	$(PYTEST) $(filter %/test_$(MODULE).py,$(TESTS)) -k "$(SIM) or not icarus and not verilator"
 
 ## make verilog: synthesizable Verilog of every top into build/verilog/
 verilog: $(STAMP)

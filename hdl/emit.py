@@ -20,6 +20,14 @@ against the port list of the Verilog it wrote.  Bad parameters print the
 component's one-line message and exit with status 2.
 """
 
+if __name__ == "__main__":
+    # `python -m navcores.hdl.emit`, or `python -m hdl.emit` in a source tree:
+    # run the module under its package name, so that no class is loaded a
+    # second time as __main__'s (or as the top-level hdl's).
+    import sys
+    from navcores.hdl.emit import main
+    sys.exit(main())
+
 import argparse
 import inspect
 import json
@@ -35,8 +43,7 @@ from amaranth.hdl import Const, Shape, ValueCastable  # noqa: E402
 from amaranth.lib import data, stream, wiring  # noqa: E402
 
 from .dflc.core import DflcCore  # noqa: E402
-from .dflc.multi import DflcMulti  # noqa: E402
-from .dflc.top import DflcStream, config_for  # noqa: E402
+from .dflc.top import DflcStream, core_from_params  # noqa: E402
 from .edt_bfs.array import EdtArray  # noqa: E402
 from .edt_bfs.cell import EdtCell  # noqa: E402
 from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
@@ -58,15 +65,15 @@ TOPS = {
         n, m, (br, bc), p_max, depth, bool(exponents), e_max),
     "harmonic_planner": lambda n=6, m=12, br=2, bc=2, p_max=30, depth=1024, block_exponents=0, e_max=255,
     headroom=1: Planner(n, m, (br, bc), p_max, depth, bool(block_exponents), e_max, headroom),
-    # DFLC: fll = a .fll stem (models/dflc_<fll>.fll or tb/dflc/fll/<fll>.fll),
+    # DFLC: fll = a .fll path or the stem of a shipped one (models/dflc_<fll>.fll),
     # widths ip_sz, dy_ip, mf_op_sz, op_sz, div (lut/array), op (sel_op), par (1 = parallel),
     # psr1_no .. psr4_no, cpr1_no .. cpr9_no (Table 2 pipeline registers)
     "dflc_stream": DflcStream,
-    "dflc_core": lambda **kw: DflcCore.from_params(**kw),
-    "dflc_multi": DflcMulti,     # test top: the regression's configurations in one build
+    "dflc_core": core_from_params,
     "edt_cell": EdtCell,
-    "edt_array": EdtArray,
-    "edt_bfs": EdtBfs,
+    # The array's cells instantiate one module, named after the top (instance_modules).
+    "edt_array": lambda height, width: EdtArray(height, width, cell_module=_cell_module("edt_array", height, width)),
+    "edt_bfs": lambda height, width: EdtBfs(height, width, cell_module=_cell_module("edt_bfs", height, width)),
 }
 
 # The class whose PARAMS / CONSTRAINTS a factory above takes (when it is not a class).
@@ -74,6 +81,8 @@ SPECS = {
     "harmonic_block": Block,
     "harmonic_planner": Planner,
     "dflc_core": DflcStream,
+    "edt_array": EdtArray,
+    "edt_bfs": EdtBfs,
 }
 
 # Parameter sets `make verilog` emits (the tests emit their own on demand).
@@ -113,9 +122,15 @@ def top_name(name, params):
     return name + tail
 
 
-def params_of(name):
-    """(PARAMS, CONSTRAINTS) of top ``name``: the component's declarations."""
-    cls = SPECS.get(name, TOPS[name])
+def _cell_module(top, height, width):
+    """The EDT/BFS cell's module name in the Verilog of ``top``: ``<top module>_cell``."""
+    return top_name(top, {"height": height, "width": width}) + "_cell"
+
+
+def params_of(name, factory=None):
+    """(PARAMS, CONSTRAINTS) of top ``name``: the component's declarations
+    (``factory``'s, for a top that is not in TOPS)."""
+    cls = factory or SPECS.get(name, TOPS[name])
     params = getattr(cls, "PARAMS", None)
     if params is None:      # a top without declarations: its signature, no ranges
         sig = inspect.signature(cls)
@@ -126,11 +141,15 @@ def params_of(name):
     return params, getattr(cls, "CONSTRAINTS", ())
 
 
-def build(name, params):
-    """The component of ``name`` at ``params`` (checked by the component itself)."""
-    if name not in TOPS:
+def build(name, params, factory=None):
+    """The component of ``name`` at ``params`` (checked by the component itself).
+
+    ``factory``: the component class (or a function of the parameters) of a
+    top that is not in TOPS, e.g. a test's own top; ``name`` then only names
+    its module (:func:`top_name`)."""
+    if factory is None and name not in TOPS:
         raise ValueError(f"unknown top {name!r}; tops: {', '.join(TOPS)}")
-    decl, _ = params_of(name)
+    decl, _ = params_of(name, factory)
     missing = [p.name for p in decl if p.default is REQUIRED and p.name not in params]
     if missing:
         raise ValueError(f"{name}: missing parameter{'s' * (len(missing) > 1)} {', '.join(missing)} "
@@ -139,7 +158,7 @@ def build(name, params):
     # the rest (a parameter a top takes but does not declare passes through).
     names = {p.name for p in decl}
     check(decl, **{k: v for k, v in params.items() if k in names})
-    return TOPS[name](**params)
+    return (factory or TOPS[name])(**params)
 
 
 # -- manifest
@@ -235,12 +254,12 @@ def _value(component, p, params):
     return None if p.default is REQUIRED else p.default
 
 
-def manifest(name, params, component=None):
-    """The manifest of ``name`` at ``params`` (a dict; JSON-ready)."""
+def manifest(name, params, component=None, factory=None):
+    """The manifest of ``name`` at ``params`` (a dict; JSON-ready); ``factory`` as in :func:`build`."""
     if component is None:
-        component = build(name, params)
+        component = build(name, params, factory)
         _silence(component)         # only its signature is read
-    decl, constraints = params_of(name)
+    decl, constraints = params_of(name, factory)
     timing = component.timing() if hasattr(component, "timing") else {}
     ports = ports_of(component)
     return {
@@ -267,6 +286,8 @@ def _silence(component):
             obj._MustUse__silence = True
 
 
+_TOP_ATTR = "(* top =  1  *)\n"          # as yosys' write_verilog prints the attribute
+
 _PORT = re.compile(r"^\s*(input|output)\s+(?:signed\s+)?(?:\[(\d+):(\d+)\]\s*)?(\S+)\s*;", re.M)
 
 
@@ -277,13 +298,13 @@ def verilog_ports(text, module):
     return {m[4]: (m[1], int(m[2]) - int(m[3]) + 1 if m[2] else 1) for m in _PORT.finditer(body)}
 
 
-def emit(name, params, out_dir, with_manifest=True):
+def emit(name, params, out_dir, with_manifest=True, factory=None):
     """Write ``out_dir/<top_name>.v`` and ``.json`` (only if their text changed);
-    returns the Verilog file's path."""
+    returns the Verilog file's path.  ``factory`` as in :func:`build`."""
     module = top_name(name, params)
-    component = build(name, params)
-    man = manifest(name, params, component) if with_manifest else None
-    text = _convert(component, module)
+    component = build(name, params, factory)
+    man = manifest(name, params, component, factory) if with_manifest else None
+    text = verilog_text(component, module)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     path = out / f"{module}.v"
@@ -301,6 +322,18 @@ def emit(name, params, out_dir, with_manifest=True):
             man["clock"] = man["reset"] = None
         _write(out / f"{module}.json", json.dumps(man, indent=1) + "\n")
     return path
+
+
+def verilog_text(component, module):
+    """The Verilog of ``component`` as module ``module``, followed by the
+    modules it instantiates by name (``component.instance_modules()``:
+    {module name: component}, e.g. the EDT/BFS array's cell), each converted
+    under its name: one self-contained file.  Only ``module`` keeps the
+    ``top`` attribute, so tools that look for it find the one top."""
+    text = _convert(component, module)
+    for sub_name, sub in getattr(component, "instance_modules", dict)().items():
+        text += _convert(sub, sub_name).replace(_TOP_ATTR, "", 1)
+    return text
 
 
 def manifest_text(name, params):
@@ -396,7 +429,3 @@ def main(argv=None):
 def _fail(msg):
     print(f"python -m hdl.emit: error: {msg}", file=sys.stderr)
     sys.exit(2)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -63,7 +63,7 @@ from .robot import KHEPERA_II, Robot, wheel_speeds
 from .swam import Swam
 
 __all__ = ["TrackerParams", "canonical_inputs", "ClosedLoop", "distance_to_chain", "fired_rules", "run_model",
-           "track_chains"]
+           "track_chains", "loop_job", "loop_from_job"]
 
 
 @dataclass(frozen=True)
@@ -268,3 +268,23 @@ def run_model(loop, memo=None):
 def track_chains(chains, dflc, **kw):
     """Build a :class:`ClosedLoop` over ``chains`` and run it with the golden model."""
     return run_model(ClosedLoop(chains, dflc, **kw))
+
+
+def loop_job(chains, params, start, slip, seed, approach=None):
+    """Everything that defines a closed-loop run, as JSON-able data (the job an
+    RTL run of the loop reads inside the simulator: sim/rtl/track_job.py)."""
+    return {
+        "chains": [{"vertices": c.vertices.tolist(), "theta_s": c.theta_s} for c in chains],
+        "params": {"speed": params.speed, "lookahead": params.lookahead,
+                   "kappa_fs": params.kappa_fs, "kappa_limit": params.kappa_limit},
+        "start": list(start) if start is not None else None,
+        "slip": slip, "seed": seed, "approach": approach,
+    }
+
+
+def loop_from_job(job, dflc):
+    """The :class:`ClosedLoop` a :func:`loop_job` describes (used on both sides of the RTL run)."""
+    chains = [Swam(c["vertices"], theta_s=c["theta_s"]) for c in job["chains"]]
+    return ClosedLoop(chains, dflc, params=TrackerParams(**job["params"]),
+                      start=tuple(job["start"]) if job["start"] is not None else None,
+                      slip=job["slip"], seed=job["seed"], approach=job["approach"])

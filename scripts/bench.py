@@ -24,7 +24,7 @@ by this run on this machine; only the papers' column is copied.
    the same inputs: median of several repeats (the count is in the table).
 4. Simulation speed: simulated cycles per wall second, from the cocotb
    results of the runs above (sim_time / wall time of the test, build
-   excluded), and an idle-clock probe (tb/simspeed.py) for tops without a job.
+   excluded), and an idle-clock probe (sim/rtl/simspeed.py) for tops without a job.
 5. The regression's wall time (build/regression.json, written by make test).
 6. The harmonic schedule study (scripts/bench_harmonic.py) and, when present,
    the block-exponent comparison (scripts/bench_exponents.py).
@@ -51,13 +51,14 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))       # tb/ (not installed): the cluster's iteration job, run in the simulator
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 import fmax as fmax_mod  # noqa: E402
 import software  # noqa: E402
 import synth  # noqa: E402
-from hdl.emit import emit, top_name  # noqa: E402
-from sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.hdl.emit import emit, top_name  # noqa: E402
+from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
 
 OUT = ROOT / "build" / "bench"
 CACHE = OUT / "cache"
@@ -273,9 +274,9 @@ HARMONIC_BLOCK, HARMONIC_I = (6, 12), 6           # the synthesized planner's bl
 
 
 def harmonic_jobs(hw, speeds, problems):
-    from models.harmonic import plan
-    from tb.harmonic.planner_bench import planner_params
-    from tb.runner import run
+    from navcores.models.harmonic import plan
+    from navcores.sim.rtl.planner_driver import planner_params
+    from navcores.sim.rtl.runner import run
     rows = []
     # One iteration at the paper's p = 128, measured on the cluster RTL.
     start, res = time.time(), OUT / "iteration.json"
@@ -329,9 +330,9 @@ def harmonic_jobs(hw, speeds, problems):
 # --- jobs: DFLC --------------------------------------------------------------------
 
 def dflc_jobs(hw, speeds, problems):
-    from hdl.dflc.top import stream_latency
-    from sim.dflc import rtl_params
-    from models.dflc import Dflc, load_fll
+    from navcores.hdl.dflc.top import stream_latency
+    from navcores.sim.dflc import rtl_params
+    from navcores.models.dflc import Dflc, load_fll
     fll = ROOT / "models" / "dflc_table1.fll"
     model = Dflc(load_fll(fll))
     rng = np.random.default_rng(3)
@@ -389,7 +390,7 @@ def _free_corners(grid):
 
 
 def edt_jobs(hw, speeds, problems):
-    from models.edt_bfs import plan_path
+    from navcores.models.edt_bfs import plan_path
     rows = []
     room = load_map(ROOT / "maps" / "room-32-32-4.map")
     # RTL jobs on crops of room-32-32-4 and on the whole map: equal to the model?
@@ -435,9 +436,9 @@ def edt_jobs(hw, speeds, problems):
 def probe_tops():
     """(name, params) of every simulated top: the hardware tops' simulation
     parameter sets and the jobs' tops."""
-    from sim.dflc import rtl_params
-    from models.dflc import load_fll
-    from tb.harmonic.planner_bench import planner_params
+    from navcores.sim.dflc import rtl_params
+    from navcores.models.dflc import load_fll
+    from navcores.sim.rtl.planner_driver import planner_params
     table1 = load_fll(ROOT / "models" / "dflc_table1.fll")
     return [("harmonic_node", {}), ("harmonic_cluster", {"depth": 1024}), ("harmonic_block", TOPS[2][3]),
             ("harmonic_planner", planner_params((16, 16), (3, 6), HARMONIC_SCHEDULE[-1])),
@@ -450,15 +451,15 @@ def probe_tops():
 PROBE_CYCLES = {"icarus": 20_000, "verilator": 200_000}
 # Verilator builds too long for a benchmark run (the probe says why instead).
 VERILATOR_SKIP = {
-    "harmonic_block": "not run: the 6x12 block's Verilator build takes 10+ minutes (tb/harmonic/planner_bench.py)",
+    "harmonic_block": "not run: the 6x12 block's Verilator build takes 10+ minutes (sim/rtl/planner_driver.py)",
     "edt_bfs_height32_width32": "not run: a 32x32 array's Verilator build takes about 18 minutes (hdl/edt_bfs/README.md)",
 }
 
 
 def probes(speeds):
-    """Idle-clock probe (tb/simspeed.py) of every simulated top: the
+    """Idle-clock probe (sim/rtl/simspeed.py) of every simulated top: the
     simulator's own cost per cycle, no Python in the loop."""
-    from tb.runner import run
+    from navcores.sim.rtl.runner import run
     for name, params in probe_tops():
         module = top_name(name, params)
         entry = speeds.setdefault(module, {"name": name, "params": params})
@@ -470,7 +471,7 @@ def probes(speeds):
             res = OUT / f"probe_{module}_{sim}.json"
             log(f"idle-clock probe {module} on {sim}")
             try:
-                run(name, params, sim, "tb.simspeed",
+                run(name, params, sim, "navcores.sim.rtl.simspeed",
                     env={"SIMSPEED_CYCLES": PROBE_CYCLES[sim], "SIMSPEED_RESULT": res},
                     log_file=OUT / f"probe_{module}_{sim}.log")
             except Exception as e:  # noqa: BLE001 - the report says what happened
@@ -532,7 +533,7 @@ def markdown(data, hw, extra):
     if notes:
         lines += ["", "Notes: " + "; ".join(notes) + "."]
     lines += ["", "## Simulation speed", "",
-              "Simulated clock cycles per wall-clock second, build excluded. *Probe*: tb/simspeed.py, reset "
+              "Simulated clock cycles per wall-clock second, build excluded. *Probe*: sim/rtl/simspeed.py, reset "
               "and then the clock runs with the inputs at 0 for "
               f"{PROBE_CYCLES['icarus']:,} (Icarus) or {PROBE_CYCLES['verilator']:,} (Verilator) cycles, one "
               "wake-up of Python: the simulator's own cost. *Job*: the jobs above, sim time over the cocotb "

@@ -87,7 +87,7 @@ def harness(verilog_text, module, clock="clk"):
 
 def fmax(name, params, work):
     """Synthesize and place ``name`` at ``params``; returns a dict of the figures."""
-    from hdl.emit import emit, top_name
+    from navcores.hdl.emit import emit, top_name
     module = top_name(name, params)
     work = Path(work) / module
     work.mkdir(parents=True, exist_ok=True)

@@ -43,7 +43,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
-from hdl.emit import emit  # noqa: E402
+from navcores.hdl.emit import emit  # noqa: E402
 
 YOSYS = shutil.which("yosys") or "/usr/bin/yosys"
 OUT_DIR = Path("build/synth")
@@ -190,7 +190,7 @@ def edt_hier(v, name, params, paper):
             continue
         cells = body.split("Number of cells:", 1)[1].split("\n\n", 1)[0]
         counts = group(Counter({k: int(n) for k, n in re.findall(r"^\s+(\w+)\s+(\d+)$", cells, re.M)}))[0]
-        if mod.lstrip("\\").endswith(".proto"):
+        if mod.lstrip("\\").endswith("_cell"):     # the array's cell module (hdl.emit: <top>_cell)
             cell = counts
         else:
             glue = counts

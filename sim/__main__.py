@@ -1,4 +1,4 @@
-"""``python -m sim <command> ...``: the project's one command line.
+"""``python -m navcores.sim <command> ...`` (``python -m sim`` in a source tree): the project's one command line.
 
 Every command is a module ``sim/<command>.py`` with a docstring (its first
 line is the help), ``add_arguments(parser)`` and ``run(args) -> int``.  Errors
@@ -8,7 +8,9 @@ reach the user as one line and a non-zero exit code, never as a traceback
 
 import sys
 
-from .cli import main
+# Absolute: run as ``python -m sim`` this file is the top-level package sim's
+# __main__, and the commands must still be loaded once, as navcores.sim.*.
+from navcores.sim.cli import main
 
 if __name__ == "__main__":
     sys.exit(main(sys.argv[1:]))

@@ -16,13 +16,13 @@ import sys
 
 __all__ = ["COMMANDS", "CliError", "parse_cell", "check_cell", "main"]
 
-# name -> module; order is the order of `python -m sim --help`.
+# name -> module (in this package); order is the order of `python -m sim --help`.
 COMMANDS = {
-    "harmonic": "sim.harmonic",
-    "edt": "sim.edt",
-    "dflc": "sim.dflc",
-    "track": "sim.track",
-    "navigate": "sim.navigate",
+    "harmonic": f"{__package__}.harmonic",
+    "edt": f"{__package__}.edt",
+    "dflc": f"{__package__}.dflc",
+    "track": f"{__package__}.track",
+    "navigate": f"{__package__}.navigate",
 }
 
 

@@ -28,6 +28,14 @@ the true pose drifts away from the odometry the controller sees; over the
 map's 5 m it may touch a wall: reported, not counted.)
 """
 
+if __name__ == "__main__":
+    # `python -m sim.demo` in a source tree, or `python -m navcores.sim.demo`:
+    # run the module under its package name, so that every module is loaded
+    # once, as navcores.sim.* (not a second time as the top-level sim's).
+    import sys
+    from navcores.sim.demo import cli
+    sys.exit(cli())
+
 import argparse
 import json
 import os
@@ -39,8 +47,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from sim.cli import CliError  # noqa: E402
-from sim.mapfile import MapFormatError, load_map, load_scenarios  # noqa: E402
+from .cli import CliError  # noqa: E402
+from .mapfile import MapFormatError, load_map, load_scenarios  # noqa: E402
 
 def _mm(v):
     return "   n/a" if v is None else f"{v * 1e3:6.1f}"
@@ -61,10 +69,10 @@ def main(argv=None):
     ap.add_argument("--out", default=str(ROOT / "results" / "demo"))
     args = ap.parse_args(argv)
 
-    from models.swam import Swam
-    from models.tracker import TrackerParams, fired_rules
-    from sim.navigate import DEFAULT_SCHEDULE, navigate, plot_navigation, summary_line
-    from sim.tracking import load_dflc, plot_track, read_path_csv, run_loop
+    from navcores.models.swam import Swam
+    from navcores.models.tracker import TrackerParams, fired_rules
+    from .navigate import DEFAULT_SCHEDULE, navigate, plot_navigation, summary_line
+    from .tracking import load_dflc, plot_track, read_path_csv, run_loop
 
     t_start = time.time()
     obstacle = load_map(args.map)
@@ -184,10 +192,11 @@ def main(argv=None):
     return 0 if ok else 1
 
 
-if __name__ == "__main__":
+def cli():
+    """``python -m sim.demo``: main() with bad input as one line and exit status 2."""
     os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
     try:
-        sys.exit(main())
+        return main()
     except (CliError, MapFormatError) as e:
         print(f"sim.demo: error: {e}", file=sys.stderr)
-        sys.exit(2)
+        return 2

@@ -46,7 +46,7 @@ def add_arguments(p):
 
 
 def load_config(path, div):
-    from models.dflc import FllError, load_fll
+    from navcores.models.dflc import FllError, load_fll
     try:
         return load_fll(path, div_type=div)
     except FllError as e:
@@ -97,8 +97,8 @@ def rtl_params(fll_path, config, div, parallel):
     """The emitted top's parameters.  A controller shipped in models/
     (``dflc_<stem>.fll``, byte for byte) is the module ``make verilog`` emits,
     ``dflc_stream_<stem>`` (one build, shared); any other .fll is copied under
-    build/dflc_fll/ as <stem>_<hash>.fll: a stem that names the emitted module
-    and changes with the file's content."""
+    build/dflc_fll/ as <stem>_<hash>.fll, given by that path: its stem names
+    the emitted module and changes with the file's content."""
     data = Path(fll_path).read_bytes()
     tag = None
     for shipped in sorted((ROOT / "models").glob("dflc_*.fll")):
@@ -107,10 +107,10 @@ def rtl_params(fll_path, config, div, parallel):
             break
     if tag is None:
         stem = re.sub(r"[^A-Za-z0-9_]", "_", Path(fll_path).stem) or "fll"
-        tag = f"{stem}_{hashlib.sha1(data).hexdigest()[:8]}"
-        d = ROOT / "build" / "dflc_fll"
-        d.mkdir(parents=True, exist_ok=True)
-        (d / f"{tag}.fll").write_bytes(data)
+        copy = ROOT / "build" / "dflc_fll" / f"{stem}_{hashlib.sha1(data).hexdigest()[:8]}.fll"
+        copy.parent.mkdir(parents=True, exist_ok=True)
+        copy.write_bytes(data)
+        tag = str(copy)
     params = {"fll": tag}
     if div != "lut":
         params["div"] = div
@@ -120,13 +120,13 @@ def rtl_params(fll_path, config, div, parallel):
 
 
 def run_rtl(params, codes, sim):
-    from tb.runner import run
+    from .rtl.runner import run
     with tempfile.TemporaryDirectory() as tmp:
         job, result = Path(tmp) / "job.json", Path(tmp) / "result.json"
         job.write_text(json.dumps({"params": params, "codes": codes.tolist()}))
         log = ROOT / "build" / "dflc_fll" / f"sim_{sim}.log"
         log.parent.mkdir(parents=True, exist_ok=True)
-        run("dflc_stream", params, sim, "sim.dflc_job",
+        run("dflc_stream", params, sim, "navcores.sim.rtl.dflc_job",
             env={"DFLC_JOB": job, "DFLC_RESULT": result}, log_file=log)
         return json.loads(result.read_text())
 
@@ -156,8 +156,8 @@ def plot_surface(model, out):
 
 
 def run(args):
-    from hdl.dflc.top import stream_latency
-    from models.dflc import Dflc
+    from navcores.hdl.dflc.top import stream_latency
+    from navcores.models.dflc import Dflc
     if not Path(args.fll).exists():
         raise CliError(f"{args.fll}: no such .fll file")
     config = load_config(args.fll, args.div)

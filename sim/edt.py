@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from models.edt_bfs import plan_path
+from navcores.models.edt_bfs import plan_path
 
 from .cli import CliError, check_cell, parse_cell
 from .mapfile import load_grid
@@ -59,13 +59,13 @@ def _check_args(args):
 
 
 def run_rtl(grid, goals, start, dfar, sim, work):
-    """Run sim/edt_job.py on the core at the map's size; returns its decoded result."""
-    from tb.runner import run
+    """Run sim/rtl/edt_bfs_job.py on the core at the map's size; returns its decoded result."""
+    from .rtl.runner import run
     job, result = work / "job.json", work / "result.json"
     job.write_text(json.dumps({"obstacle": grid.tolist(), "goals": [list(g) for g in goals],
                                "start": list(start) if start else None, "dfar": dfar}))
     h, w = grid.shape
-    run("edt_bfs", {"height": h, "width": w}, sim, "sim.edt_job",
+    run("edt_bfs", {"height": h, "width": w}, sim, "navcores.sim.rtl.edt_bfs_job",
         env={"EDT_JOB": job, "EDT_RESULT": result}, log_file=work / "sim.log")
     return json.loads(result.read_text())
 

@@ -156,7 +156,7 @@ def _plan_defaults():
     verilator builds in seconds; the same default for the model, so every
     engine gives the same JSON), and plan()'s own I."""
     import inspect
-    from models.harmonic import plan
+    from navcores.models.harmonic import plan
     return DEFAULT_BLOCK, int(inspect.signature(plan).parameters["iters"].default)
 
 
@@ -168,7 +168,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
     keys = ("h", "p", "converged", "maxima", "unreachable", "sweeps", "block_iterations",
             "check_iterations", "node_updates", "cycles", "levels")
     if engine == "model":
-        from models.harmonic import plan
+        from navcores.models.harmonic import plan
         try:
             # With block exponents every engine runs the planner RTL's variant
             # (rtl=True: converted Maximum, scan and shift-visit cycles), so
@@ -183,11 +183,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
             # exact local maxima of the final field (the RTL engines count the same)
             out["maxima"] = _maxima(obstacle, goals, block, r.padded_h)
         return out
-    try:
-        from tb.harmonic.planner_bench import run_planner_rtl
-    except ImportError:
-        raise CliError(f"--engine {engine}: not available (the planner RTL driver "
-                       "tb/harmonic/planner_bench.py is not in this checkout); use --engine model") from None
+    from .rtl.planner_driver import run_planner_rtl
     ticker = _Ticker(f"planner RTL on {engine}")
     try:
         out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine,
@@ -218,7 +214,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
 
 
 def _maxima(obstacle, goals, block, padded_h):
-    from models.harmonic import local_max, neighbours, pad_to_blocks, reachable
+    from navcores.models.harmonic import local_max, neighbours, pad_to_blocks, reachable
     padded = pad_to_blocks(obstacle, block)
     const = padded | ~reachable(padded, goals)
     for g in goals:
@@ -255,7 +251,7 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
     """The whole command without I/O: returns the JSON-ready dict and the
     field (h at precision p, unpadded map; with block exponents h is on the
     common scale 2**-frac_bits and p is that scale)."""
-    from models.harmonic import ascent_next, pad_to_blocks, reachable, trajectory
+    from navcores.models.harmonic import ascent_next, pad_to_blocks, reachable, trajectory
 
     height, width = grid.shape
     padded = pad_to_blocks(grid, block)

@@ -25,12 +25,13 @@ from pathlib import Path
 
 import numpy as np
 
-from models.navigation import cell_centre, collisions, safe_cells, shorten, split_monotone
-from models.swam import Swam
-from models.tracker import TrackerParams
-from sim.cli import CliError, check_cell, parse_cell
-from sim.mapfile import load_grid
-from sim.tracking import ENGINES, run_loop
+from navcores.models.navigation import cell_centre, collisions, safe_cells, shorten, split_monotone
+from navcores.models.swam import Swam
+from navcores.models.tracker import TrackerParams
+
+from .cli import CliError, check_cell, parse_cell
+from .mapfile import load_grid
+from .tracking import ENGINES, run_loop
 
 DEFAULT_SCHEDULE = "16,32,64,128,256"
 
@@ -66,7 +67,7 @@ def _ints(text, what, n=None):
 
 
 def plan_harmonic(obstacle, start, goal, args):
-    from models.harmonic import plan, reachable, trajectory
+    from navcores.models.harmonic import plan, reachable, trajectory
     if not reachable(obstacle, [goal])[start]:
         raise CliError(f"goal {goal} cannot be reached from start {start}")
     schedule = _ints(args.schedule, "--schedule")
@@ -88,7 +89,7 @@ def plan_harmonic(obstacle, start, goal, args):
 
 
 def plan_edt(obstacle, start, goal, args):
-    from models.edt_bfs import plan_path
+    from navcores.models.edt_bfs import plan_path
     if args.dfar < 0:
         raise CliError(f"--dfar {args.dfar}: must be >= 0")
     res = plan_path(obstacle, [goal], start, args.dfar)

@@ -21,10 +21,11 @@ import json
 import math
 from pathlib import Path
 
-from models.swam import Swam, SwamError
-from models.tracker import TrackerParams
-from sim.cli import CliError
-from sim.tracking import ENGINES, plot_track, read_path_csv, run_loop
+from navcores.models.swam import Swam, SwamError
+from navcores.models.tracker import TrackerParams
+
+from .cli import CliError
+from .tracking import ENGINES, plot_track, read_path_csv, run_loop
 
 
 def add_arguments(p):

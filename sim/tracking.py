@@ -2,8 +2,8 @@
 
 * :func:`run_loop`: the closed loop (models.tracker.ClosedLoop) over a list of
   chains with the DFLC golden model (``engine="model"``) or the DFLC RTL in
-  Icarus / Verilator (``sim/track_rtl.py`` runs the whole loop inside the
-  simulator through the DFLC cocotb driver, one inference per control
+  Icarus / Verilator (``sim/rtl/track_job.py`` runs the whole loop inside
+  the simulator through the DFLC cocotb driver, one inference per control
   period).  Same result dictionary either way.
 * :func:`read_path_csv`: a chain's vertices from a CSV file.
 * :func:`plot_track`: the paper's Fig. 13/14 view (reference, odometry and
@@ -19,36 +19,17 @@ from pathlib import Path
 
 import numpy as np
 
-from models.swam import Swam
-from models.tracker import ClosedLoop, TrackerParams, distance_to_chain, run_model
-from sim.cli import CliError
+from navcores.models.tracker import TrackerParams, distance_to_chain, loop_from_job, loop_job, run_model
+
+from .cli import CliError
 
 ENGINES = ("model", "icarus", "verilator")
-DFLC_FLL = Path(__file__).resolve().parents[1] / "models" / "dflc_table1.fll"
 
 
 def load_dflc():
-    from models.dflc import Dflc
-    return Dflc.from_fll(DFLC_FLL)
-
-
-def loop_job(chains, params, start, slip, seed, approach=None):
-    """Everything that defines a closed-loop run, as JSON-able data."""
-    return {
-        "chains": [{"vertices": c.vertices.tolist(), "theta_s": c.theta_s} for c in chains],
-        "params": {"speed": params.speed, "lookahead": params.lookahead,
-                   "kappa_fs": params.kappa_fs, "kappa_limit": params.kappa_limit},
-        "start": list(start) if start is not None else None,
-        "slip": slip, "seed": seed, "approach": approach,
-    }
-
-
-def loop_from_job(job, dflc):
-    """The :class:`ClosedLoop` a job describes (used on both sides of the RTL run)."""
-    chains = [Swam(c["vertices"], theta_s=c["theta_s"]) for c in job["chains"]]
-    return ClosedLoop(chains, dflc, params=TrackerParams(**job["params"]),
-                      start=tuple(job["start"]) if job["start"] is not None else None,
-                      slip=job["slip"], seed=job["seed"], approach=job["approach"])
+    """The paper's Table 1 controller (models/dflc_table1.fll), the golden model."""
+    from navcores.models.dflc import DEFAULT_FLL, Dflc
+    return Dflc.from_fll(DEFAULT_FLL)
 
 
 def run_loop(chains, engine="model", params=TrackerParams(), start=None, slip=0.0, seed=0, approach=None,
@@ -66,15 +47,15 @@ def run_loop(chains, engine="model", params=TrackerParams(), start=None, slip=0.
 
 
 def run_loop_rtl(job, sim, log_file=None):
-    """The closed loop inside the simulator (sim/track_rtl.py) on the DFLC RTL.
+    """The closed loop inside the simulator (sim/rtl/track_job.py) on the DFLC RTL.
 
     The simulator's output goes to ``log_file`` (default
     ``build/track/<sim>_track_rtl.log``); the runner's own chatter is muted.
     """
     import logging
 
-    from sim.track_rtl import DFLC_PARAMS, DFLC_TOP
-    from tb.runner import BUILD, run
+    from .rtl.runner import BUILD, run
+    from .rtl.track_job import DFLC_PARAMS, DFLC_TOP
     log_file = Path(log_file) if log_file else BUILD / "track" / f"{sim}_track_rtl.log"
     log_file.parent.mkdir(parents=True, exist_ok=True)
     loggers = [logging.getLogger(n) for n in ("Icarus", "Verilator")]
@@ -96,7 +77,7 @@ def run_loop_rtl(job, sim, log_file=None):
             with open(build_log, "ab") as fh:
                 os.dup2(fh.fileno(), 1)
                 os.dup2(fh.fileno(), 2)
-                run(DFLC_TOP, DFLC_PARAMS, sim, "sim.track_rtl",
+                run(DFLC_TOP, DFLC_PARAMS, sim, "navcores.sim.rtl.track_job",
                     env={"TRACK_JOB": work / "job.json", "TRACK_RESULT": work / "result.json"},
                     log_file=log_file)
         except (AssertionError, RuntimeError, SystemExit, OSError) as e:

@@ -169,13 +169,6 @@ class DflcCore(wiring.Component):
             "o_stream": Out(stream.Signature(result_layout(c), always_ready=True)),
         })
 
-    @classmethod
-    def from_params(cls, **params):
-        """The core of an emitted parameter set (``hdl.emit`` ``dflc_core``:
-        fll, widths, div, op, par and the pipeline generics, as DflcStream)."""
-        from .top import core_from_params    # top imports this module
-        return core_from_params(**params)
-
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest."""
         return {"initiation_interval_cycles": 1 if self.parallel else 1 << self.config.n,

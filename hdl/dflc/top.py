@@ -8,7 +8,7 @@ from amaranth.lib import stream, wiring
 from amaranth.lib.fifo import SyncFIFO
 from amaranth.lib.wiring import In, Out
 
-from models.dflc import DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
+from navcores.models.dflc import DEFAULT_FLL, DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
 
 from ..params import Constraint, Param, check
 
@@ -18,15 +18,14 @@ from .pipe import PIPE_KEYS, check_pipe
 __all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth", "split_params",
            "core_from_params"]
 
-ROOT = Path(__file__).resolve().parents[2]
-# models/: the shipped controllers; tb/dflc/fll/: test fixtures;
-# build/dflc_fll/: .fll files `python -m sim dflc` copied under a content tag.
-FLL_DIRS = (ROOT / "models", ROOT / "tb" / "dflc" / "fll", ROOT / "build" / "dflc_fll")
+# Where a stem is looked up: the controllers shipped in models/ (any other
+# .fll, a test fixture or a user's, is given by its path).
+FLL_DIRS = (DEFAULT_FLL.parent,)
 
 
 def resolve_fll(fll):
-    """A .fll path, or a stem: ``table1`` -> models/dflc_table1.fll,
-    ``n3_prod`` -> tb/dflc/fll/n3_prod.fll (the test fixtures)."""
+    """A .fll path, or the stem of a shipped controller: ``table1`` ->
+    models/dflc_table1.fll."""
     p = Path(str(fll))
     if p.suffix == ".fll" and p.exists():
         return p
@@ -35,7 +34,7 @@ def resolve_fll(fll):
             if cand.exists():
                 return cand
     raise ValueError(f"fll = {fll!r}: no such .fll (looked for a path, and dflc_{fll}.fll / "
-                     f"{fll}.fll in models/ and tb/dflc/fll/)")
+                     f"{fll}.fll in models/)")
 
 
 def config_for(fll="table1", ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div="lut", op=None):

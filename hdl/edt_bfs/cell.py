@@ -4,7 +4,7 @@ from amaranth.hdl import C, Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from models.edt_bfs import OFFSETS, widths
+from navcores.models.edt_bfs import OFFSETS, widths
 
 from ..params import Param, check
 

@@ -47,7 +47,7 @@ class Controller(wiring.Component):
       of the current pass (``order.ready`` low while one waits), then the
       run continues with a sweep at the same precision.
 
-    Timing (cycles, see the table in :mod:`models.harmonic`): a visit of K
+    Timing (cycles, see the table in :mod:`models.harmonic.schedule`): a visit of K
     iterations takes K*(p+2) + 6 cycles:
 
     =========  ============================================================
@@ -408,7 +408,7 @@ class Controller(wiring.Component):
 
     def _rise(self, m, v):
         """A precision rise: blocks saturated in the ending level with e_b > 0
-        coarsen (plan_exponents' raise_precision_exp); clamps restart."""
+        coarsen (ExponentGrid.raise_precision in models/harmonic/exponents.py); clamps restart."""
         x = self._x
         E, sat = x["E"], x["sat"]
         mask = Signal(len(sat), name="crs_mask")

@@ -15,7 +15,7 @@ class Counters(wiring.Component):
     With a synchronous RAM the data of an address appears one cycle after it
     is presented, so each counter presents, in iteration cycle c, the address
     whose bit the nodes need at c+1 (see :class:`~hdl.harmonic.node.Node` for
-    the cycle numbering and :mod:`models.harmonic` for the word layout).
+    the cycle numbering and :mod:`models.harmonic.ram` for the word layout).
 
     * ``cntR`` (port A, LSB first): ``p+1-c``, a down counter p+1 .. 0, so the
       nodes read the flag at c = 0 and value bit k at c = k+1.

@@ -10,9 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models.dflc import DEFAULT_FLL, Dflc
-from sim.cli import CliError, main
-from tb.runner import SIMULATORS
+from navcores.hdl.emit import top_name
+from navcores.models.dflc import DEFAULT_FLL, Dflc
+from navcores.sim.cli import CliError, main
+from navcores.sim.rtl.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 FIXTURES = Path(__file__).resolve().parent / "fll"
@@ -61,7 +62,7 @@ def test_zero_strength_flag(tmp_path):
 def test_bad_csv(tmp_path, text, match):
     csv = write(tmp_path, "in.csv", text)
     with pytest.raises(CliError, match=match):
-        from sim.dflc import run
+        from navcores.sim.dflc import run
         import argparse
         run(argparse.Namespace(fll=str(DEFAULT_FLL), input=str(csv), engine="model", parallel=False,
                                div="lut", json=None, surface=None))
@@ -96,14 +97,16 @@ def test_errors_are_one_line(tmp_path, capsys):
 def test_rtl_params_share_the_shipped_build(tmp_path):
     """The shipped controller is the module ``make verilog`` emits (one build for
     every run, the regression's too); any other .fll gets a copy named by its content."""
-    from sim.dflc import rtl_params
+    from navcores.sim.dflc import rtl_params
     copy = write(tmp_path, "mine.fll", DEFAULT_FLL.read_text())
     assert rtl_params(copy, None, "lut", False) == {"fll": "table1"}
     assert rtl_params(DEFAULT_FLL, None, "array", True) == {"fll": "table1", "div": "array", "par": 1}
     changed = write(tmp_path, "mine2.fll", DEFAULT_FLL.read_text() + "\n")
     p = rtl_params(changed, None, "lut", False)
-    assert re.fullmatch(r"mine2_[0-9a-f]{8}", p["fll"])
-    assert (ROOT / "build" / "dflc_fll" / f"{p['fll']}.fll").read_text() == changed.read_text()
+    copy = Path(p["fll"])
+    assert copy.parent == ROOT / "build" / "dflc_fll" and re.fullmatch(r"mine2_[0-9a-f]{8}", copy.stem)
+    assert copy.read_text() == changed.read_text()
+    assert top_name("dflc_stream", p) == f"dflc_stream_{copy.stem}"     # the module carries the stem
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)

@@ -7,16 +7,16 @@ import warnings
 import pytest
 from amaranth.hdl import UnusedElaboratable
 
-from hdl.dflc.addr_gen import AddrGen
-from hdl.dflc.cons_map import ConsMap
-from hdl.dflc.core import PIPE_DEFAULTS, PIPE_KEYS, PIPE_TABLE2, DflcCore, latency
-from hdl.dflc.divider import Divider
-from hdl.dflc.integrator import Integrator
-from hdl.dflc.mf_gen import MfGen
-from hdl.dflc.pipe import PIPE_RANGE
-from hdl.dflc.top import DflcStream, config_for, fifo_depth, resolve_fll, stream_latency
-from hdl.dflc.tnorm import Tnorm
-from hdl.emit import TOPS, top_name
+from navcores.hdl.dflc.addr_gen import AddrGen
+from navcores.hdl.dflc.cons_map import ConsMap
+from navcores.hdl.dflc.core import PIPE_DEFAULTS, PIPE_KEYS, PIPE_TABLE2, DflcCore, latency
+from navcores.hdl.dflc.divider import Divider
+from navcores.hdl.dflc.integrator import Integrator
+from navcores.hdl.dflc.mf_gen import MfGen
+from navcores.hdl.dflc.pipe import PIPE_RANGE
+from navcores.hdl.dflc.top import DflcStream, config_for, fifo_depth, resolve_fll, stream_latency
+from navcores.hdl.dflc.tnorm import Tnorm
+from navcores.hdl.emit import TOPS, top_name
 
 
 @pytest.fixture(autouse=True)

@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 from cocotb.triggers import ReadOnly, RisingEdge
 
-from edt_bench import EdtBfsDriver, compare
 from images import FAMILIES, free_cells
-from models.edt_bfs import plan_path
-from tb.runner import SIMULATORS, run, seed_from_env
+from navcores.models.edt_bfs import plan_path
+from navcores.sim.rtl.edt_bfs_driver import EdtBfsDriver, compare
+from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
 
 H, W = (int(v) for v in os.environ.get("EDT_SIZE", "8x8").split("x"))
 JOBS = int(os.environ.get("EDT_JOBS", "6"))

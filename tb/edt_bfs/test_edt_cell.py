@@ -15,10 +15,10 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ReadOnly, RisingEdge, Timer
 
-from edt_bench import pack, unpack
-from hdl.edt_bfs.cell import cell_widths, result_layout, state_layout
-from models.edt_bfs import OFFSETS, bfs_step, edt_step
-from tb.runner import SIMULATORS, run, seed_from_env
+from navcores.hdl.edt_bfs.cell import cell_widths, result_layout, state_layout
+from navcores.models.edt_bfs import OFFSETS, bfs_step, edt_step
+from navcores.sim.rtl.edt_bfs_driver import pack, unpack
+from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
 
 H = W = 16
 CYCLES = 3000

@@ -9,11 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models.edt_bfs import plan_path
-from sim import edt as cmd
-from sim.cli import CliError, main
-from sim.mapfile import load_grid
-from tb.runner import SIMULATORS
+from navcores.models.edt_bfs import plan_path
+from navcores.sim import edt as cmd
+from navcores.sim.cli import CliError, main
+from navcores.sim.mapfile import load_grid
+from navcores.sim.rtl.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 MAP = ROOT / "maps" / "room-32-32-4.map"

@@ -1,6 +1,6 @@
 """Fields for the host-side tests, from the block-synchronous model (one place)."""
 
-from models.harmonic import plan, reachable
+from navcores.models.harmonic import plan, reachable
 
 
 def reachable_mask(obstacle, goals):

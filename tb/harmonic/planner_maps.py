@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from models.harmonic import reachable
+from navcores.models.harmonic import reachable
 
 
 def corridor(rows, cols):

@@ -26,9 +26,9 @@ import cocotb
 import pytest
 from cocotb.triggers import FallingEdge, ReadOnly
 
-from models.harmonic import convert_mantissa
-from tb.harmonic.serial import start
-from tb.runner import SIMULATORS, run
+from navcores.models.harmonic import convert_mantissa
+from navcores.sim.rtl.clock import start
+from navcores.sim.rtl.runner import SIMULATORS, run
 
 P = dict(n=3, m=6, br=3, bc=3, p_max=12)
 STRIDE = P["p_max"] + 2
@@ -41,7 +41,7 @@ SIDES = (("N", "bottom", P["m"], (-1, 0)), ("S", "top", P["m"], (1, 0)),
 def _layouts():
     """The per-side layouts of the conversion port (``conversion__s`` in,
     ``conversion__lead`` out): one field per side."""
-    from hdl.harmonic.border import BorderExponentsSignature
+    from navcores.hdl.harmonic.border import BorderExponentsSignature
     members = BorderExponentsSignature(STRIDE, 255).members
     return members["s"].shape, members["lead"].shape
 
@@ -52,7 +52,7 @@ def _field(word, layout, side):
 
 
 def _top(n, m, br, bc, p_max):
-    from hdl.harmonic.border import Border
+    from navcores.hdl.harmonic.border import Border
     return Border(n, m, (br, bc), p_max + 2, exponents=True)
 
 
@@ -207,7 +207,7 @@ def test_border_exponents(sim):
     # HARMONIC_BIG=1 runs this unit test on Verilator too.
     if sim == "verilator" and os.environ.get("HARMONIC_BIG") != "1":
         pytest.skip("Verilator run of the Border unit test: HARMONIC_BIG=1")
-    from hdl.emit import TOPS
+    from navcores.hdl.emit import TOPS
     TOPS["harmonic_border"] = _top     # a test-only top, registered only while it is built
     try:
         run("harmonic_border", P, sim, "test_border_exponents")

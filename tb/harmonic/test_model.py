@@ -19,7 +19,7 @@ import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from models.harmonic import (
+from navcores.models.harmonic import (
     from_ram_image, local_max, neighbours, one, ram_image, relax, step, word_bits,
 )
 

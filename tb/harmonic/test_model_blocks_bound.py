@@ -45,8 +45,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from harmonic_small_maps import corridor, spiral
-from models.harmonic import neighbours, one, plan, relax, step
-from sim.mapfile import load_map
+from navcores.models.harmonic import neighbours, one, plan, relax, step
+from navcores.sim.mapfile import load_map
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -167,7 +167,7 @@ def test_plan_explore_defaults_are_plan(block, iters):
     """plan_explore (the benches' schedule variants) with its defaults is
     plan() counter for counter; every order, with and without skipping still
     blocks, ends in the same fixed point (part 2 above)."""
-    from models.harmonic import plan_explore
+    from navcores.models.harmonic import plan_explore
     ob, goals = _random(13, 17, 22, 0.15)
     sched = (8, 16, 24)
     a = plan(ob, goals, block=block, iters=iters, schedule=sched)

@@ -38,7 +38,7 @@ import pytest
 
 from harmonic_small_maps import corridor, spiral
 from planner_maps import random_map
-from models.harmonic import (
+from navcores.models.harmonic import (
     RUN_OVERHEAD, TRIANGLES, VISIT_OVERHEAD, ascent_reaches, convert_mantissa, decision, decision_exponents,
     local_max, plan, reachable, visit_cycles,
 )
@@ -217,7 +217,7 @@ def test_cycles_follow_timing_model():
 
 
 def test_exponents_converge_where_fixed_point_cannot():
-    from sim.mapfile import load_map
+    from navcores.sim.mapfile import load_map
     ob = load_map(ROOT / "maps" / "random-32-32-10.map")
     goals = [(29, 6)]                                    # the longest scenario's goal
     fixed = plan(ob, goals, schedule=(16,))
@@ -269,7 +269,7 @@ def test_rtl_variant_conservative_maxima():
     """rtl=True (the planner RTL's variant): converted-Maximum convergence
     implies no exact local maximum on the common scale; the check pass never
     re-picks (asserted inside); scans cost cycles only where exponents differ."""
-    from models.harmonic import local_max
+    from navcores.models.harmonic import local_max
     from tb.harmonic.planner_maps import random_map
     converged = 0
     for seed in range(6):
@@ -292,7 +292,7 @@ def test_rtl_variant_conservative_maxima():
 def _decision_fields():
     """Converged block-exponent fields (the RTL's variant): small random
     maps with 3x6 blocks and random-32-32-10 at p = 16 with 6x12 blocks."""
-    from sim.mapfile import load_map
+    from navcores.sim.mapfile import load_map
     for seed in range(4):
         ob, goals = random_map(9, 18, seed)
         yield plan(ob, goals, block=(3, 6), iters=3, schedule=(6, 10, 14), block_exponents=True, rtl=True)

@@ -2,7 +2,7 @@
 """The whole harmonic Planner RTL against models.harmonic.plan, bit-exact.
 
 One build per parameter set (B = BR x BC blocks of n x m nodes); the cocotb
-tests drive only the host streams (tb/harmonic/planner_bench.py):
+tests drive only the host streams (sim/rtl/planner_driver.py):
 
 * planner_maps: a corridor, a spiral and a random map: LOAD, START, poll
   STATUS to the end, READ every node: every stored value and constant flag
@@ -29,12 +29,12 @@ import cocotb
 import numpy as np
 import pytest
 
-from models.harmonic import decision, plan
-from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic
-from tb.harmonic.planner_job import run_map
+from navcores.models.harmonic import decision, plan
+from navcores.sim.rtl.clock import start
+from navcores.sim.rtl.planner_driver import Code, Op, PlannerDriver, arithmetic
+from navcores.sim.rtl.planner_job import run_map
+from navcores.sim.rtl.runner import SIMULATORS, run
 from tb.harmonic.planner_maps import MAPS, random_map
-from tb.harmonic.serial import start
-from tb.runner import SIMULATORS, run
 
 SETS = {
     # 3x3 blocks of one cluster: every border kind (B+-1, B+-k, the map edge)
@@ -51,9 +51,9 @@ PARAMS = json.loads(os.environ.get("PLANNER_PARAMS", json.dumps(SETS["b3x6"])))
 SET_NAME = os.environ.get("PLANNER_SET", "b3x6")
 
 
-def _bench(dut):
+def _driver(dut):
     P = PARAMS
-    return PlannerBench(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"])
+    return PlannerDriver(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"])
 
 
 def _shape():
@@ -67,11 +67,11 @@ def _padded(ob, goals):
     return goal
 
 
-async def _run(bench, ob, goals, sched, iters, events=()):
+async def _run(drv, ob, goals, sched, iters, events=()):
     """Model and RTL on one map; compare everything; return the model result."""
     P = PARAMS
     res = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched, events=events)
-    st, h, const = await run_map(bench, ob | res.unreachable, _padded(ob, goals), arithmetic(sched),
+    st, h, const = await run_map(drv, ob | res.unreachable, _padded(ob, goals), arithmetic(sched),
                                  iters, events)
     bad = np.argwhere((h != res.padded_h) | (const != res.padded_const))
     assert not len(bad), (f"{len(bad)} nodes differ, first {tuple(bad[0])}: RTL {h[tuple(bad[0])]} "
@@ -88,13 +88,13 @@ async def _run(bench, ob, goals, sched, iters, events=()):
 @cocotb.test()
 async def planner_maps(dut):
     await start(dut)
-    bench = _bench(dut)
+    drv = _driver(dut)
     rng = random.Random(cocotb.RANDOM_SEED)
     rows, cols = _shape()
     compared = 0
     for name, sched, iters in RUNS[SET_NAME]:
         ob, goals = MAPS[name](rows, cols, cocotb.RANDOM_SEED % 1000)
-        res, h = await _run(bench, ob, goals, sched, iters)
+        res, h = await _run(drv, ob, goals, sched, iters)
         compared += h.size
         dut._log.info(f"{name} {rows}x{cols}, {sched}, I={iters}: p={res.p} converged={res.converged} "
                       f"sweeps={res.sweeps} block_iterations={res.block_iterations} "
@@ -106,8 +106,8 @@ async def planner_maps(dut):
                  (rows // 2, 0), (n - 1, m - 1), (n, m), (n - 1, m), (n, m - 1)}
         cells |= {(rng.randrange(rows), rng.randrange(cols)) for _ in range(6)}
         for r, c in sorted(cells):
-            b, x, y = bench.locate(r, c)
-            resp = await bench.command(Op.DIRECTION, block=b, row=x, col=y)
+            b, x, y = drv.locate(r, c)
+            resp = await drv.command(Op.DIRECTION, block=b, row=x, col=y)
             t, (gr, gc) = decision(res.padded_h, r, c)
             assert resp["code"] == Code.OK
             got = (resp["triangle"], resp["g_row"], resp["g_col"], resp["value"])
@@ -119,7 +119,7 @@ async def planner_maps(dut):
 @cocotb.test()
 async def planner_dynamic(dut):
     await start(dut)
-    bench = _bench(dut)
+    drv = _driver(dut)
     rows, cols = _shape()
     P = PARAMS
     # a map whose runs converge at p = 16 on the b3x6 set (~20K cycles each)
@@ -131,7 +131,7 @@ async def planner_dynamic(dut):
     s = min(3, passes - 1)
     cell = tuple(int(x) for x in free[len(free) // 3])
     goal2 = tuple(int(x) for x in free[-1])
-    res, _ = await _run(bench, ob, goals, sched, iters,
+    res, _ = await _run(drv, ob, goals, sched, iters,
                         events=[(s, cell, "obstacle"), (s + 2, goal2, "goal")])
     assert res.events_applied == 2 and res.clear_passes == 2
     if SET_NAME == "b3x6":
@@ -145,7 +145,7 @@ async def planner_dynamic(dut):
     cell2 = tuple(int(x) for x in free[2 * len(free) // 3])
     # The idle SET clears at the last run's p = 16; the new run starts lower
     # (every word above the clear's bits is 0, so any schedule is valid).
-    res2, _ = await _run(bench, ob2, goals, (4, 8), iters, events=[(0, cell2, "obstacle")])
+    res2, _ = await _run(drv, ob2, goals, (4, 8), iters, events=[(0, cell2, "obstacle")])
     assert res2.events_applied == 1
     dut._log.info(f"obstacle at {cell2} after the run: equal, {res2.cycles} cycles")
 
@@ -153,14 +153,14 @@ async def planner_dynamic(dut):
 @cocotb.test()
 async def planner_bad_commands(dut):
     await start(dut)
-    bench = _bench(dut)
+    drv = _driver(dut)
     P = PARAMS
     B, n, m, p_max = P["br"] * P["bc"], P["n"], P["m"], P["p_max"]
     checked = 0
 
     async def expect(code, op, **f):
         nonlocal checked
-        resp = await bench.command(op, **f)
+        resp = await drv.command(op, **f)
         assert resp["code"] == code, f"{op} {f}: {resp['code']}, expected {code}"
         checked += 1
         return resp
@@ -171,8 +171,8 @@ async def planner_bad_commands(dut):
             await expect(Code.BAD_NODE, op, **{"block": 0, "row": 0, "col": 0, **where})
     dut.i_stream__valid.value = 0
     for raw in (6, 7):      # ops the layout can carry but the planner does not know
-        d = bench.dut
-        word = bench.pack(block=0) | raw
+        d = drv.dut
+        word = drv.pack(block=0) | raw
         d.i_stream__payload.value = word
         d.i_stream__valid.value = 1
         from cocotb.triggers import FallingEdge
@@ -190,7 +190,7 @@ async def planner_bad_commands(dut):
     ob, goals = random_map(rows, cols, 3)
     sched, iters = (4, 8), 2
     res = plan(ob, goals, block=(n, m), iters=iters, schedule=sched)
-    await bench.load_map(ob | res.unreachable, _padded(ob, goals))
+    await drv.load_map(ob | res.unreachable, _padded(ob, goals))
     for f in ({"p1": 1, "step": 1, "p_last": 8}, {"p1": 4, "step": 4, "p_last": p_max + 1},
               {"p1": 8, "step": 4, "p_last": 4}, {"p1": 4, "step": 0, "p_last": 8}):
         await expect(Code.BAD_PRECISION, Op.START, iters=2, **f)
@@ -201,8 +201,8 @@ async def planner_bad_commands(dut):
     await expect(Code.BUSY, Op.DIRECTION, block=0, row=0, col=0)
     await expect(Code.BUSY, Op.START, p1=4, step=4, p_last=8, iters=2)
     await expect(Code.BAD_NODE, Op.SET, block=B, row=0, col=0)
-    st = await bench.wait_idle()
-    h, const = await bench.read_all(ob.shape)
+    st = await drv.wait_idle()
+    h, const = await drv.read_all(ob.shape)
     assert (h == res.padded_h).all() and (const == res.padded_const).all(), "a refused command changed the map"
     assert (st["cycles"], st["sweeps"], st["p"]) == (res.cycles, res.sweeps, res.p)
     dut._log.info(f"{checked} refused commands, each with its code; the run after them is exact")
@@ -228,7 +228,7 @@ def test_block_elaborates_paper_sizes():
     recursive elaboration of 4608 nodes takes minutes: `make verilog` /
     scripts/synth.py cover emission at the tested sizes."""
     from amaranth.hdl import Fragment
-    from hdl.harmonic.block import Block
+    from navcores.hdl.harmonic.block import Block
     for n, m, blocks in ((36, 66, (2, 2)), (48, 96, (1, 1))):
         blk = Block(n, m, blocks, p_max=254, depth=1024)
         mod = blk.elaborate(None)
@@ -249,11 +249,11 @@ def test_block_elaborates_paper_sizes():
     (dict(n=6, m=12, p_max=1), "p_max=1 is not supported"),
 ])
 def test_block_refuses(kwargs, message):
-    from hdl.harmonic.block import Block
+    from navcores.hdl.harmonic.block import Block
     with pytest.raises(ValueError, match=message):
         Block(**kwargs)
 
 
 def test_block_fits_exactly():
-    from hdl.harmonic.block import Block
+    from navcores.hdl.harmonic.block import Block
     assert Block(6, 12, (4, 4), p_max=62, depth=1024).stride == 64      # 16 * 64 = 1024

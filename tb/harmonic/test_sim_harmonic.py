@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.cli import main
+from navcores.sim.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 ROOM = str(ROOT / "maps" / "room-32-32-4.map")
@@ -177,13 +177,6 @@ def test_bad_input_is_one_line(tmp_path, capsys, args, message):
     assert re.search(message, lines[0]), lines[0]
 
 
-def test_rtl_engine_without_driver(capsys, monkeypatch):
-    """Without tb/harmonic/planner_bench.py the RTL engines say so in one line."""
-    monkeypatch.setitem(sys.modules, "tb.harmonic.planner_bench", None)    # import fails
-    rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "icarus"], capsys)
-    assert rc == 2 and "--engine icarus: not available" in err and len(err.strip().splitlines()) == 1
-
-
 def test_rtl_engine_refuses_what_the_rtl_cannot_run(capsys):
     """A block that is not whole 3x6 clusters, a schedule that is not
     arithmetic: one line from the driver / Planner checks, before any build."""
@@ -222,8 +215,8 @@ def test_block_exponents_json(tmp_path, capsys):
     """The JSON gains "exponents" (BR x BC) and "frac_bits"; the field is the
     model's, on the common scale; at p = 16, where fixed point still has
     local maxima on this map, every start reaches the goal."""
-    from models.harmonic import plan
-    from sim.mapfile import load_map
+    from navcores.models.harmonic import plan
+    from navcores.sim.mapfile import load_map
     out = tmp_path / "e.json"
     args = [RANDOM, "--goal", "29,6", "--start", "0,31", "--start", "31,31", "--block", "6x12",
             "--schedule", "16", "--json", str(out)]

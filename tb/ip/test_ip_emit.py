@@ -9,18 +9,17 @@ import os
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 from amaranth.hdl import Const, Shape
 from amaranth.lib import wiring
 
-from hdl import emit
-from hdl.dflc.core import latency
-from hdl.dflc.top import config_for, stream_latency
-from hdl.params import REQUIRED
-from models.dflc import WIDTH_LIMITS
-from tb.runner import ROOT, VERILATOR_WAIVERS, tool_env
+from navcores.hdl import emit
+from navcores.hdl.dflc.core import latency
+from navcores.hdl.dflc.top import config_for, stream_latency
+from navcores.hdl.params import REQUIRED
+from navcores.models.dflc import WIDTH_LIMITS
+from navcores.sim.rtl.runner import ROOT, VERILATOR_WAIVERS, tool_env
 
 # A small valid parameter set of every top (the required parameters and some).
 BASE = {
@@ -31,7 +30,6 @@ BASE = {
     "harmonic_planner": {"n": 3, "m": 6, "br": 1, "bc": 2, "p_max": 14, "depth": 64},
     "dflc_stream": {"fll": "table1"},
     "dflc_core": {"fll": "table1"},
-    "dflc_multi": {},
     "edt_cell": {"height": 5, "width": 7},
     "edt_array": {"height": 5, "width": 7},
     "edt_bfs": {"height": 5, "width": 7},

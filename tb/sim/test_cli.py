@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.cli import CliError, check_cell, parse_cell
+from navcores.sim.cli import CliError, check_cell, parse_cell
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -17,7 +17,7 @@ import math
 import numpy as np
 import pytest
 
-from models.robot import KHEPERA_II, Khepera, Robot, arc_step, speed_curvature, wheel_speeds
+from navcores.models.robot import KHEPERA_II, Khepera, Robot, arc_step, speed_curvature, wheel_speeds
 
 
 def test_wheel_speeds_round_trip():

@@ -19,8 +19,8 @@ import math
 import numpy as np
 import pytest
 
-from models.swam import Swam, SwamError
-from tb.runner import seed_from_env
+from navcores.models.swam import Swam, SwamError
+from navcores.sim.rtl.runner import seed_from_env
 
 
 def random_chain(rng, n=None, spread=None):

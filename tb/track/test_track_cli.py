@@ -21,10 +21,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models.navigation import segment_clear
-from models.swam import Swam
-from models.tracker import distance_to_chain
-from sim.cli import main
+from navcores.models.navigation import segment_clear
+from navcores.models.swam import Swam
+from navcores.models.tracker import distance_to_chain
+from navcores.sim.cli import main
 
 ROOT = Path(__file__).resolve().parents[2]
 

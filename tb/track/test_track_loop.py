@@ -18,10 +18,10 @@ import math
 import numpy as np
 import pytest
 
-from models.swam import Swam
-from models.tracker import ClosedLoop, TrackerParams, canonical_inputs, distance_to_chain, run_model
-from sim.tracking import load_dflc
-from tb.runner import seed_from_env
+from navcores.models.swam import Swam
+from navcores.models.tracker import ClosedLoop, TrackerParams, canonical_inputs, distance_to_chain, run_model
+from navcores.sim.rtl.runner import seed_from_env
+from navcores.sim.tracking import load_dflc
 
 LINE = Swam([(0.0, 0.0), (1.0, 0.5)])
 _t = np.linspace(0, 1, 30)
@@ -105,7 +105,7 @@ def test_params_checked(dflc):
 
 def test_fired_rules(dflc):
     """The rule count of the demo's summary: exact at MF peaks, and a strict subset of Table 1 in a run."""
-    from models.tracker import fired_rules
+    from navcores.models.tracker import fired_rules
     assert len(fired_rules(dflc, dflc.encode([[0.0, 0.0]]))) == 1            # both inputs on a peak
     assert len(fired_rules(dflc, dflc.encode([[22.5, 0.0]]))) == 2           # one between two MFs
     assert len(fired_rules(dflc, dflc.encode([[22.5, -22.5]]))) == 4

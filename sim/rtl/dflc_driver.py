@@ -1,25 +1,26 @@
 """Drive a DFLC stream top (hdl/dflc/top.py) from cocotb.
 
 Shared by the regression (tb/dflc/test_dflc_stream.py), ``python -m sim dflc
---engine icarus|verilator`` (sim/dflc_job.py) and the path tracker, which runs
-its closed loop inside the simulator::
+--engine icarus|verilator`` (sim/rtl/dflc_job.py) and the path tracker, which
+runs its closed loop inside the simulator (sim/rtl/track_job.py)::
 
-    from dflc_bench import DflcStream
-    bench = DflcStream(dut, config)           # config: models.dflc.DflcConfig (None: Table 1)
-    await bench.start()                       # clock + synchronous reset
-    y, zero = await bench.infer([c1, c2])     # one sample through the top
-    outs = await bench.run(code_rows)         # many, pipelined, in order
+    from navcores.sim.rtl.dflc_driver import DflcDriver
+    drv = DflcDriver(dut, config)             # config: models.dflc.DflcConfig (None: Table 1)
+    await drv.start()                         # clock + synchronous reset
+    y, zero = await drv.infer([c1, c2])       # one sample through the top
+    outs = await drv.run(code_rows)           # many, pipelined, in order
 
-The top for a .fll is emitted with ``hdl.emit.emit("dflc_stream", {"fll":
-STEM_OR_PATH, ...}, out_dir)``; ``hdl.dflc.top.config_for(**params)`` gives
-the matching config.
+The top for a .fll is emitted with ``navcores.hdl.emit.emit("dflc_stream",
+{"fll": STEM_OR_PATH, ...}, out_dir)``; ``navcores.hdl.dflc.top.config_for(**params)``
+gives the matching config.
 
-:class:`StreamBench` holds the cocotb-bus pieces: :class:`StreamSource` (a BusDriver that presents one
-sample per transaction and holds it until the handshake, with optional random
-idle cycles), :class:`StreamMonitor` (a BusMonitor recording every output
-handshake with its cycle), :class:`ReadyToggler` (random back-pressure on
-``o_stream.ready``) and :class:`InputMonitor` (the input handshakes with their
-cycles, for the cycle properties).
+:class:`DflcStallDriver` holds the cocotb-bus pieces: :class:`StreamSource` (a
+BusDriver that presents one sample per transaction and holds it until the
+handshake, with optional random idle cycles), :class:`StreamMonitor` (a
+BusMonitor recording every output handshake with its cycle),
+:class:`ReadyToggler` (random back-pressure on ``o_stream.ready``) and
+:class:`InputMonitor` (the input handshakes with their cycles, for the cycle
+properties).
 """
 
 import random
@@ -31,7 +32,8 @@ from cocotb.utils import get_sim_time
 from cocotb_bus.drivers import BusDriver
 from cocotb_bus.monitors import BusMonitor
 
-PERIOD_NS = 10
+from .clock import PERIOD_NS
+
 SIGNALS = ["valid", "ready", "payload"]
 
 
@@ -143,21 +145,21 @@ class ReadyToggler:
         self._task.cancel()
 
 
-class DflcStream:
+class DflcDriver:
     """A DFLC stream top under cocotb: start, reset, one sample or many.
 
     ``infer`` / ``run`` drive the streams from one coroutine (two triggers per
     cycle: cheap enough for long sweeps and closed loops) with the output
-    always ready; :class:`StreamBench` adds the cocotb-bus driver, monitors and
-    random stalls.  ``prefix`` selects an instance of a multi-configuration
-    test top (``hdl/dflc/multi.py``: ports ``<key>_i_stream__valid`` ...); ""
+    always ready; :class:`DflcStallDriver` adds the cocotb-bus driver, monitors
+    and random stalls.  ``prefix`` selects an instance of a multi-configuration
+    test top (``tb/dflc/multi.py``: ports ``<key>_i_stream__valid`` ...); ""
     for a plain ``dflc_stream_*`` top.  After ``run``, ``in_cycles`` /
     ``out_cycles`` hold the cycle of every input / output handshake.
     """
 
     def __init__(self, dut, config=None, prefix=""):
         if config is None:                      # the default controller (Table 1, Table 2 widths)
-            from hdl.dflc.top import config_for
+            from navcores.hdl.dflc.top import config_for
             config = config_for()
         self.dut, self.config = dut, config
         self.mask = (1 << config.op_sz) - 1
@@ -223,7 +225,7 @@ class DflcStream:
         return out
 
 
-class StreamBench:
+class DflcStallDriver:
     """cocotb-bus pieces around a DFLC stream top, for stall and reset tests:
     a :class:`StreamSource` (random idle cycles), a :class:`StreamMonitor` on
     each side and a :class:`ReadyToggler` (random back-pressure).  Outputs are
@@ -249,7 +251,7 @@ class StreamBench:
         return payload & self.mask, bool(payload >> self.config.op_sz)
 
     def stop(self):
-        """End this bench's coroutines (before another bench takes the same DUT)."""
+        """End this driver's coroutines (before another driver takes the same DUT)."""
         for part in (self.source, self.in_mon, self.out_mon, self.sink, self.cycles):
             part.kill()
         self.source.bus.valid.value = 0

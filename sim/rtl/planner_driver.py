@@ -1,15 +1,15 @@
 """Drive the harmonic Planner RTL in simulation through its host streams.
 
 Shared by the planner regression (tb/harmonic/test_planner.py), the cocotb
-job tb/harmonic/planner_job.py and, through :func:`run_planner_rtl`, the
-command line (``python -m sim harmonic --rtl``).
+job sim/rtl/planner_job.py and, through :func:`run_planner_rtl`, the
+command line (``python -m sim harmonic --engine icarus|verilator``).
 
-* :class:`PlannerBench`: pack / unpack commands and responses by the
+* :class:`PlannerDriver`: pack / unpack commands and responses by the
   planner's struct layouts, one command -> one response, map loading, a run
   to the end, reading every node back.
 * :func:`planner_params`: the block / RAM parameters for a map.
 * :func:`run_planner_rtl`: a whole map through cocotb (a JSON job file read
-  by tb/harmonic/planner_job.py), returning the fields of
+  by sim/rtl/planner_job.py), returning the fields of
   :class:`models.harmonic.PlanResult`.
 """
 
@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from hdl.harmonic.cluster import COLS, ROWS
-from hdl.harmonic.planner import Code, Op, command_layout, response_layout
-from models.harmonic import pad_to_blocks, reachable
+from navcores.hdl.harmonic.cluster import COLS, ROWS
+from navcores.hdl.harmonic.planner import Code, Op, command_layout, response_layout
+from navcores.models.harmonic import pad_to_blocks, reachable
 
-__all__ = ["PlannerBench", "planner_params", "run_planner_rtl", "Op", "Code"]
+__all__ = ["PlannerDriver", "planner_params", "run_planner_rtl", "Op", "Code"]
 
 POLL = 128          # cycles between STATUS polls while a run is on
 
@@ -33,7 +33,7 @@ def _fields(layout):
     return {name: (f.offset, f.width) for name, f in layout}
 
 
-class PlannerBench:
+class PlannerDriver:
     def __init__(self, dut, n, m, blocks, p_max, exponents=False, e_max=255):
         self.dut, self.n, self.m = dut, n, m
         self.BR, self.BC = blocks
@@ -182,14 +182,14 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     Unreachable free cells are walled off (loaded as obstacles) like the
     model does.  ``events``: ``(s, (r, c), kind)`` as in
     :func:`models.harmonic.plan`; s = 0 is sent while idle before START, s >= 1
-    during pass s-1 (the bench watches the pass count).  ``progress(status)``
+    during pass s-1 (the driver watches the pass count).  ``progress(status)``
     is called from the job's STATUS polls (through the job's log, after the
     run, when the simulator runs in a subprocess: it gets the last status).
     ``block_exponents``: the Planner's exponent option (:func:`exponent_params`);
     ``h``/``padded_h`` are then the mantissas and ``exponents``
     (BR x BC) the block exponents (models.harmonic.plan(..., rtl=True)).
     """
-    from tb.runner import run
+    from .runner import run
     obstacle = np.asarray(obstacle, dtype=bool)
     H, W = obstacle.shape
     p1, step, p_last = arithmetic(schedule)
@@ -209,7 +209,7 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
             "exponents": bool(block_exponents),
         }))
         run("harmonic_planner", exponent_params(params) if block_exponents else params, sim,
-            "tb.harmonic.planner_job",
+            "navcores.sim.rtl.planner_job",
             env={"PLANNER_JOB": job, "PLANNER_RESULT": result}, log_file=work / "sim.log")
         out = json.loads(result.read_text())
     h = np.array([[int(v) for v in row] for row in out["h"]], dtype=object)

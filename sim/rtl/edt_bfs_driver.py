@@ -13,8 +13,10 @@ from amaranth.hdl import Shape
 from cocotb.clock import Clock
 from cocotb.triggers import ReadOnly, RisingEdge
 
-from hdl.edt_bfs.cell import cell_widths
-from hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
+from navcores.hdl.edt_bfs.cell import cell_widths
+from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
+
+from .clock import PERIOD_NS
 
 __all__ = ["EdtBfsDriver", "compare", "pack", "unpack"]
 
@@ -49,7 +51,7 @@ class EdtBfsDriver:
         self.res = result_layout(wd)
 
     async def start(self):
-        Clock(self.dut.clk, 10, unit="ns").start()
+        Clock(self.dut.clk, PERIOD_NS, unit="ns").start()
         await self.reset()
 
     async def reset(self, cycles=2):
