@@ -52,7 +52,7 @@ from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
 from .harmonic.planner import Planner  # noqa: E402
 from .harmonic.block import Block  # noqa: E402
-from .params import REQUIRED, Param, check, parse  # noqa: E402
+from .params import REQUIRED, Param, check, parse, unelaborated  # noqa: E402
 
 __all__ = ["TOPS", "DEFAULT_SETS", "SPECS", "top_name", "emit", "manifest", "params_of", "main"]
 
@@ -257,8 +257,7 @@ def _value(component, p, params):
 def manifest(name, params, component=None, factory=None):
     """The manifest of ``name`` at ``params`` (a dict; JSON-ready); ``factory`` as in :func:`build`."""
     if component is None:
-        component = build(name, params, factory)
-        _silence(component)         # only its signature is read
+        component = unelaborated(build(name, params, factory))     # only described
     decl, constraints = params_of(name, factory)
     timing = component.timing() if hasattr(component, "timing") else {}
     ports = ports_of(component)
@@ -276,14 +275,6 @@ def manifest(name, params, component=None, factory=None):
         "timing": timing,
         "doc": inspect.getdoc(type(component)).split("\n\n")[0],
     }
-
-
-def _silence(component):
-    """No "created but never used" warning for a component (and the parts its
-    constructor built) that is only described, not elaborated."""
-    for obj in (component, *vars(component).values()):
-        if hasattr(obj, "elaborate"):
-            obj._MustUse__silence = True
 
 
 _TOP_ATTR = "(* top =  1  *)\n"          # as yosys' write_verilog prints the attribute

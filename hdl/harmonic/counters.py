@@ -1,10 +1,10 @@
 """Counters unit shared by the 18 nodes of a cluster (paper 000, section 5.2)."""
 
-from amaranth.hdl import Module, Signal, unsigned
+from amaranth.hdl import Module, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param, check
+from ..params import Param, check, checked_init
 
 __all__ = ["Counters"]
 
@@ -49,6 +49,7 @@ class Counters(wiring.Component):
     PARAMS = (Param("p_max", int, lo=2, doc="largest precision; sets the counter widths",
                     message="p_max must be an integer >= 2, not {value!r}"),)
 
+    @checked_init
     def __init__(self, p_max):
         check(self.PARAMS, p_max=p_max)
         self.p_max = p_max

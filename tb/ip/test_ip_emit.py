@@ -17,7 +17,7 @@ from amaranth.lib import wiring
 from navcores.hdl import emit
 from navcores.hdl.dflc.core import latency
 from navcores.hdl.dflc.top import config_for, stream_latency
-from navcores.hdl.params import REQUIRED
+from navcores.hdl.params import REQUIRED, unelaborated
 from navcores.models.dflc import WIDTH_LIMITS
 from navcores.sim.rtl.runner import ROOT, VERILATOR_WAIVERS, tool_env
 
@@ -139,24 +139,13 @@ def test_bad_parameters(capsys, tmp_path):
 
 
 # Non-default parameter sets: manifest against the signature and the Verilog, then lint.
+N3_PROD = str(ROOT / "tb" / "dflc" / "fll" / "n3_prod.fll")     # a test fixture: given by its path
 SETS = [
     ("dflc_stream", {"ip_sz": 10, "op_sz": 14, "div": "array", "par": 1, "cpr9_no": 3}),
-    ("dflc_core", {"fll": "n3_prod", "div": "array"}),     # an always_ready stream (no ready port)
+    ("dflc_core", {"fll": N3_PROD, "div": "array"}),       # an always_ready stream (no ready port)
     ("harmonic_cluster", {"depth": 64, "p_max": 30}),
     ("edt_bfs", {"height": 5, "width": 7}),
 ]
-
-
-def _verilog_ports(text, module):
-    """The port list of ``module`` (an independent reading of the emitted Verilog)."""
-    body = text[text.index(f"module {module}("):]
-    body = body[:body.index("endmodule")]
-    ports = {}
-    for line in body.splitlines():
-        m = re.match(r"\s*(input|output)\s+(?:signed\s+)?(?:\[(\d+):0\])?\s*([\w$\\]+)\s*;", line)
-        if m:
-            ports[m[3]] = (m[1], int(m[2]) + 1 if m[2] else 1)
-    return ports
 
 
 @pytest.mark.parametrize("name,params", SETS, ids=[s[0] for s in SETS])
@@ -172,15 +161,14 @@ def test_manifest_and_lint(name, params, tmp_path):
 
     # every port of the signature, with its direction and width (a constant
     # member, an always_ready stream's ready, is no port)
-    comp = emit.TOPS[name](**params)
-    comp._MustUse__silence = True
+    comp = unelaborated(emit.TOPS[name](**params))
     sig_ports = {"__".join(map(str, path)): ("input" if member.flow == wiring.Flow.In else "output",
                                              Shape.cast(value.shape()).width)
                  for path, member, value in comp.signature.flatten(comp) if not isinstance(value, Const)}
     man_ports = {p["name"]: (p["direction"], p["width"]) for p in man["ports"]}
     assert man_ports == sig_ports
     # ... which are the Verilog module's ports, besides the clock and the reset
-    vports = _verilog_ports(vfile.read_text(), module)
+    vports = emit.verilog_ports(vfile.read_text(), module)
     assert vports.pop("clk") == ("input", 1) and vports.pop("rst") == ("input", 1)
     assert vports == man_ports
     assert man["clock"]["name"] == "clk" and man["reset"] == {**man["reset"], "name": "rst", "synchronous": True}
@@ -212,7 +200,7 @@ def test_manifest_and_lint(name, params, tmp_path):
         assert t["iteration_cycles"] == "p+2"
     elif name == "dflc_core":             # n = 3: 8 cycles per sample; no back-pressure on o_stream
         assert t["initiation_interval_cycles"] == 8
-        assert t["latency_cycles"] == latency(config_for(fll="n3_prod", div="array"))
+        assert t["latency_cycles"] == latency(config_for(fll=N3_PROD, div="array"))
         assert man["streams"]["o_stream"]["always_ready"] and not man["streams"]["i_stream"]["always_ready"]
     else:
         assert t["load_cycles"] == 7 and t["readout_cycles"] == 35
