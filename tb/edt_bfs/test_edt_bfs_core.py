@@ -113,7 +113,7 @@ async def changed_environment(dut):
     _, m2 = await _check(drv, moved, goals, start, 1)
     assert not np.array_equal(m1.distance, m2.distance)
     # and back, plus a different goal set
-    _, m3 = await _check(drv, img, [(h - 1, 0)], (0, w - 1), 0)
+    await _check(drv, img, [(h - 1, 0)], (0, w - 1), 0)
 
 
 @cocotb.test()
