@@ -38,15 +38,10 @@ PART_NAME = "iCE40-HX8K (ct256), nextpnr-ice40 seed 1"
 # maximum frequency is reported whether it meets the target or not.
 NEXTPNR_FLAGS = ("--pcf-allow-unconstrained", "--seed", "1", "--freq", "50", "--timing-allow-fail")
 
-_PORT = re.compile(r"^\s*(input|output)\s+(?:\[(\d+):(\d+)\]\s+)?(\w+)\s*;", re.M)
-
-
 def ports(verilog_text, module):
-    """``[(direction, name, width)]`` of ``module`` in Amaranth's Verilog."""
-    start = verilog_text.index(f"module {module}(")
-    end = verilog_text.index("endmodule", start)
-    head = verilog_text[start:end]
-    return [(d, name, int(hi) - int(lo) + 1 if hi else 1) for d, hi, lo, name in _PORT.findall(head)]
+    """``[(direction, name, width)]`` of ``module`` in Amaranth's Verilog (hdl.emit's port parser)."""
+    from navcores.hdl.emit import verilog_ports
+    return [(d, name, w) for name, (d, w) in verilog_ports(verilog_text, module).items()]
 
 
 def harness(verilog_text, module, clock="clk"):
