@@ -138,10 +138,12 @@ def test_bad_parameters(capsys, tmp_path):
     assert n == len(BAD) and not any(tmp_path.iterdir())      # nothing written
 
 
+N3_PROD = ROOT / "tb" / "dflc" / "fll" / "n3_prod.fll"     # a test fixture: hdl takes it by path
+
 # Non-default parameter sets: manifest against the signature and the Verilog, then lint.
 SETS = [
     ("dflc_stream", {"ip_sz": 10, "op_sz": 14, "div": "array", "par": 1, "cpr9_no": 3}),
-    ("dflc_core", {"fll": "n3_prod", "div": "array"}),     # an always_ready stream (no ready port)
+    ("dflc_core", {"fll": str(N3_PROD), "div": "array"}),  # an always_ready stream (no ready port)
     ("harmonic_cluster", {"depth": 64, "p_max": 30}),
     ("edt_bfs", {"height": 5, "width": 7}),
 ]
@@ -212,7 +214,7 @@ def test_manifest_and_lint(name, params, tmp_path):
         assert t["iteration_cycles"] == "p+2"
     elif name == "dflc_core":             # n = 3: 8 cycles per sample; no back-pressure on o_stream
         assert t["initiation_interval_cycles"] == 8
-        assert t["latency_cycles"] == latency(config_for(fll="n3_prod", div="array"))
+        assert t["latency_cycles"] == latency(config_for(fll=str(N3_PROD), div="array"))
         assert man["streams"]["o_stream"]["always_ready"] and not man["streams"]["i_stream"]["always_ready"]
     else:
         assert t["load_cycles"] == 7 and t["readout_cycles"] == 35
