@@ -46,6 +46,11 @@ from hdl.params import parse  # noqa: E402,F401
 
 ROOT = toolchain.ROOT
 
+__all__ = ["Part", "PARTS", "part", "ports", "harness", "RESOURCES", "resources", "synthesize", "FlowError",
+           "utilisation", "critical_path", "place", "fit",
+           # the project's code, for fit.py, synth.py and bench.py
+           "TOPS", "emit", "manifest", "params_of", "parse", "top_name"]
+
 
 @dataclass(frozen=True)
 class Part:
