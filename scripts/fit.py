@@ -136,7 +136,8 @@ def main(argv=None):
     tmp = _temporary(out)
     tmp.write_text(json.dumps(result, indent=1) + "\n")
     os.replace(tmp, out)            # never a partial file
-    print(summary(result, out))
+    shown = os.path.relpath(out)
+    print(summary(result, out if shown.startswith("..") else shown))
     return 0
 
 

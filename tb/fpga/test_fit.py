@@ -66,17 +66,17 @@ def test_node_fits(tmp_path, given, part, speed, nextpnr, ff_resource):
 
 
 def test_too_large_does_not_fit(tmp_path):
-    """A cluster whose RAM (16384 x 18 bits) exceeds the UP5K's 30 block RAMs:
-    fits false, the overflowing resource named, no clock, exit 0."""
+    """The DFLC's parallel option needs more multipliers than the UP5K's 8
+    DSPs: fits false, the overflowing resource named, no clock, exit 0."""
     out = tmp_path / "big.json"
-    r = fit("harmonic_cluster", "depth=16384", "--part", "iCE40-UP5K", out=out)
+    r = fit("dflc_core", "fll=table1", "par=1", "--part", "iCE40-UP5K", out=out)
     assert r.returncode == 0, r.stderr
-    assert "does not fit (ICESTORM_RAM" in r.stdout and len(r.stdout.splitlines()) == 1, r.stdout
+    assert "does not fit (ICESTORM_DSP" in r.stdout and len(r.stdout.splitlines()) == 1, r.stdout
     d = json.loads(out.read_text())
     assert (d["fits"], d["fmax_mhz"], d["seeds"], d["critical_path"]) == (False, None, [], None)
-    over = {o["resource"]: o for o in d["overflow"]}
-    assert over["ICESTORM_RAM"]["used"] > over["ICESTORM_RAM"]["available"] == 30
-    assert d["bram"] == over["ICESTORM_RAM"]["used"]
+    assert d["overflow"] and all(o["used"] > o["available"] for o in d["overflow"])
+    dsp = next(o for o in d["overflow"] if o["resource"] == "ICESTORM_DSP")
+    assert dsp["available"] == 8 and d["dsp"] == dsp["used"]      # the harness has no DSP
 
 
 @pytest.mark.parametrize("args,says", [
