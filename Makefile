@@ -48,11 +48,12 @@ cxx:	# Verilator compiles its models with the system C++ compiler
 demo: $(STAMP) $(if $(filter model,$(ENGINE)),,icarus cxx)
 	$(BIN)/python -m sim.demo --out results/demo --engine $(ENGINE)
 
-## make test: model tests plus the whole cocotb regression on Icarus and Verilator
-## (JOBS pytest-xdist workers; the wall time lands in build/regression.json)
+## make test: model tests plus the whole cocotb regression on Icarus and Verilator, and the fit flow
+## (JOBS pytest-xdist workers; loadgroup keeps the yosys/nextpnr tests on one worker, see
+## tb/fpga/test_fit.py; the wall time lands in build/regression.json)
 test: $(FPGA) icarus cxx
 	@mkdir -p build; start=$$(date +%s); \
-	$(PYTEST) -n $(JOBS) tb; rc=$$?; \
+	$(PYTEST) -n $(JOBS) --dist loadgroup tb; rc=$$?; \
 	printf '{"seconds": %d, "passed": %s, "jobs": %d, "date": "%s"}\n' $$(( $$(date +%s) - start )) \
 	  $$( [ $$rc = 0 ] && echo true || echo false ) $(JOBS) "$$(date -u +%FT%TZ)" > build/regression.json; \
 	exit $$rc

@@ -165,11 +165,14 @@ def run(tool, args, inputs=None, progress=None):
     """Run ``tool`` with ``args`` in a fresh directory, or find that run in the cache.
 
     ``inputs`` maps placeholder names to files: ``{name}`` in an argument
-    becomes the file's absolute path, and the key holds the file's content,
-    not its path.  Outputs are written relative to the run directory (the
-    working directory of the tool); stdout and stderr land in stdout.txt and
-    stderr.txt.  Interrupted runs are not cached; failed ones are (a
-    design that does not fit stays so for the same input)."""
+    becomes the file's path relative to the run directory (YoWASP mounts a
+    temporary directory of its own on /tmp, so an absolute path under /tmp
+    would not reach the file), and the key holds the file's content, not its
+    path.  Outputs are written relative to the run directory (the working
+    directory of the tool); stdout and stderr land in stdout.txt and
+    stderr.txt.  Only successful runs are cached: a failure (a design that
+    does not fit stops early) runs again, so that no failure of the
+    environment is kept."""
     inputs = {k: Path(v).resolve() for k, v in (inputs or {}).items()}
     version = prepare(tool, progress)
     key_text = json.dumps({"tool": tool, "version": version, "args": list(map(str, args)),
@@ -182,7 +185,7 @@ def run(tool, args, inputs=None, progress=None):
         return Run(final, m["returncode"], m["seconds"], True, version)
     work = RESULTS / tool / f".{key}.{os.getpid()}.{time.monotonic_ns()}"
     work.mkdir(parents=True)
-    concrete = [str(a).format(**{k: str(p) for k, p in inputs.items()}) for a in args]
+    concrete = [str(a).format(**{k: os.path.relpath(p, work) for k, p in inputs.items()}) for a in args]
     t0 = time.monotonic()
     try:
         with open(work / "stdout.txt", "w") as out, open(work / "stderr.txt", "w") as err:
@@ -198,6 +201,14 @@ def run(tool, args, inputs=None, progress=None):
     (work / "key.json").write_text(key_text + "\n")
     (work / "run.json").write_text(json.dumps({"returncode": res.returncode, "seconds": seconds,
                                                "argv": concrete}))
+    if res.returncode:          # kept for reading, replaced by the next run
+        failed = RESULTS / tool / f"failed-{key}"
+        shutil.rmtree(failed, ignore_errors=True)
+        try:
+            work.rename(failed)
+        except OSError:         # another process failed the same way meanwhile
+            failed = work
+        return Run(failed, res.returncode, seconds, False, version)
     try:
         work.rename(final)
     except OSError:             # another process cached the same run meanwhile: keep theirs

@@ -6,6 +6,11 @@ build/cache) and checks the JSON it writes against the tools' own figures:
 the median of the seeds, the critical path's delay against the clock, the
 core's cells apart from the harness's, the tools' versions.  Also a top that
 does not fit (fits false, exit 0) and the refusals (exit 2, one line).
+
+The tests that run the tools share one pytest-xdist group (``make test``
+runs ``--dist loadgroup``): in a fresh clone the first of them compiles
+yosys (two to three minutes), and the others would wait for it on the
+other worker instead of running the rest of the regression.
 """
 
 import importlib.metadata
@@ -22,6 +27,7 @@ FIT = ROOT / "scripts" / "fit.py"
 KEYS = {"module": str, "part": str, "speed_grade": (str, type(None)), "fits": bool, "lut4": int, "ff": int,
         "bram": int, "dsp": int, "fmax_mhz": float, "seeds": list, "critical_path": dict, "tools": dict,
         "overflow": list, "utilisation": dict}
+TOOLS = pytest.mark.xdist_group("fpga-tools")
 # (part as a user types it, its vendor spelling, speed grade, nextpnr, the FF resource in nextpnr's utilisation)
 PARTS = [("lfe5u-25f", "LFE5U-25F", "6", "nextpnr-ecp5", "TRELLIS_FF"),
          ("ice40-up5k", "iCE40-UP5K", None, "nextpnr-ice40", "ICESTORM_LC")]
@@ -32,6 +38,7 @@ def fit(*args, out=None):
     return subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=900)
 
 
+@TOOLS
 @pytest.mark.parametrize("given,part,speed,nextpnr,ff_resource", PARTS, ids=[p[1] for p in PARTS])
 def test_node_fits(tmp_path, given, part, speed, nextpnr, ff_resource):
     out = tmp_path / "node.json"
@@ -65,6 +72,7 @@ def test_node_fits(tmp_path, given, part, speed, nextpnr, ff_resource):
     assert importlib.metadata.version(f"yowasp-{nextpnr}") in d["tools"]["nextpnr"]
 
 
+@TOOLS
 def test_too_large_does_not_fit(tmp_path):
     """The DFLC's parallel option needs more multipliers than the UP5K's 8
     DSPs: fits false, the overflowing resource named, no clock, exit 0."""
