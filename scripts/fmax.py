@@ -145,9 +145,10 @@ def harness(verilog_text, module, clock="clk"):
 # -- synthesis
 
 # Resources of a core from its mapped cells: (key, [(cell type, LUT4s or units per cell)]).
-# ECP5: a CCU2C carry cell is two LUT4s, a TRELLIS_DPR16X4 LUT RAM four (slices A and B).
+# ECP5: a CCU2C carry cell is two LUT4s; a TRELLIS_DPR16X4 (16x4 LUT RAM) takes three slices, six
+# LUT4 places (two slices of RAM, one of its write port; nextpnr counts 13 TRELLIS_COMB for two).
 RESOURCES = {
-    "ecp5": (("lut4", (("LUT4", 1), ("CCU2C", 2), ("TRELLIS_DPR16X4", 4))),
+    "ecp5": (("lut4", (("LUT4", 1), ("CCU2C", 2), ("TRELLIS_DPR16X4", 6))),
              ("ff", (("TRELLIS_FF", 1),)),
              ("bram", (("DP16KD", 1), ("PDPW16KD", 1))),
              ("dsp", (("MULT18X18D", 1), ("ALU54B", 1)))),
@@ -181,14 +182,15 @@ def _error_line(text, tool):
     return tail[-1].strip() if tail else f"{tool} failed without a message"
 
 
-def synthesize(name, params, family_synth, work, progress=None):
-    """Emit ``name`` at ``params`` into ``work``, wrap it in the harness and
-    synthesize it with ``family_synth`` (e.g. ``synth_ecp5``).  Returns
-    (module, toolchain.Run, the core's cell counts)."""
+def synthesize(name, params, family_synth, work, progress=None, source=None):
+    """Emit ``name`` at ``params`` into ``work`` (unless ``source``, its
+    Verilog, is given), wrap it in the harness and synthesize it with
+    ``family_synth`` (e.g. ``synth_ecp5``).  Returns (module, toolchain.Run,
+    the core's cell counts)."""
     module = top_name(name, params)
     work = Path(work)
     work.mkdir(parents=True, exist_ok=True)
-    source = emit(name, params, work, with_manifest=False)
+    source = source or emit(name, params, work, with_manifest=False)
     wrap = work / f"fmax_{module}.v"
     text = harness(source.read_text(), module)
     if not wrap.exists() or wrap.read_text() != text:
@@ -282,6 +284,8 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None):
     netlist = syn.dir / "netlist.json"
 
     def one(seed):
+        if progress:
+            progress(f"{module} on {prt.name}, seed {seed}: placing and routing")
         r = place(netlist, prt, seed, progress)
         if progress:
             what = (f"{r['fmax_mhz']:.1f} MHz" if "fmax_mhz" in r else

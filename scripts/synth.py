@@ -253,19 +253,21 @@ def fabrics():
     return out
 
 
-def fabric_report(jobs=2):
+def fabric_report(sources, jobs=2):
     """The ECP5 / iCE40 section: each FABRIC_TOPS top's own cells after the
-    synthesis the fit flow places (the same cached runs)."""
+    synthesis the fit flow places (the same cached runs); ``sources``: the
+    tops' Verilog files already emitted, by module name."""
     fabs = fabrics()
     work = ROOT / "build" / "synth" / "fabric"
     runs = [(name, params, synth) for name, params in FABRIC_TOPS for synth in fabs]
     with ThreadPoolExecutor(max_workers=jobs) as pool:
-        cells = list(pool.map(lambda j: fmax.synthesize(j[0], j[1], j[2], work / j[2].replace(" ", ""))[2], runs))
+        cells = list(pool.map(lambda j: fmax.synthesize(j[0], j[1], j[2], work / j[2].replace(" ", ""),
+                                                        source=sources[fmax.top_name(j[0], j[1])])[2], runs))
     res = {(fmax.top_name(name, params), synth): fmax.resources(fabs[synth][0], c)
            for (name, params, synth), c in zip(runs, cells)}
     lines = ["", "# ECP5 and iCE40: the cells of each core for the parts of `make fit`", "",
              "The core's own cells (the harness of scripts/fmax.py excluded) after the synthesis "
-             "`make fit` places: LUT4 (ECP5: LUT4 + 2 per CCU2C carry + 4 per LUT RAM), FF, block RAM "
+             "`make fit` places: LUT4 (ECP5: LUT4 + 2 per CCU2C carry + 6 per 16x4 LUT RAM), FF, block RAM "
              "(DP16KD / SB_RAM40_4K) and DSP (MULT18X18D / SB_MAC16; the iCE40 HX has none, its "
              "multipliers are LUTs).  Whether a top fits and its clock: `make fit`.", "",
              "| module | " + " | ".join(f"`{synth}` ({', '.join(parts)}): LUT4 / FF / BRAM / DSP"
@@ -312,7 +314,8 @@ def main():
     with ThreadPoolExecutor(max_workers=2) as pool:
         edt = list(pool.map(lambda j: edt_hier(*j), edt_jobs))
     text += "\n".join(edt_report(edt)) + "\n"
-    text += "\n".join(fabric_report()) + "\n"
+    emitted = {j["top"]: j["v"] for j in jobs} | {v.stem: v for v, *_ in edt_jobs}
+    text += "\n".join(fabric_report(emitted)) + "\n"
     print(text, end="")
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text)
