@@ -48,7 +48,11 @@ def _progress():
     if not sys.stderr.isatty():
         return None
     t0 = time.monotonic()
-    return lambda msg: print(f"[fit {time.monotonic() - t0:5.0f} s] {msg}", file=sys.stderr, flush=True)
+
+    def show(msg):      # one write per line: seeds run in threads
+        sys.stderr.write(f"[fit {time.monotonic() - t0:5.0f} s] {msg}\n")
+        sys.stderr.flush()
+    return show
 
 
 def parse_args(argv):
