@@ -9,8 +9,9 @@ Two caches, both under build/ (``make clean`` removes them):
 * ``build/yowasp/``: the tools compiled from WebAssembly to machine code.
   The first run of a tool compiles it (yosys takes one to three minutes on
   two cores, nextpnr 15 s); yowasp-runtime keeps the result in
-  ``$YOWASP_CACHE_DIR``, which this module points here, under the SHA-1 of
-  the .wasm file.  :func:`prepare` does that first run under a file lock, so
+  ``$YOWASP_CACHE_DIR``, which this module points here unless it is set
+  (to share the compiled tools between clones), under the SHA-1 of the
+  .wasm file.  :func:`prepare` does that first run under a file lock, so
   parallel jobs (pytest-xdist, parallel seeds) compile a tool once.
 * ``build/cache/<tool>/<key>/``: the outputs of each tool run (netlists,
   logs, reports).  The key is the SHA-256 of the tool's version (its own
