@@ -58,7 +58,7 @@ import fmax as fmax_mod  # noqa: E402
 import software  # noqa: E402
 import synth  # noqa: E402
 from navcores.hdl.emit import emit, top_name  # noqa: E402
-from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import load_map, load_scenarios  # noqa: E402
 
 OUT = ROOT / "build" / "bench"
 CACHE = OUT / "cache"

@@ -39,7 +39,7 @@ sys.path.insert(0, str(ROOT))
 import software  # noqa: E402
 from navcores.models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, largest_map, plan_path_tiled,  # noqa: E402
                                   ram_blocks, state_bits)
-from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import load_map, load_scenarios  # noqa: E402
 
 MAPS = ("maze512-1-0", "den312d", "room-64-64-8", "random-64-64-10")
 ARRAYS = ((8, 8), (16, 16))

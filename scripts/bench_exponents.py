@@ -39,7 +39,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 
 from navcores.models.harmonic import plan  # noqa: E402
-from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import load_map, load_scenarios  # noqa: E402
 
 BLOCK, ITERS = (6, 12), 6
 STEP = 16

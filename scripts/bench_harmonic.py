@@ -39,7 +39,7 @@ sys.path.insert(0, str(ROOT))       # tb/ (not installed): the test maps
 
 from tb.harmonic.harmonic_small_maps import corridor, spiral  # noqa: E402
 from navcores.models.harmonic import plan, plan_explore, reachable  # noqa: E402
-from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import load_map, load_scenarios  # noqa: E402
 
 CLOCK_HZ = 150e6
 RTL_BLOCK, RTL_ITERS = (6, 12), 6          # plan()'s defaults: a 2x2-cluster block

@@ -80,7 +80,7 @@ def main(argv=None):
     os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
     parser = build_parser()
     args = parser.parse_args(argv)          # argparse itself exits 2 with one line on bad usage
-    from .mapfile import MapFormatError
+    from navcores.models.maps import MapFormatError
     try:
         return int(args._run(args) or 0)
     except CliError as e:

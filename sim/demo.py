@@ -48,7 +48,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 from .cli import CliError  # noqa: E402
-from .mapfile import MapFormatError, load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import MapFormatError, load_map, load_scenarios  # noqa: E402
 
 def _mm(v):
     return "   n/a" if v is None else f"{v * 1e3:6.1f}"

@@ -24,7 +24,7 @@ import numpy as np
 from navcores.models.edt_bfs import plan_path
 
 from .cli import CliError, check_cell, parse_cell
-from .mapfile import load_grid
+from navcores.models.maps import load_grid
 
 ENGINES = ("model", "icarus", "verilator")
 RTL_LIMIT = {"icarus": 1024, "verilator": 256}     # cells

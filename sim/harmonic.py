@@ -325,7 +325,7 @@ def plot(path, grid, result, title):
 
 
 def run(args):
-    from .mapfile import load_grid
+    from navcores.models.maps import load_grid
 
     path = Path(args.map)
     if not path.is_file():

@@ -30,7 +30,7 @@ from navcores.models.swam import Swam
 from navcores.models.tracker import TrackerParams
 
 from .cli import CliError, check_cell, parse_cell
-from .mapfile import load_grid
+from navcores.models.maps import load_grid
 from .tracking import ENGINES, run_loop
 
 DEFAULT_SCHEDULE = "16,32,64,128,256"

@@ -12,7 +12,7 @@ import pytest
 from navcores.models.edt_bfs import plan_path
 from navcores.sim import edt as cmd
 from navcores.sim.cli import CliError, main
-from navcores.sim.mapfile import load_grid
+from navcores.models.maps import load_grid
 from navcores.sim.rtl.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]

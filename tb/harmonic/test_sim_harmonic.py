@@ -216,7 +216,7 @@ def test_block_exponents_json(tmp_path, capsys):
     model's, on the common scale; at p = 16, where fixed point still has
     local maxima on this map, every start reaches the goal."""
     from navcores.models.harmonic import plan
-    from navcores.sim.mapfile import load_map
+    from navcores.models.maps import load_map
     out = tmp_path / "e.json"
     args = [RANDOM, "--goal", "29,6", "--start", "0,31", "--start", "31,31", "--block", "6x12",
             "--schedule", "16", "--json", str(out)]
