@@ -24,6 +24,7 @@ import importlib
 import importlib.util
 import math
 import os
+import re
 import sys
 import tempfile
 from pathlib import Path
@@ -377,7 +378,14 @@ def _available():
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse, but a usage error is one line (``--help`` still shows the usage)."""
+    """argparse, but a usage error is one line (``--help`` still shows the usage),
+    and a value such as ``-1.5,2`` (a point or cell left of / above the
+    origin) is a value, not an option."""
+
+    def __init__(self, *a, **kw):
+        super().__init__(*a, **kw)
+        self._negative_number_matcher = re.compile(r"^-\d+$|^-\d*\.\d+$|^-[\d.]+([eE][-+]?\d+)?"
+                                                   r"(,[-+]?[\d.]+([eE][-+]?\d+)?)+$")
 
     def error(self, message):
         self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
