@@ -62,7 +62,7 @@ import numpy as np
 from .robot import KHEPERA_II, Robot, wheel_speeds
 from .swam import Swam
 
-__all__ = ["TrackerParams", "canonical_inputs", "ClosedLoop", "distance_to_chain", "fired_rules", "run_model",
+__all__ = ["TrackerParams", "canonical_inputs", "wrap_degrees", "ClosedLoop", "distance_to_chain", "fired_rules", "run_model",
            "track_chains", "loop_job", "loop_from_job"]
 
 
@@ -79,15 +79,16 @@ class TrackerParams:
                 raise ValueError(f"tracker parameter {name} must be > 0, got {getattr(self, name)}")
 
 
-def _wrap_deg(a):
+def wrap_degrees(a):
+    """An angle (degrees; scalar or array) wrapped by whole turns into [-180, 180)."""
     return (a + 180.0) % 360.0 - 180.0
 
 
 def canonical_inputs(qc, delta):
     """φ1, φ2 (degrees, [-180, 180)) of canonical state ``qc`` with canonical look-ahead ``delta``."""
     _, y, th = qc
-    phi1 = _wrap_deg(math.degrees(math.atan2(-y, delta) - th))
-    phi2 = _wrap_deg(math.degrees(-th))
+    phi1 = wrap_degrees(math.degrees(math.atan2(-y, delta) - th))
+    phi2 = wrap_degrees(math.degrees(-th))
     return phi1, phi2
 
 

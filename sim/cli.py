@@ -130,6 +130,28 @@ def check_cell(grid, cell, what, free=True):
     return cell
 
 
+def read_lines(path, max_bytes, what="file"):
+    """The lines of a text file; a missing, binary, non-UTF-8 or oversized one
+    is a :class:`CliError` naming the file (and the line of a bad byte)."""
+    path = Path(path)
+    if not path.is_file():
+        raise CliError(f"{path}: no such {what}" if not path.exists() else f"{path}: not a file")
+    size = path.stat().st_size
+    if size > max_bytes:
+        raise CliError(f"{path}: {size} bytes; a {what} of at most {max_bytes >> 20} MiB is read")
+    data = path.read_bytes()
+    bad = data.find(b"\0")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as e:
+        bad = e.start
+    else:
+        if bad < 0:
+            return text.splitlines()
+    line = data[:bad].count(b"\n") + 1
+    raise CliError(f"{path}:{line}: byte 0x{data[bad]:02x}: binary data or not UTF-8: not a {what}")
+
+
 # --- options --------------------------------------------------------------------
 
 class _Place(argparse.Action):
