@@ -32,9 +32,9 @@ from pathlib import Path
 from .rtl.runner import SIMULATORS
 
 __all__ = ["COMMANDS", "ENGINES", "EXIT_STATUS", "CliError", "parse_cell", "check_cell", "parse_xy",
-           "number", "integer", "add_map", "add_place", "add_engine", "add_outputs", "add_block",
+           "number", "integer", "Once", "add_map", "add_place", "add_engine", "add_outputs", "add_block",
            "add_schedule", "parse_block", "parse_schedule", "load_map_arg", "places", "write_text",
-           "save_figure", "main"]
+           "save_figure", "guarded", "main"]
 
 # name -> module (in this package); order is the order of `python -m sim --help`.
 COMMANDS = {
@@ -144,7 +144,7 @@ def read_lines(path, max_bytes, what="file"):
     try:
         text = data.decode("utf-8")
     except UnicodeDecodeError as e:
-        bad = e.start
+        bad = e.start if bad < 0 else min(bad, e.start)
     else:
         if bad < 0:
             return text.splitlines()
@@ -182,9 +182,24 @@ def add_place(parser, role, many=False, required=False, help=""):
                                         "else the drawing frame at --cell)")
 
 
-def add_map(parser, cell=True):
-    parser.add_argument("map", metavar="MAP", help="map: .map (Moving AI), .txt ('#'/'@' obstacle), "
-                        ".pgm/.png (dark = obstacle) or a ROS map_server .yaml beside its image")
+class Once(argparse.Action):
+    """``store``, but the option may be given once (a second one is a usage error)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if getattr(namespace, self.dest, None) is not None:
+            parser.error(f"{option_string}: given twice ({getattr(namespace, self.dest)!r} and {values!r}); "
+                         "give it once")
+        setattr(namespace, self.dest, values)
+
+
+def add_map(parser, cell=True, option=False):
+    """``MAP`` (``option``: ``--map MAP``), ``--cell``, ``--unknown``."""
+    help = ("map: .map (Moving AI), .txt ('#'/'@' obstacle), .pgm/.png (dark = obstacle) or a ROS "
+            "map_server .yaml beside its image")
+    if option:
+        parser.add_argument("--map", metavar="MAP", action=Once, help=help)
+    else:
+        parser.add_argument("map", metavar="MAP", help=help)
     if cell:
         parser.add_argument("--cell", type=number(0, 1000, lo_open=True, unit="m",
                                                   why="metres a cell; 1 km is no robot map"),
@@ -410,7 +425,8 @@ class _Parser(argparse.ArgumentParser):
                                                    r"(,[-+]?[\d.]+([eE][-+]?\d+)?)+$")
 
     def error(self, message):
-        self.exit(2, f"{self.prog}: error: {message} (see --help)\n")
+        # the same prefix as every other error of the command: "sim <command>: error:"
+        self.exit(2, f"{self.prog.removeprefix('python -m ')}: error: {message} (see --help)\n")
 
 
 def build_parser():
@@ -432,18 +448,13 @@ def fail(prog, message, status=2):
     return status
 
 
-def main(argv=None):
-    os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
-    parser = build_parser()
-    try:
-        args = parser.parse_args(argv)      # a usage error: one line, 2; --help: 0
-    except SystemExit as e:
-        return e.code if isinstance(e.code, int) else 2
+def guarded(prog, work):
+    """``work()`` with the frame's promise: its status, or one line on stderr
+    and 2 for bad input (CliError, MapFormatError, an unusable file, memory);
+    an unexpected error is one line and 70 (``SIM_DEBUG=1``: the traceback)."""
     from navcores.models.maps import MapFormatError
-    prog = args._prog
     try:
-        check_outputs(args)
-        return int(args._run(args) or 0)
+        return int(work() or 0)
     except (CliError, MapFormatError) as e:
         return fail(prog, str(e))
     except OSError as e:
@@ -460,3 +471,17 @@ def main(argv=None):
         print(f"{prog}: internal error: {type(e).__name__}: {e} (SIM_DEBUG=1 shows the traceback)",
               file=sys.stderr)
         return 70
+
+
+def main(argv=None):
+    os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)      # a usage error: one line, 2; --help: 0
+    except SystemExit as e:
+        return e.code if isinstance(e.code, int) else 2
+
+    def work():
+        check_outputs(args)
+        return args._run(args)
+    return guarded(args._prog, work)
