@@ -126,6 +126,7 @@ BAD = [
     (["dflc_stream", "op_sz=8"], "op_sz = 8 < MF_op_sz = 12"),
     (["dflc_stream", "div=fast"], "div_type = 'fast': expected one of"),
     (["dflc_stream", "fll=nosuch"], "fll = 'nosuch': no such .fll"),
+    (["dflc_stream", "fll=my_rules.fll"], "fll = 'my_rules.fll': no such file"),      # not my_rules.fll.fll
     (["harmonic_cluster", "depth=64", "p_max=63"], "p_max=63 needs words of p_max+2=65 bits"),
     (["harmonic_block", "n=4", "m=6"], "block rows n=4: must be a positive multiple of 3"),
     (["harmonic_block", "m=6"], "missing parameter n"),
