@@ -201,6 +201,10 @@ class GridMap:
 def _read_text(path):
     """The lines of a text file; a binary or non-UTF-8 file is a MapFormatError."""
     path = Path(path)
+    if not path.is_file():
+        if not path.exists():
+            raise FileNotFoundError(2, "No such file", str(path))
+        raise MapFormatError(path, None, "not a regular file")
     size = path.stat().st_size
     if size > MAX_TEXT_BYTES:
         raise MapFormatError(path, None, f"{size} bytes: larger than any map of at most {MAX_CELLS} cells")
@@ -292,7 +296,9 @@ def _open_image(path):
     from PIL import Image, UnidentifiedImageError
     path = Path(path)
     if not path.is_file():
-        raise FileNotFoundError(2, "No such file", str(path))
+        if not path.exists():
+            raise FileNotFoundError(2, "No such file", str(path))
+        raise MapFormatError(path, None, "not a regular file")
     try:
         with Image.open(path) as im:
             w, h = im.size

@@ -226,8 +226,8 @@ def main(argv=None):
     return 0 if ok else 1
 
 
-def cli():
+def cli(argv=None):
     """``python -m sim.demo``: main() with bad input as one line and exit status 2."""
     os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
     from .cli import guarded
-    return guarded("sim.demo", main)
+    return guarded("sim.demo", lambda: main(argv))
