@@ -172,13 +172,13 @@ class _Place(argparse.Action):
 
 def add_place(parser, role, many=False, required=False, help=""):
     """``--<role> R,C`` and ``--<role>-xy X,Y`` (``many``: repeatable, else one)."""
-    what = f"{help} " if help else ""
-    group = parser.add_argument_group(f"{role}" + (" (repeatable)" if many else " (one)"))
+    what = help or role
+    group = parser.add_argument_group(f"{role}: --{role} or --{role}-xy" + (", repeatable" if many else ", once")
+                                      + (", required" if required else ""))
     group.add_argument(f"--{role}", dest=role, action=_Place, kind="cell", once=not many, metavar="R,C",
-                       default=[], help=f"{what}cell: row, column from the map's top left (0-based)"
-                       + ("; repeatable" if many else "") + ("; required" if required else ""))
+                       default=[], help=f"{what} as a cell: row, column from the map's top left (0-based)")
     group.add_argument(f"--{role}-xy", dest=role, action=_Place, kind="xy", once=not many, metavar="X,Y",
-                       default=[], help=f"{what}point in metres in the map frame (a ROS map's, "
+                       default=[], help=f"{what} as a point in metres in the map frame (a ROS map's, "
                                         "else the drawing frame at --cell)")
 
 
