@@ -32,7 +32,7 @@ from pathlib import Path
 from .rtl.runner import SIMULATORS
 
 __all__ = ["COMMANDS", "ENGINES", "EXIT_STATUS", "CliError", "parse_cell", "check_cell", "parse_xy",
-           "number", "integer", "Once", "add_map", "add_place", "add_engine", "add_outputs", "add_block",
+           "number", "integer", "finite_numbers", "Once", "add_map", "add_place", "add_engine", "add_outputs", "add_block",
            "add_schedule", "parse_block", "parse_schedule", "load_map_arg", "places", "write_text",
            "save_figure", "guarded", "main"]
 
@@ -105,18 +105,22 @@ def parse_cell(text, what="cell"):
         raise CliError(f"{what} {text!r}: expected ROW,COL (two integers)") from None
 
 
-def parse_xy(text, what):
-    """``"X,Y"`` (metres) -> ``(X, Y)``, two finite numbers."""
+def finite_numbers(text, n):
+    """``"a,b,..."`` -> a tuple of ``n`` finite floats, or None."""
     parts = text.split(",")
     try:
-        if len(parts) != 2:
-            raise ValueError
-        x, y = float(parts[0]), float(parts[1])
-        if not (math.isfinite(x) and math.isfinite(y)):
-            raise ValueError
+        values = tuple(float(p) for p in parts)
     except ValueError:
-        raise CliError(f"{what} {text!r}: expected X,Y (two finite numbers, metres in the map frame)") from None
-    return x, y
+        return None
+    return values if len(values) == n and all(math.isfinite(v) for v in values) else None
+
+
+def parse_xy(text, what):
+    """``"X,Y"`` (metres) -> ``(X, Y)``, two finite numbers."""
+    xy = finite_numbers(text, 2)
+    if xy is None:
+        raise CliError(f"{what} {text!r}: expected X,Y (two finite numbers, metres in the map frame)")
+    return xy
 
 
 def check_cell(grid, cell, what, free=True):

@@ -44,7 +44,7 @@ from navcores.models.navigation import collisions
 from navcores.models.swam import Swam, SwamError
 from navcores.models.tracker import wrap_degrees
 
-from .cli import CliError, Once, add_map, add_outputs, load_map_arg, write_text
+from .cli import CliError, Once, add_map, finite_numbers, add_outputs, load_map_arg, write_text
 from .tracking import add_drive_options, plot_track, read_path_csv, run_loop, tracker_params
 
 
@@ -58,15 +58,10 @@ def add_arguments(p):
 
 
 def parse_start(text):
-    parts = text.split(",")
-    try:
-        if len(parts) != 3:
-            raise ValueError
-        x, y, th = (float(v) for v in parts)
-        if not all(math.isfinite(v) for v in (x, y, th)):
-            raise ValueError
-    except ValueError:
-        raise CliError(f"--start {text!r}: expected X,Y,THETA (metres, metres, degrees)") from None
+    pose = finite_numbers(text, 3)
+    if pose is None:
+        raise CliError(f"--start {text!r}: expected X,Y,THETA (metres, metres, degrees)")
+    x, y, th = pose
     return x, y, math.radians(wrap_degrees(th))
 
 

@@ -17,7 +17,6 @@
 """
 
 import json
-import math
 import os
 import sys
 import tempfile
@@ -28,7 +27,7 @@ import numpy as np
 from navcores.models.tracker import (MAX_LOOKAHEAD, MAX_SLIP, MAX_SPEED, MIN_SPEED, RangeError, TrackerParams,
                                      check_run, distance_to_chain, loop_from_job, loop_job, run_model)
 
-from .cli import ENGINES, CliError, add_engine, integer, number, read_lines, save_figure
+from .cli import ENGINES, CliError, add_engine, finite_numbers, integer, number, read_lines, save_figure
 from .progress import Progress, Ticker, announce
 
 MAX_PATH_BYTES = 64 << 20
@@ -154,15 +153,10 @@ def read_path_csv(path):
     for n, text in enumerate(lines[1:], start=2):
         if not text.strip():
             continue
-        parts = [p.strip() for p in text.split(",")]
-        try:
-            if len(parts) != 2:
-                raise ValueError
-            x, y = float(parts[0]), float(parts[1])
-            if not (math.isfinite(x) and math.isfinite(y)):
-                raise ValueError
-        except ValueError:
-            raise CliError(f"{path}:{n}: expected two numbers x,y (metres), got {text[:60]!r}") from None
+        xy = finite_numbers(text, 2)
+        if xy is None:
+            raise CliError(f"{path}:{n}: expected two numbers x,y (metres), got {text[:60]!r}")
+        x, y = xy
         if max(abs(x), abs(y)) > MAX_COORDINATE:
             raise CliError(f"{path}:{n}: ({x:g}, {y:g}) is more than {MAX_COORDINATE / 1e3:.0f} km from the origin; "
                            "the longest run drives 25 km (2,000,000 periods at 1 m/s)")

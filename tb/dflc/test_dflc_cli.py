@@ -131,7 +131,12 @@ def test_rtl_engine_matches_model(tmp_path, sim):
     assert r.returncode == 0, r.stderr[-2000:]
     res = json.loads(out.read_text())
     assert res["engine"] == sim and len(res["codes"]) == len(vals)
-    y, codes, zero = Dflc.from_fll(DEFAULT_FLL).evaluate(vals)
+    m = Dflc.from_fll(DEFAULT_FLL)
+    # the angles beyond +-180 degrees wrap by whole turns (sim dflc's rule): the model on the wrapped values
+    wrapped = (vals + 180.0) % 360.0 - 180.0
+    wrapped = np.where(np.abs(vals) > 180, wrapped, vals)
+    assert (np.abs(vals) > 180).any() and not np.array_equal(wrapped, vals)
+    y, codes, zero = m.evaluate(wrapped)
     assert res["codes"] == codes.tolist() and res["zero_strength"] == zero.tolist()
     assert res["outputs"] == y.tolist()
     assert res["cycles_per_sample"] == 4 and res["latency"] == 13
