@@ -183,10 +183,9 @@ class ClosedLoop:
         self.max_steps = max_steps or int(3 * (total + 4 * d0 + 0.5)
                                           / (params.speed * self.robot.params.period)) + 400
         if self.max_steps > MAX_PERIODS:
-            raise RangeError("periods", self.max_steps,
-                             f"a {total:.4g} m path (start {d0:.3g} m off it) at {params.speed:g} m/s may need "
-                             f"that many 12.5 ms control periods; at most {MAX_PERIODS} are run (7 h of "
-                             "driving, about 2 GB of log)")
+            raise ValueError(f"the run may need {self.max_steps} control periods of 12.5 ms (a {total:.4g} m "
+                             f"path, the start {d0:.3g} m off it, at {params.speed:g} m/s); at most {MAX_PERIODS} "
+                             "are run (7 h of driving, about 2 GB of log)")
         self.steps = 0
         self.log = {k: [] for k in ("true", "odometry", "codes", "y_code", "zero", "kappa_p", "phi", "chain",
                                         "approach")}
