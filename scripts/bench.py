@@ -61,7 +61,7 @@ import software  # noqa: E402
 import synth  # noqa: E402
 import toolchain  # noqa: E402
 from navcores.hdl.emit import emit, top_name  # noqa: E402
-from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 OUT = ROOT / "build" / "bench"
 PERIOD_NS = 10                  # every cocotb bench here clocks at 10 ns
@@ -215,14 +215,10 @@ def _job_speed(speeds, speed, sim, name, params):
 
 
 def bundled(name):
-    """(obstacle, goal, start) of a bundled map: its longest scenario."""
+    """(obstacle, goal, start) of a bundled map: its job (models.maps.longest_scenario)."""
     path = ROOT / "maps" / name
     obstacle = load_map(path)
-    scen = sorted(path.parent.glob(path.stem + "-even-*.scen"))
-    if not scen:            # no scenario file: the first and the last free cell
-        start, goal = _free_corners(obstacle)
-        return obstacle, goal, start
-    s = max(load_scenarios(scen[0], obstacle), key=lambda s: s.optimal_length)
+    s = longest_scenario(path, obstacle)
     return obstacle, tuple(s.goal), tuple(s.start)
 
 
