@@ -120,12 +120,14 @@ class Param:
 @dataclass(frozen=True)
 class Constraint:
     """A rule across parameters: ``test(values) -> bool``; ``message`` is
-    formatted with the values (and whatever ``extra(values)`` adds)."""
+    formatted with the values (and whatever ``extra(values)`` adds); ``why``:
+    the reason of a bound, for --list."""
 
     text: str
     test: object = field(compare=False)
     message: str = ""
     extra: object = field(default=None, compare=False)
+    why: str = ""
 
     def check(self, values):
         if not self.test(values):

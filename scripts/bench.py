@@ -4,13 +4,14 @@ Writes BENCHMARKS.md (tables, the papers' own figures beside ours) and
 build/bench/results.json (the same figures as data).  Everything is measured
 by this run on this machine; only the papers' column is copied.
 
-1. Hardware, per top: Debian's yosys ``synth_xilinx -nowidelut`` cell counts
+1. Hardware, per top: yosys ``synth_xilinx -nowidelut`` cell counts
    (xc2v for the harmonic and EDT/BFS cores, xc3s for the DFLC: the papers'
    families; FF = FD*, LUT4 = LUT1..4 + INV, MULT = MULT18X18*, BRAM =
    RAMB16*), and a clock from nextpnr-ice40 place and route of the same
-   Verilog in the registered harness of scripts/fmax.py, on an iCE40-HX8K:
-   not the papers' Virtex/Spartan.  A top whose xc2v LUT4 count exceeds the
-   HX8K's 7680 logic cells is not placed ("does not fit").  The EDT/BFS
+   Verilog in the registered harness of scripts/fmax.py (the median of 3
+   seeds, as ``make fit``), on an iCE40-HX8K: not the papers' Virtex/
+   Spartan.  A top whose xc2v LUT4 count exceeds the HX8K's 7680 logic
+   cells is not placed ("does not fit").  The EDT/BFS
    arrays are synthesized with their hierarchy kept (the cell module once,
    counted per instance), the other tops flattened.
 2. Cycles per job, from simulations: the cluster RTL's cycles per iteration
@@ -29,8 +30,9 @@ by this run on this machine; only the papers' column is copied.
 6. The harmonic schedule study (scripts/bench_harmonic.py) and, when present,
    the block-exponent comparison (scripts/bench_exponents.py).
 
-Synthesis and place-and-route results are cached under build/bench/cache by
-the hash of the Verilog (a re-run only redoes what changed).
+yosys and nextpnr come from PyPI (scripts/toolchain.py); their runs are
+cached under build/cache by the hash of the Verilog, the tool's version and
+the options (a re-run only redoes what changed).
 
     python scripts/bench.py [--md BENCHMARKS.md] [--json build/bench/results.json]
                             [--skip study,simspeed,...]
@@ -57,14 +59,15 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 import fmax as fmax_mod  # noqa: E402
 import software  # noqa: E402
 import synth  # noqa: E402
+import toolchain  # noqa: E402
 from navcores.hdl import catalog  # noqa: E402
 from navcores.hdl.emit import emit, top_name  # noqa: E402
-from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 OUT = ROOT / "build" / "bench"
-CACHE = OUT / "cache"
 PERIOD_NS = 10                  # every cocotb bench here clocks at 10 ns
 HX8K_LCS = 7680
+CLOCK_PART = fmax_mod.part("iCE40-HX8K")     # the part of the clock column
 PY = sys.executable
 PARTS = ("hardware", "harmonic", "dflc", "edt", "simspeed", "study")
 
@@ -80,51 +83,23 @@ def log(msg):
 
 # --- 1. hardware --------------------------------------------------------------
 
-def _cached(kind, text, compute):
-    key = hashlib.sha1((kind + "\0" + text).encode()).hexdigest()[:20]
-    path = CACHE / f"{kind}_{key}.json"
-    if path.exists():
-        return json.loads(path.read_text())
-    value = compute()
-    CACHE.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(value))
-    return value
-
-
-def _stat_cells(log_text, hierarchical):
-    """Cell counts of the final yosys ``stat``: the whole design (summed over
-    the hierarchy, per instance) when ``hierarchical``."""
-    stat = log_text.rsplit("Printing statistics.", 1)[1]
-    if hierarchical and "=== design hierarchy ===" in stat:
-        stat = stat.split("=== design hierarchy ===", 1)[1]
-    cells = stat.split("Number of cells:", 1)[1].split("\n\n", 1)[0]
-    return {k: int(n) for k, n in re.findall(r"^\s+(\w+)\s+(\d+)$", cells, re.M)}
-
-
 def synthesize(top):
     key, core, name, params, family, hier, _ = top
     work = OUT / "synth"
     work.mkdir(parents=True, exist_ok=True)
     v = emit(name, params, work)
     module = top_name(name, params)
-    script = (f"read_verilog {v}; synth_xilinx -family {family} -top {module} "
+    script = (f"read_verilog {{v}}; synth_xilinx -family {family} -top {module} "
               f"{'' if hier else '-flatten '}-noiopad -noclkbuf -nowidelut; stat")
 
-    def compute():
-        logf = work / f"{module}.{family}.log"
-        t0 = time.time()
-        res = subprocess.run([synth.YOSYS, "-q", "-l", str(logf), "-p", script],
-                             capture_output=True, text=True)
-        if res.returncode:
-            return {"error": "yosys failed: " + res.stderr.strip()[-300:]}
-        cells = _stat_cells(logf.read_text(), hier)
-        sums, _ = synth.group(cells)
-        mult = sum(n for c, n in cells.items() if c.startswith("MULT18X18"))
-        return {"ff": sums["FF"], "lut4": sums["LUT"], "mult": mult, "bram": sums["BRAM"],
-                "cells": cells, "seconds": round(time.time() - t0, 1)}
-
     log(f"synth {module} ({family}{', hierarchical' if hier else ''})")
-    return _cached("synth", script + "\n" + v.read_text(), compute)
+    t0 = time.time()
+    stats = synth.yosys_stat(v, script)
+    cells = stats[None] if hier else stats[module]      # hierarchical: every instance counted
+    sums, _ = synth.group(cells)
+    mult = sum(n for c, n in cells.items() if c.startswith("MULT18X18"))
+    return {"ff": sums["FF"], "lut4": sums["LUT"], "mult": mult, "bram": sums["BRAM"],
+            "cells": dict(cells), "seconds": round(time.time() - t0, 1)}
 
 
 # Place-and-route parameters where the synthesized ones do not fit the HX8K's
@@ -138,10 +113,17 @@ def place(top, lut4):
     module = top_name(name, params)
     if lut4 is not None and lut4 > HX8K_LCS:
         return {"fmax_mhz": None, "error": f"does not fit the HX8K ({lut4} LUT4 > {HX8K_LCS} logic cells)"}
-    text = emit(name, params, OUT / "synth").read_text()
-    log(f"place and route {module} (iCE40)")
-    return _cached("fmax", fmax_mod.PART_NAME + "\n" + text,
-                   lambda: fmax_mod.fmax(name, params, OUT / "fmax"))
+    log(f"place and route {module} ({CLOCK_PART.name})")
+    try:
+        r = fmax_mod.fit(name, params, CLOCK_PART, jobs=1)     # hardware() runs two tops at once
+    except fmax_mod.FlowError as e:
+        return {"top": module, "fmax_mhz": None, "error": str(e)}
+    util = {k: f"{u}/{a}" for k, (u, a) in r["utilisation"].items()}
+    if not r["fits"]:
+        return {"top": module, "fmax_mhz": None, "error": "does not fit the part", "utilization": util}
+    return {"top": module, "fmax_mhz": r["fmax_mhz"], "seeds": r["seeds"], "critical_path": r["critical_path"],
+            "part": f"{CLOCK_PART.name} ({CLOCK_PART.package}), {r['tools']['nextpnr']}, median of "
+                    f"{len(r['seeds'])} seeds", "utilization": util}
 
 
 def hardware(jobs=2):
@@ -214,14 +196,10 @@ def _job_speed(speeds, speed, sim, name, params):
 
 
 def bundled(name):
-    """(obstacle, goal, start) of a bundled map: its longest scenario."""
+    """(obstacle, goal, start) of a bundled map: its job (models.maps.longest_scenario)."""
     path = ROOT / "maps" / name
     obstacle = load_map(path)
-    scen = sorted(path.parent.glob(path.stem + "-even-*.scen"))
-    if not scen:            # no scenario file: the first and the last free cell
-        start, goal = _free_corners(obstacle)
-        return obstacle, goal, start
-    s = max(load_scenarios(scen[0], obstacle), key=lambda s: s.optimal_length)
+    s = longest_scenario(path, obstacle)
     return obstacle, tuple(s.goal), tuple(s.start)
 
 
@@ -487,9 +465,10 @@ def markdown(data, hw, extra):
         "Every figure below was measured by that run except the papers' column. "
         "build/bench/results.json holds the same figures as data.", "",
         "## Hardware", "",
-        "Resources: Debian's yosys 0.23 `synth_xilinx -nowidelut` (xc2v = Virtex-II for the harmonic "
+        f"Resources: {toolchain.prepare('yosys')} `synth_xilinx -nowidelut` (xc2v = Virtex-II for the harmonic "
         "and EDT/BFS cores, xc3s = Spartan-3 for the DFLC: the papers' families). Clock: nextpnr-ice40 "
-        f"place and route on an **{fmax_mod.PART_NAME.split(',')[0]}** (Lattice iCE40, not the papers' Virtex/"
+        f"place and route ({toolchain.prepare('nextpnr-ice40')}, median of 3 seeds) on an "
+        f"**{CLOCK_PART.name} ({CLOCK_PART.package})** (Lattice iCE40, not the papers' Virtex/"
         "Spartan), the top between registered ports (scripts/fmax.py), so the figure is the core's "
         "register-to-register timing.", "",
         "| top | family | FF | LUT4 | MULT18X18 | BRAM | iCE40 clock (MHz) | iCE40 logic cells | paper |",

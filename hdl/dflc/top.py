@@ -26,8 +26,10 @@ def resolve_fll(fll):
     """A .fll path, or the stem of a shipped controller: ``table1`` ->
     models/dflc_table1.fll."""
     p = Path(str(fll))
-    if p.suffix == ".fll" and p.exists():
-        return p
+    if p.suffix == ".fll" or "/" in str(fll):     # a path: the file itself, never a stem + ".fll"
+        if p.is_file():
+            return p
+        raise ValueError(f"fll = {fll!r}: no such file" if not p.exists() else f"fll = {fll!r}: not a file")
     for d in FLL_DIRS:
         for cand in (d / f"dflc_{fll}.fll", d / f"{fll}.fll"):
             if cand.exists():

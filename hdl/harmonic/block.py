@@ -7,6 +7,8 @@ from amaranth.lib.wiring import In, Out
 from ..params import Constraint, Param, check, checked_init
 from .border import Border, BorderExponentsSignature
 from .cluster import COLS, NODES, ROWS, Cluster
+from .limits import (BLOCKS_WHY, CLUSTERS_WHY, DEPTH_WHY, E_WHY, MAX_BLOCKS_SIDE, MAX_CLUSTERS, MAX_DEPTH, MAX_E,
+                     MAX_WORDS, WORDS_WHY)
 
 __all__ = ["Block", "BlockControlSignature", "BlockHostSignature"]
 
@@ -160,21 +162,26 @@ class Block(wiring.Component):
 
     # hdl.emit's names: br, bc are ``blocks`` = (BR, BC).
     PARAMS = (
-        Param("n", int, lo=ROWS, doc=f"block rows, a multiple of {ROWS}",
-              message=f"block rows n={{value!r}}: must be a positive multiple of {ROWS}"),
-        Param("m", int, lo=COLS, doc=f"block columns, a multiple of {COLS}",
-              message=f"block columns m={{value!r}}: must be a positive multiple of {COLS}"),
-        Param("br", int, 1, lo=1, doc="block rows of the map (BR)",
-              message="blocks: BR={value!r} must be an integer >= 1"),
-        Param("bc", int, 1, lo=1, doc="block columns of the map (BC)",
-              message="blocks: BC={value!r} must be an integer >= 1"),
-        Param("p_max", int, 30, lo=2, doc="largest precision",
-              message="precision p_max={value!r} is not supported: p must be at least 2"),
-        Param("depth", int, 1024, lo=1, doc="words per cluster RAM"),
+        Param("n", int, lo=ROWS, hi=ROWS * MAX_CLUSTERS,
+              doc=f"block rows, a multiple of {ROWS} (at most {MAX_CLUSTERS} clusters in all, see the constraint)",
+              message=f"block rows n={{value!r}}: must be a positive multiple of {ROWS}, at most {{hi}} "
+                      f"({CLUSTERS_WHY})"),
+        Param("m", int, lo=COLS, hi=COLS * MAX_CLUSTERS,
+              doc=f"block columns, a multiple of {COLS} (at most {MAX_CLUSTERS} clusters in all)",
+              message=f"block columns m={{value!r}}: must be a positive multiple of {COLS}, at most {{hi}} "
+                      f"({CLUSTERS_WHY})"),
+        Param("br", int, 1, lo=1, hi=MAX_BLOCKS_SIDE, doc=f"block rows of the map (BR; {BLOCKS_WHY})",
+              message=f"blocks: BR={{value!r}} must be an integer in 1..{{hi}} ({BLOCKS_WHY})"),
+        Param("bc", int, 1, lo=1, hi=MAX_BLOCKS_SIDE, doc=f"block columns of the map (BC; {BLOCKS_WHY})",
+              message=f"blocks: BC={{value!r}} must be an integer in 1..{{hi}} ({BLOCKS_WHY})"),
+        Param("p_max", int, 30, lo=2, hi=MAX_DEPTH - 2, doc="largest precision (p_max + 2 <= depth)",
+              message="precision p_max={value!r} is not supported: p must be in 2..{hi} (p_max + 2 <= depth)"),
+        Param("depth", int, 1024, lo=1, hi=MAX_DEPTH, doc=f"words per cluster RAM (at most 2**20: {DEPTH_WHY})",
+              message=f"depth={{value!r}}: must be an integer in 1..{{hi}} ({DEPTH_WHY})"),
         Param("exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
               message="exponents={value!r}: must be True or False"),
-        Param("e_max", int, 255, lo=1, doc="largest block exponent (with exponents)",
-              message="e_max={value!r}: must be an integer >= 1"),
+        Param("e_max", int, 255, lo=1, hi=MAX_E, doc=f"largest block exponent (with exponents; {E_WHY})",
+              message=f"e_max={{value!r}}: must be an integer in 1..{{hi}} ({E_WHY})"),
     )
     CONSTRAINTS = (
         Constraint(f"n % {ROWS} == 0", lambda p: p["n"] % ROWS == 0,
@@ -186,6 +193,14 @@ class Block(wiring.Component):
                    "a map of {br}x{bc} = {b} blocks at p_max={p_max} needs "
                    "{b} * (p_max+2) = {words} words per cluster RAM, but the RAM depth is {depth}",
                    lambda p: {"b": p["br"] * p["bc"], "words": p["br"] * p["bc"] * (p["p_max"] + 2)}),
+        Constraint(f"(n / {ROWS}) * (m / {COLS}) <= {MAX_CLUSTERS}",
+                   lambda p: (p["n"] // ROWS) * (p["m"] // COLS) <= MAX_CLUSTERS,
+                   "a {n}x{m} block is {c} clusters; at most " f"{MAX_CLUSTERS} ({CLUSTERS_WHY})",
+                   lambda p: {"c": (p["n"] // ROWS) * (p["m"] // COLS)}, why=CLUSTERS_WHY),
+        Constraint("clusters * depth <= 2**22", lambda p: (p["n"] // ROWS) * (p["m"] // COLS) * p["depth"] <= MAX_WORDS,
+                   "{c} clusters of {depth} words are {w} RAM words; at most " f"{MAX_WORDS} ({WORDS_WHY})",
+                   lambda p: {"c": (p["n"] // ROWS) * (p["m"] // COLS),
+                              "w": (p["n"] // ROWS) * (p["m"] // COLS) * p["depth"]}, why=WORDS_WHY),
     )
 
     @checked_init

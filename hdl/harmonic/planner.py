@@ -12,6 +12,7 @@ from .block import Block
 from .cluster import COLS, ROWS
 from .controller import Controller
 from .decision import NEIGHBOURHOOD, Decision, neighbourhood_layout
+from .limits import MAX_DEPTH
 
 __all__ = ["Planner", "Op", "Code", "command_layout", "response_layout"]
 
@@ -142,8 +143,9 @@ class Planner(wiring.Component):
                 for p in Block.PARAMS if p.name != "exponents"),
               Param("block_exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
                     message="block_exponents={value!r}: must be True or False"),
-              Param("headroom", int, 1, lo=0, doc="top mantissa bits a re-pick leaves empty (with block_exponents)",
-                    message="headroom={value!r}: must be an integer >= 0"))
+              Param("headroom", int, 1, lo=0, hi=MAX_DEPTH - 2,
+                    doc="top mantissa bits a re-pick leaves empty (with block_exponents; headroom <= p_max)",
+                    message="headroom={value!r}: must be an integer in 0..{hi} (headroom <= p_max)"))
     CONSTRAINTS = (*Block.CONSTRAINTS,
                    Constraint("headroom <= p_max", lambda p: p["headroom"] <= p["p_max"],
                               "headroom={headroom!r}: leaves no mantissa bit at p_max={p_max}"))

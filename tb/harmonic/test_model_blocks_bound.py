@@ -46,7 +46,7 @@ import scipy.sparse.linalg as spla
 from dirichlet import dirichlet
 from harmonic_small_maps import corridor, spiral
 from navcores.models.harmonic import neighbours, one, plan, relax, step
-from navcores.sim.mapfile import load_map
+from navcores.models.maps import load_map
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -204,7 +204,7 @@ def test_cycles_follow_timing_model():
 
 
 def test_exponents_converge_where_fixed_point_cannot():
-    from navcores.sim.mapfile import load_map
+    from navcores.models.maps import load_map
     ob = load_map(ROOT / "maps" / "random-32-32-10.map")
     goals = [(29, 6)]                                    # the longest scenario's goal
     fixed = plan(ob, goals, schedule=(16,))
@@ -279,7 +279,7 @@ def test_rtl_variant_conservative_maxima():
 def _decision_fields():
     """Converged block-exponent fields (the RTL's variant): small random
     maps with 3x6 blocks and random-32-32-10 at p = 16 with 6x12 blocks."""
-    from navcores.sim.mapfile import load_map
+    from navcores.models.maps import load_map
     for seed in range(4):
         ob, goals = random_map(9, 18, seed)
         yield plan(ob, goals, block=(3, 6), iters=3, schedule=(6, 10, 14), block_exponents=True, rtl=True)
