@@ -41,7 +41,7 @@ import toolchain
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 # The project's code, imported here only (fit.py, synth.py and bench.py use these names).
-from navcores.hdl.emit import TOPS, emit, manifest, params_of, top_name  # noqa: E402,F401
+from navcores.hdl.emit import TOPS, emit, manifest, params_of, top_name, verilog_ports  # noqa: E402,F401
 from navcores.hdl.params import parse  # noqa: E402,F401
 
 ROOT = toolchain.ROOT
@@ -97,7 +97,6 @@ def part(name):
 
 def ports(verilog_text, module):
     """``[(direction, name, width)]`` of ``module`` in Amaranth's Verilog (hdl.emit's port parser)."""
-    from navcores.hdl.emit import verilog_ports
     return [(d, name, w) for name, (d, w) in verilog_ports(verilog_text, module).items()]
 
 
