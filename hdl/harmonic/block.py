@@ -276,12 +276,13 @@ class Block(wiring.Component):
         # port while iterating (all clusters write the same address), or of
         # the host word for the one cluster the host writes.
         idle = ~c0.busy
-        m.d.comb += border.w_addr.eq(c0.w_addr)
+        m.d.comb += [border.w_addr.eq(c0.w_addr), border.w_host.eq(idle)]
         with m.If(idle):
             m.d.comb += border.w_addr.eq(host.addr)
-        # The border RAMs' segments: each cluster edge that faces another
-        # block, with the word bits of its nodes (top/bottom rows, left/right
-        # columns of the block).
+        # The border nodes by cluster edge segment: each cluster edge that
+        # faces another block, with the word bits of its nodes (top/bottom
+        # rows, left/right columns of the block); the host writes one
+        # cluster's segments (the Border merges them into its lane words).
         segments = []
         for j in range(CC):
             cols = slice(COLS * j, COLS * (j + 1))

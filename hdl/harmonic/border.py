@@ -9,6 +9,7 @@ from amaranth.lib.wiring import In, Out
 __all__ = ["Border", "BorderExponentsSignature", "SIDES"]
 
 SIDES = ("N", "S", "W", "E")        # the border sides, in the order of the per-side fields
+LANE = 18                           # border nodes per RAM word: the 1Kx18 block RAM's width
 
 
 class BorderExponentsSignature(wiring.Signature):
@@ -59,14 +60,31 @@ class BorderExponentsSignature(wiring.Signature):
 class Border(wiring.Component):
     """The border nodes around an n x m block of a map of BR x BC blocks.
 
-    Four RAMs, stored like the clusters' (one bit per address, word of block
-    b at base ``b*stride``, flag first then value bits MSB first), keep every
-    block's edges: ``top`` (row 0, m bits wide), ``bottom`` (row n-1),
-    ``left`` (column 0, n bits) and ``right`` (column m-1).  They are written
-    with the clusters' write port while the block that holds those nodes is
-    computed (its base and ``cntW``), and by the host port at load.  While
-    block b = br*BC + bc is computed, the border nodes stream, with the
-    clusters' read addresses and one cycle of RAM latency like them:
+    Four edge stores keep every block's edges: ``top`` (row 0, m border
+    nodes), ``bottom`` (row n-1), ``left`` (column 0, n nodes) and ``right``
+    (column m-1).  Each is packed like the clusters' RAMs (one bit per
+    address, block b's words at base ``b*stride``, flag first then value
+    bits MSB first) with 18 border nodes per RAM word (:data:`LANE`, the
+    width of the paper's 1Kx18 block RAM): ceil(m/18) RAMs per row edge,
+    ceil(n/18) per column edge, each one true dual-port block RAM (port A
+    reads LSB first; port B reads MSB first or writes, never both in a
+    cycle, as in the cluster): 2*ceil(m/18) + 2*ceil(n/18) RAMs, 12 for the
+    paper's 36x66 block (its 204 border nodes in 12 block RAMs, 5.4), 18
+    for 48x96.  A lane word holds one edge of one block, so the four sides
+    read four blocks at once.
+
+    Writes: while the block that holds those nodes is computed, the
+    clusters' write port (its address and ``cntW``) writes every lane
+    whole, in the same cycle (all clusters write in lockstep).  A host
+    write (``w_host``, at load: one cluster, i.e. one 6- or 3-node segment
+    of a lane) is a read-modify-write: the lane's old word is read through
+    port A in the write's cycle and the merged word written through port B
+    in the next one.  So two host writes to the same address need a cycle
+    between them, and the clusters must not write in the cycle after a
+    host write (they never do: a run starts idle and writes from its
+    iteration's cycle 2 on).  While block b = br*BC + bc is computed, the
+    border nodes stream, with the clusters' read addresses and one cycle
+    of RAM latency like them:
 
     ==========  ==========================================  ===============
     border      the edge it reads                           block address
@@ -90,9 +108,6 @@ class Border(wiring.Component):
         Block rows and columns of the map.
     stride : int
         RAM words per block (p_max + 2).
-    segment : (rows, cols)
-        The cluster size: each edge is stored as one RAM per cluster segment
-        (written whole; ``en_*`` is read once per segment, at its first bit).
     exponents : bool
         Block exponents (issue 10; default False: the ports and logic below
         do not exist and the module is the fixed-point one).  Each stream is
@@ -126,6 +141,9 @@ class Border(wiring.Component):
                  ``scan_busy`` is never high; the scan costs nothing)
     ===========  ==========================================================
 
+    With block exponents the MSB-first reads (scan, raw) also happen while
+    the block writes, so each RAM has a third port (yosys doubles it).
+
     Exponent ports: ``p`` In (the run's precision) and ``conversion``
     In(:class:`BorderExponentsSignature`): ``s.N .. s.E`` In(signed),
     ``scan`` In(1), ``scan_busy`` Out(1), ``scan_len`` Out (max over the
@@ -144,15 +162,18 @@ class Border(wiring.Component):
         The clusters' read address offsets (relative to a block base).
     w_addr : In(range(depth)); w_top, w_bottom : In(m); w_left, w_right : In(n)
     en_top, en_bottom : In(m); en_left, en_right : In(n)
-        Edge write: absolute address, bits and enables (one per segment,
-        given on each of its bits).
+        Edge write: absolute address, bits and per-node enables.  Without
+        ``w_host`` every lane with an enabled node is written whole (the
+        clusters' write); with it, only the enabled nodes (read-modify-write,
+        written one cycle later).
+    w_host : In(1)
+        The write comes from the host port.
     h_N, h_S, m_N, m_S : Out(m); h_W, h_E, m_W, m_E : Out(n)
         The border streams.
     """
 
-    def __init__(self, n, m, blocks, stride, segment=(3, 6), exponents=False, e_max=255):
+    def __init__(self, n, m, blocks, stride, exponents=False, e_max=255):
         BR, BC = blocks
-        self.seg_rows, self.seg_cols = segment
         for name, v in (("n", n), ("m", m), ("BR", BR), ("BC", BC), ("stride", stride)):
             if not isinstance(v, int) or v < 1:
                 raise ValueError(f"{name}={v!r}: must be an integer >= 1")
@@ -168,7 +189,7 @@ class Border(wiring.Component):
         super().__init__({
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
             "cntR": In(range(stride)), "r_cnt": In(range(stride)),
-            "w_addr": In(range(self.depth)),
+            "w_addr": In(range(self.depth)), "w_host": In(1),
             "w_top": In(m), "w_bottom": In(m), "w_left": In(n), "w_right": In(n),
             "en_top": In(m), "en_bottom": In(m), "en_left": In(n), "en_right": In(n),
             "h_N": Out(m), "h_S": Out(m), "h_W": Out(n), "h_E": Out(n),
@@ -188,34 +209,58 @@ class Border(wiring.Component):
             ("right", self.n, self.w_right, self.en_right, "W", -1, self.bc != 0),
             ("left", self.n, self.w_left, self.en_left, "E", 1, self.bc != BC - 1),
         )
+        # A host write is merged into its lane word one cycle later (the old
+        # word read through port A in the write's cycle).
+        addr_r = Signal(range(self.depth))
+        with m.If(self.w_host):
+            m.d.sync += addr_r.eq(self.w_addr)
         for name, width, wdata, en, side, offset, valid in sides:
-            seg = self.seg_cols if name in ("top", "bottom") else self.seg_rows
             src = Signal(range(self.depth), name=f"src_{side}")
             m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
             # The validity of the data follows its address by one cycle.
             ok = Signal(name=f"ok_{side}")
             m.d.sync += ok.eq(valid)
-            # One RAM per cluster edge segment (6 columns / 3 rows): a cluster
-            # writes its whole segment at once (at load the host writes one
-            # cluster), so no per-bit write enables, which would split the
-            # storage into 1-bit-wide block RAMs.
             if self.exponents:
                 conv = self._shift(m, side, width, ok, valid)
-            for k in range(width // seg):
-                sl = slice(k * seg, (k + 1) * seg)
-                ram = Memory(shape=seg, depth=self.depth, init=[])
+            for k in range(-(-width // LANE)):
+                sl = slice(k * LANE, min((k + 1) * LANE, width))
+                lw = sl.stop - sl.start
+                ram = Memory(shape=lw, depth=self.depth, init=[])
                 m.submodules[f"ram_{name}_{k}"] = ram
-                wp = ram.write_port()
                 lsb, msb = ram.read_port(), ram.read_port()
-                m.d.comb += [wp.addr.eq(self.w_addr), wp.data.eq(wdata[sl]), wp.en.eq(en[k * seg])]
+                wp = ram.write_port()
+                # The host's read-modify-write: the old word now, the merge
+                # (the enabled bits from the host, the others kept) next cycle.
+                host = Signal(name=f"host_{name}_{k}")
+                pend = Signal(name=f"pend_{name}_{k}")
+                data_r, mask_r = Signal(lw, name=f"data_{name}_{k}"), Signal(lw, name=f"mask_{name}_{k}")
+                m.d.comb += host.eq(self.w_host & en[sl].any())
+                m.d.sync += pend.eq(host)
+                with m.If(host):
+                    m.d.sync += [data_r.eq(wdata[sl]), mask_r.eq(en[sl])]
+                merged = (lsb.data & ~mask_r) | (data_r & mask_r)
+                waddr = Mux(pend, addr_r, self.w_addr)
+                m.d.comb += [
+                    wp.data.eq(Mux(pend, merged, wdata[sl])),
+                    wp.en.eq(pend | (en[sl].any() & ~self.w_host)),
+                ]
                 if not self.exponents:
+                    # Port B: the MSB-first reads, or the write on the same
+                    # address (one physical port, as in the cluster).
                     m.d.comb += [
-                        lsb.addr.eq(src + self.cntR), msb.addr.eq(src + self.r_cnt),
+                        lsb.addr.eq(src + self.cntR),
+                        msb.addr.eq(Mux(wp.en, waddr, src + self.r_cnt)),
+                        wp.addr.eq(msb.addr),
                         getattr(self, f"h_{side}")[sl].eq(Mux(ok, lsb.data, 0)),
                         getattr(self, f"m_{side}")[sl].eq(Mux(ok, msb.data, 0)),
                     ]
                 else:
+                    # The scan and the raw reads use port B while the block
+                    # writes: a third port (yosys doubles the RAM).
+                    m.d.comb += wp.addr.eq(waddr)
                     conv(src, sl, lsb, msb)
+                with m.If(host):
+                    m.d.comb += lsb.addr.eq(self.w_addr)
         if self.exponents:
             self._scan_control(m)
         return m
