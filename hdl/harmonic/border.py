@@ -73,18 +73,12 @@ class Border(wiring.Component):
     for 48x96.  A lane word holds one edge of one block, so the four sides
     read four blocks at once.
 
-    Writes: while the block that holds those nodes is computed, the
-    clusters' write port (its address and ``cntW``) writes every lane
-    whole, in the same cycle (all clusters write in lockstep).  A host
-    write (``w_host``, at load: one cluster, i.e. one 6- or 3-node segment
-    of a lane) is a read-modify-write: the lane's old word is read through
-    port A in the write's cycle and the merged word written through port B
-    in the next one.  So two host writes to the same address need a cycle
-    between them, and the clusters must not write in the cycle after a
-    host write (they never do: a run starts idle and writes from its
-    iteration's cycle 2 on).  While block b = br*BC + bc is computed, the
-    border nodes stream, with the clusters' read addresses and one cycle
-    of RAM latency like them:
+    Every write writes all lanes of the four edges at one address: the
+    clusters' write port (all clusters write in lockstep) while the block
+    that holds those nodes is computed, and the whole edge words the
+    :class:`~hdl.harmonic.block.Block` assembles after a host write.  While
+    block b = br*BC + bc is computed, the border nodes stream, with the
+    clusters' read addresses and one cycle of RAM latency like them:
 
     ==========  ==========================================  ===============
     border      the edge it reads                           block address
@@ -160,14 +154,9 @@ class Border(wiring.Component):
         Row and column of the block being computed (held during the visit).
     cntR, r_cnt : In
         The clusters' read address offsets (relative to a block base).
-    w_addr : In(range(depth)); w_top, w_bottom : In(m); w_left, w_right : In(n)
-    en_top, en_bottom : In(m); en_left, en_right : In(n)
-        Edge write: absolute address, bits and per-node enables.  Without
-        ``w_host`` every lane with an enabled node is written whole (the
-        clusters' write); with it, only the enabled nodes (read-modify-write,
-        written one cycle later).
-    w_host : In(1)
-        The write comes from the host port.
+    w_addr : In(range(depth)); w_en : In(1)
+    w_top, w_bottom : In(m); w_left, w_right : In(n)
+        Edge write: absolute address, enable, every edge node's bit.
     h_N, h_S, m_N, m_S : Out(m); h_W, h_E, m_W, m_E : Out(n)
         The border streams.
     """
@@ -189,9 +178,8 @@ class Border(wiring.Component):
         super().__init__({
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
             "cntR": In(range(stride)), "r_cnt": In(range(stride)),
-            "w_addr": In(range(self.depth)), "w_host": In(1),
+            "w_addr": In(range(self.depth)), "w_en": In(1),
             "w_top": In(m), "w_bottom": In(m), "w_left": In(n), "w_right": In(n),
-            "en_top": In(m), "en_bottom": In(m), "en_left": In(n), "en_right": In(n),
             "h_N": Out(m), "h_S": Out(m), "h_W": Out(n), "h_E": Out(n),
             "m_N": Out(m), "m_S": Out(m), "m_W": Out(n), "m_E": Out(n),
             **extra,
@@ -203,18 +191,13 @@ class Border(wiring.Component):
         b = Signal(range(max(self.BR * BC, 2)))
         m.d.comb += b.eq(self.br * BC + self.bc)
         sides = (
-            # (RAM, width, data, enable, out side, source-block offset, valid)
-            ("bottom", self.m, self.w_bottom, self.en_bottom, "N", -BC, self.br != 0),
-            ("top", self.m, self.w_top, self.en_top, "S", BC, self.br != self.BR - 1),
-            ("right", self.n, self.w_right, self.en_right, "W", -1, self.bc != 0),
-            ("left", self.n, self.w_left, self.en_left, "E", 1, self.bc != BC - 1),
+            # (RAM, width, data, out side, source-block offset, valid)
+            ("bottom", self.m, self.w_bottom, "N", -BC, self.br != 0),
+            ("top", self.m, self.w_top, "S", BC, self.br != self.BR - 1),
+            ("right", self.n, self.w_right, "W", -1, self.bc != 0),
+            ("left", self.n, self.w_left, "E", 1, self.bc != BC - 1),
         )
-        # A host write is merged into its lane word one cycle later (the old
-        # word read through port A in the write's cycle).
-        addr_r = Signal(range(self.depth))
-        with m.If(self.w_host):
-            m.d.sync += addr_r.eq(self.w_addr)
-        for name, width, wdata, en, side, offset, valid in sides:
+        for name, width, wdata, side, offset, valid in sides:
             src = Signal(range(self.depth), name=f"src_{side}")
             m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
             # The validity of the data follows its address by one cycle.
@@ -224,43 +207,25 @@ class Border(wiring.Component):
                 conv = self._shift(m, side, width, ok, valid)
             for k in range(-(-width // LANE)):
                 sl = slice(k * LANE, min((k + 1) * LANE, width))
-                lw = sl.stop - sl.start
-                ram = Memory(shape=lw, depth=self.depth, init=[])
+                ram = Memory(shape=sl.stop - sl.start, depth=self.depth, init=[])
                 m.submodules[f"ram_{name}_{k}"] = ram
                 lsb, msb = ram.read_port(), ram.read_port()
                 wp = ram.write_port()
-                # The host's read-modify-write: the old word now, the merge
-                # (the enabled bits from the host, the others kept) next cycle.
-                host = Signal(name=f"host_{name}_{k}")
-                pend = Signal(name=f"pend_{name}_{k}")
-                data_r, mask_r = Signal(lw, name=f"data_{name}_{k}"), Signal(lw, name=f"mask_{name}_{k}")
-                m.d.comb += host.eq(self.w_host & en[sl].any())
-                m.d.sync += pend.eq(host)
-                with m.If(host):
-                    m.d.sync += [data_r.eq(wdata[sl]), mask_r.eq(en[sl])]
-                merged = (lsb.data & ~mask_r) | (data_r & mask_r)
-                waddr = Mux(pend, addr_r, self.w_addr)
-                m.d.comb += [
-                    wp.data.eq(Mux(pend, merged, wdata[sl])),
-                    wp.en.eq(pend | (en[sl].any() & ~self.w_host)),
-                ]
+                m.d.comb += [wp.data.eq(wdata[sl]), wp.en.eq(self.w_en)]
                 if not self.exponents:
                     # Port B: the MSB-first reads, or the write on the same
                     # address (one physical port, as in the cluster).
                     m.d.comb += [
                         lsb.addr.eq(src + self.cntR),
-                        msb.addr.eq(Mux(wp.en, waddr, src + self.r_cnt)),
-                        wp.addr.eq(msb.addr),
+                        msb.addr.eq(Mux(self.w_en, self.w_addr, src + self.r_cnt)), wp.addr.eq(msb.addr),
                         getattr(self, f"h_{side}")[sl].eq(Mux(ok, lsb.data, 0)),
                         getattr(self, f"m_{side}")[sl].eq(Mux(ok, msb.data, 0)),
                     ]
                 else:
                     # The scan and the raw reads use port B while the block
                     # writes: a third port (yosys doubles the RAM).
-                    m.d.comb += wp.addr.eq(waddr)
+                    m.d.comb += wp.addr.eq(self.w_addr)
                     conv(src, sl, lsb, msb)
-                with m.If(host):
-                    m.d.comb += lsb.addr.eq(self.w_addr)
         if self.exponents:
             self._scan_control(m)
         return m

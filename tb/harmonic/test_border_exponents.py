@@ -65,7 +65,7 @@ async def border_exponents_against_model(dut):
     await start(dut)
     BR, BC, B = P["br"], P["bc"], P["br"] * P["bc"]
     s_layout, lead_layout = _layouts()
-    for name in ("conversion__s", "conversion__scan", "cntR", "r_cnt", "p", "conversion__raw", "w_host"):
+    for name in ("conversion__s", "conversion__scan", "cntR", "r_cnt", "p", "conversion__raw", "w_en"):
         getattr(dut, name).value = 0
     # Random words (bits per offset) in every RAM of every block.
     words = {ram: [[0] * STRIDE for _ in range(B)] for _, ram, _, _ in SIDES}
@@ -87,12 +87,11 @@ async def border_exponents_against_model(dut):
     for b in range(B):
         for off in range(STRIDE):
             dut.w_addr.value = b * STRIDE + off
+            dut.w_en.value = 1
             for _, ram, width, _ in SIDES:
                 getattr(dut, f"w_{ram}").value = words[ram][b][off]
-                getattr(dut, f"en_{ram}").value = (1 << width) - 1
             await _tick(dut)
-    for _, ram, _, _ in SIDES:
-        getattr(dut, f"en_{ram}").value = 0
+    dut.w_en.value = 0
 
     seen = {"right": 0, "left": 0, "zero": 0, "clamp": 0, "outside": 0, "nodes": 0, "scan": 0, "lead": 0}
     for trial in range(TRIALS):

@@ -1,3 +1,4 @@
+# amaranth: UnusedElaboratable=no
 """The Decision module (bit-serial, section 5.3) against models.harmonic, bit-exact.
 
 ``Decision(p_max=12)`` alone (the ``harmonic_decision`` top), one build per
