@@ -57,9 +57,9 @@ TOPS = {
     "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
     "harmonic_decision": Decision,
-    # the border storage of an n x m block (stride p_max + 2), for its unit test and synthesis
+    # the border storage of an n x m block, for its unit test and synthesis
     "harmonic_border": lambda n, m, br=1, bc=1, p_max=30, exponents=0, e_max=255: Border(
-        n, m, (br, bc), p_max + 2, bool(exponents), e_max),
+        n, m, (br, bc), p_max, bool(exponents), e_max),
     "harmonic_block": lambda n, m, br=1, bc=1, p_max=30, depth=1024, exponents=0, e_max=255: Block(
         n, m, (br, bc), p_max, depth, bool(exponents), e_max),
     "harmonic_planner": lambda n=6, m=12, br=2, bc=2, p_max=30, depth=1024, block_exponents=0, e_max=255,
@@ -77,6 +77,7 @@ TOPS = {
 
 # The class whose PARAMS / CONSTRAINTS a factory above takes (when it is not a class).
 SPECS = {
+    "harmonic_border": Border,
     "harmonic_block": Block,
     "harmonic_planner": Planner,
     "dflc_core": DflcStream,

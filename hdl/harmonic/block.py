@@ -217,9 +217,9 @@ class Block(wiring.Component):
         n, mm, CR, CC, S = self.n, self.m, self.CR, self.CC, self.stride
         ctl, host = self.control, self.host
         if self.exponents:
-            border = Border(n, mm, (self.BR, self.BC), S, exponents=True, e_max=self.e_max)
+            border = Border(n, mm, (self.BR, self.BC), self.p_max, exponents=True, e_max=self.e_max)
         else:
-            border = Border(n, mm, (self.BR, self.BC), S)
+            border = Border(n, mm, (self.BR, self.BC), self.p_max)
         m.submodules.border = border
         ekw = {"exponents": True} if self.exponents else {}
         cl = [[Cluster(depth=self.depth, p_max=self.p_max, **ekw) for _ in range(CC)] for _ in range(CR)]

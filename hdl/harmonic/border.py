@@ -6,6 +6,8 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..params import REQUIRED, Param, check
+
 __all__ = ["Border", "BorderExponentsSignature", "SIDES"]
 
 SIDES = ("N", "S", "W", "E")        # the border sides, in the order of the per-side fields
@@ -100,8 +102,8 @@ class Border(wiring.Component):
         Block rows and columns.
     blocks : (BR, BC)
         Block rows and columns of the map.
-    stride : int
-        RAM words per block (p_max + 2).
+    p_max : int
+        Largest precision: ``stride`` = p_max + 2 RAM words per block.
     exponents : bool
         Block exponents (issue 10; default False: the ports and logic below
         do not exist and the module is the fixed-point one).  Each stream is
@@ -161,16 +163,27 @@ class Border(wiring.Component):
         The border streams.
     """
 
-    def __init__(self, n, m, blocks, stride, exponents=False, e_max=255):
+    # hdl.emit's names: br, bc are ``blocks`` = (BR, BC).
+    PARAMS = (
+        *(Param(k, int, default, lo=1, doc=doc, message=f"{k}={{value!r}}: must be an integer >= 1")
+          for k, default, doc in (("n", REQUIRED, "block rows"), ("m", REQUIRED, "block columns"),
+                                  ("br", 1, "block rows of the map (BR)"),
+                                  ("bc", 1, "block columns of the map (BC)"))),
+        Param("p_max", int, 30, lo=2, doc="largest precision (stride p_max + 2 words per block)",
+              message="precision p_max={value!r} is not supported: p must be at least 2"),
+        Param("exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
+              message="exponents={value!r}: must be True or False"),
+        Param("e_max", int, 255, lo=1, doc="largest block exponent (with exponents)",
+              message="e_max={value!r}: must be an integer >= 1"),
+    )
+
+    def __init__(self, n, m, blocks, p_max, exponents=False, e_max=255):
         BR, BC = blocks
-        for name, v in (("n", n), ("m", m), ("BR", BR), ("BC", BC), ("stride", stride)):
-            if not isinstance(v, int) or v < 1:
-                raise ValueError(f"{name}={v!r}: must be an integer >= 1")
+        check(self.PARAMS, n=n, m=m, br=BR, bc=BC, p_max=p_max, exponents=exponents, e_max=e_max)
+        stride = p_max + 2
         self.n, self.m, self.BR, self.BC, self.stride = n, m, BR, BC, stride
         self.depth = BR * BC * stride
         self.exponents = bool(exponents)
-        if self.exponents and (not isinstance(e_max, int) or e_max < 1):
-            raise ValueError(f"e_max={e_max!r}: must be an integer >= 1")
         self.e_max = e_max
         extra = {}
         if self.exponents:

@@ -38,8 +38,8 @@ class Decision(wiring.Component):
     best rows, else ES; otherwise SW if S is among the best rows, else WN.
     Each of the two choices compares two squares exactly through
     (h - a)^2 - (h - b)^2 = (a - b)(a + b - 2h): a is at least as steep as
-    b iff the signs of a - b and a + b - 2h do not differ (one negative,
-    the other positive).  Both signs come from LSB-first serial
+    b unless one of a - b and a + b - 2h is negative and the other
+    positive.  Both signs come from LSB-first serial
     arithmetic: a - b with a borrow flip-flop, a + b - 2h with a carry in
     {-1, 0, 1} (two flip-flops; 2h is h one bit late), each with a
     "non-zero seen" flip-flop.  Area: these few flip-flops, the bit
