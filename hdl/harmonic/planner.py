@@ -109,7 +109,8 @@ class Planner(wiring.Component):
     DIRECTION  block, row, col: ``triangle`` (0 NE, 1 ES, 2 SW, 3 WN) and the
                gradient (g_row, g_col) of :func:`models.harmonic.decision`
                (block exponents: of :func:`models.harmonic.decision_exponents`,
-               in the centre's units; ``exponent`` = its e_b).
+               in the centre's units; ``exponent`` = its e_b).  Response
+               after :func:`direction_latency` cycles (7p+26 inside the map).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
