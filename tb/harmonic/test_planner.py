@@ -105,13 +105,13 @@ async def planner_maps(dut):
         dut._log.info(f"{name} {rows}x{cols}, {sched}, I={iters}: p={res.p} converged={res.converged} "
                       f"sweeps={res.sweeps} block_iterations={res.block_iterations} "
                       f"cycles={res.cycles}: all {h.size} nodes equal")
-        compared += await _directions(dut, bench, res, name, rng, seen)
+        compared += await _directions(bench, res, name, rng, seen)
     dut._log.info(f"DIRECTION: {seen}")
     assert all(seen.values()), f"not exercised: {[k for k, v in seen.items() if not v]}"
     assert compared > 3 * rows * cols
 
 
-async def _directions(dut, bench, res, name, rng, seen):
+async def _directions(bench, res, name, rng, seen):
     """DIRECTION at the map's edges (the border reads 0 there), next to the
     block seams (neighbours in other blocks), at up to 24 nodes with a tie
     among the Decision's terms and at random cells, against
