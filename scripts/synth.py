@@ -61,6 +61,15 @@ TOPS = [  # (name, params, paper FF / LUT4 / MHz)
     # the planner top: that block + Control + Decision + host streams, p_max = 62
     ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256},
      "- (paper: Control 844 slices, Decision 3p+682 slices)"),
+    # the planner at p_max 126 and 254 (issue 19: the Decision's area grows linearly in p)
+    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 126, "depth": 512},
+     "- (paper: Decision 3p+682 slices)"),
+    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024},
+     "- (paper: Decision 3p+682 slices)"),
+    # the border storage alone, the paper's block sizes (issue 19: block RAMs)
+    ("harmonic_border", {"n": 36, "m": 66, "br": 2, "bc": 2, "p_max": 254},
+     "- (paper: 204 border nodes in 12 SRAM blocks, 36x66)"),
+    ("harmonic_border", {"n": 48, "m": 96, "br": 2, "bc": 2, "p_max": 254}, "- (48x96, Table 3's block)"),
     # the same planner with the block-exponent option (issue 10, beyond the paper)
     ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256, "block_exponents": 1},
      "- (beyond the paper: block exponents, issue 10)"),

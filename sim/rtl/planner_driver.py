@@ -65,7 +65,9 @@ class PlannerDriver:
         return out
 
     async def command(self, op, **fields):
-        """Send one command (from a falling edge); return its response."""
+        """Send one command (from a falling edge); return its response
+        (``self.latency``: its response latency, the clock edges after the
+        one that took the command up to the one that raised valid)."""
         from cocotb.triggers import FallingEdge
         d = self.dut
         d.i_stream__payload.value = self.pack(op=int(op.value), **fields)
@@ -74,8 +76,10 @@ class PlannerDriver:
             await FallingEdge(d.clk)
         await FallingEdge(d.clk)            # taken at the rising edge in between
         d.i_stream__valid.value = 0
+        self.latency = 0                    # clock edges after the taking one, to the one raising valid
         while not int(d.o_stream__valid.value):
             await FallingEdge(d.clk)
+            self.latency += 1
         resp = self.unpack(int(d.o_stream__payload.value))
         await FallingEdge(d.clk)            # ready is held high: taken
         self.commands += 1

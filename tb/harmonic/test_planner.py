@@ -8,9 +8,11 @@ tests drive only the host streams (sim/rtl/planner_driver.py):
   STATUS to the end, READ every node: every stored value and constant flag
   equals the model's, and so do the final precision, converged, sweeps,
   block iterations, check iterations and the cycle count.  Then DIRECTION
-  at corners, edges, block corners and random cells equals
-  models.harmonic.decision (outside the map reads 0: the border nodes at the
-  map's edge).
+  at every node of the map's edges, at the nodes next to block seams, at
+  up to 24 nodes with ties among the Decision's terms and at random cells
+  equals models.harmonic.decision (outside the map reads 0: the border
+  nodes at the map's edge), and its response latency equals
+  hdl.harmonic.planner.direction_latency(p, neighbours in the map).
 * planner_dynamic: an obstacle added during a run (taken at the end of the
   pass the model's event names; the SET response's counters prove which),
   then an obstacle added after convergence (SET while idle, START): values,
@@ -29,11 +31,13 @@ import cocotb
 import numpy as np
 import pytest
 
+from navcores.hdl.harmonic.planner import direction_latency
 from navcores.models.harmonic import decision, plan
 from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.planner_driver import Code, Op, PlannerDriver, arithmetic
 from navcores.sim.rtl.planner_job import run_map
 from navcores.sim.rtl.runner import SIMULATORS, run
+from tb.harmonic.harmonic_fields import tie_kinds
 from tb.harmonic.planner_maps import MAPS, random_map
 
 SETS = {
@@ -92,6 +96,8 @@ async def planner_maps(dut):
     rng = random.Random(cocotb.RANDOM_SEED)
     rows, cols = _shape()
     compared = 0
+    seen = dict.fromkeys(("edge", "seam", "row_tie", "col_tie", "both_ties", "triangle_0", "triangle_1",
+                          "triangle_2", "triangle_3"), 0)
     for name, sched, iters in RUNS[SET_NAME]:
         ob, goals = MAPS[name](rows, cols, cocotb.RANDOM_SEED % 1000)
         res, h = await _run(drv, ob, goals, sched, iters)
@@ -99,21 +105,52 @@ async def planner_maps(dut):
         dut._log.info(f"{name} {rows}x{cols}, {sched}, I={iters}: p={res.p} converged={res.converged} "
                       f"sweeps={res.sweeps} block_iterations={res.block_iterations} "
                       f"cycles={res.cycles}: all {h.size} nodes equal")
-        # Decision at the map's corners and edges (the border reads 0 there),
-        # at block corners (neighbours in other blocks) and at random cells.
-        n, m = PARAMS["n"], PARAMS["m"]
-        cells = {(0, 0), (0, cols - 1), (rows - 1, 0), (rows - 1, cols - 1), (0, cols // 2),
-                 (rows // 2, 0), (n - 1, m - 1), (n, m), (n - 1, m), (n, m - 1)}
-        cells |= {(rng.randrange(rows), rng.randrange(cols)) for _ in range(6)}
-        for r, c in sorted(cells):
-            b, x, y = drv.locate(r, c)
-            resp = await drv.command(Op.DIRECTION, block=b, row=x, col=y)
-            t, (gr, gc) = decision(res.padded_h, r, c)
-            assert resp["code"] == Code.OK
-            got = (resp["triangle"], resp["g_row"], resp["g_col"], resp["value"])
-            assert got == (t, gr, gc, res.padded_h[r, c]), f"{name} ({r}, {c}): RTL {got} model {(t, gr, gc)}"
-            compared += 1
+        compared += await _directions(drv, res, name, rng, seen)
+    dut._log.info(f"DIRECTION: {seen}")
+    assert all(seen.values()), f"not exercised: {[k for k, v in seen.items() if not v]}"
     assert compared > 3 * rows * cols
+
+
+async def _directions(drv, res, name, rng, seen):
+    """DIRECTION at the map's edges (the border reads 0 there), next to the
+    block seams (neighbours in other blocks), at up to 24 nodes with a tie
+    among the Decision's terms and at random cells, against
+    models.harmonic.decision, each with its response latency."""
+    h, p = res.padded_h, res.p
+    rows, cols = h.shape
+    n, m = PARAMS["n"], PARAMS["m"]
+    cells = {(r, c) for r, c in np.ndindex(rows, cols) if r in (0, rows - 1) or c in (0, cols - 1)}
+    cells |= {(r, c) for r, c in np.ndindex(rows, cols) if r % n in (0, n - 1) and c % m in (0, m - 1)}
+    ties = [(r, c) for r, c in np.ndindex(rows, cols) if any(tie_kinds(_around(h, r, c)).values())]
+    cells |= set(rng.sample(ties, min(len(ties), 24)))
+    cells |= {(rng.randrange(rows), rng.randrange(cols)) for _ in range(6)}
+    for r, c in sorted(cells):
+        b, x, y = drv.locate(r, c)
+        resp = await drv.command(Op.DIRECTION, block=b, row=x, col=y)
+        t, (gr, gc) = decision(h, r, c)
+        assert resp["code"] == Code.OK
+        got = (resp["triangle"], resp["g_row"], resp["g_col"], resp["value"])
+        assert got == (t, gr, gc, h[r, c]), f"{name} ({r}, {c}): RTL {got} model {(t, gr, gc)}"
+        inside = (r > 0) + (r < rows - 1) + (c > 0) + (c < cols - 1)
+        assert drv.latency == direction_latency(p, inside), (
+            f"{name} ({r}, {c}): DIRECTION took {drv.latency} cycles, expected {direction_latency(p, inside)}")
+        seen["edge"] += inside < 4
+        seen["seam"] += r % n in (0, n - 1) and c % m in (0, m - 1) and inside == 4
+        for k, hit in tie_kinds(_around(h, r, c)).items():
+            if k in seen:
+                seen[k] += hit
+        seen[f"triangle_{t}"] += 1
+    return len(cells)
+
+
+def _around(h, r, c):
+    """{"c", "N", "E", "S", "W": value} at (r, c), 0 outside the map."""
+    rows, cols = h.shape
+    v = {"c": int(h[r, c])}
+    for d, (dr, dc) in (("N", (-1, 0)), ("E", (0, 1)), ("S", (1, 0)), ("W", (0, -1))):
+        rr, cc = r + dr, c + dc
+        v[d] = int(h[rr, cc]) if 0 <= rr < rows and 0 <= cc < cols else 0
+    return v
 
 
 @cocotb.test()
