@@ -23,7 +23,6 @@ cycles before a sample and the sink drops ready at random.
 """
 
 from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, RisingEdge
 
 from navcores.hdl.dflc.core import result_layout, sample_layout
 
@@ -66,15 +65,9 @@ class DflcDriver:
         await self.reset()
 
     async def reset(self, cycles=2):
-        """Synchronous reset for ``cycles`` clocks.  Drops whatever the source
-        holds; the streams' records and counts start afresh."""
-        self.source.clear()
-        self.dut.rst.value = 1
-        await ClockCycles(self.dut.clk, cycles)
-        self.dut.rst.value = 0
-        await RisingEdge(self.dut.clk)
-        self.source.clear()
-        self.sink.clear()
+        """Synchronous reset for ``cycles`` clocks (:meth:`.stream.Streams.apply_reset`):
+        drops whatever the source holds; records and counts start afresh."""
+        await self.streams.apply_reset(cycles)
 
     def stop(self):
         """End this driver's coroutine (before another driver takes the same DUT)."""

@@ -29,6 +29,7 @@ ArrayLayout or a plain shape).  This module drives them from cocotb::
 * Reset: while ``reset`` is high nothing is recorded, a source drops the
   value it is presenting (valid goes low; the rest of its queue waits for
   the end of the reset; ``clear`` drops it too) and a sink keeps going.
+  :meth:`Streams.apply_reset` pulses the reset and starts every stream afresh.
 * Cycles: :attr:`Streams.cycle` counts the rising edges of the clock since
   the :class:`Streams` was made (from the simulation time: no coroutine
   runs for it).  A beat's cycle is the cycle in which valid and ready were
@@ -57,7 +58,7 @@ import cocotb
 from amaranth.hdl import Shape
 from amaranth.lib import data
 from cocotb.simtime import get_sim_time
-from cocotb.triggers import Event, First, ReadOnly, RisingEdge, Timer, current_gpi_trigger
+from cocotb.triggers import ClockCycles, Event, First, ReadOnly, RisingEdge, Timer, current_gpi_trigger
 
 from .clock import PERIOD_NS
 
@@ -164,6 +165,18 @@ class Streams:
         mon = self._add(StreamMonitor(self, name, layout))
         mon.callback = callback
         return mon
+
+    async def apply_reset(self, cycles=2):
+        """Pulse the synchronous reset: ``reset`` high for ``cycles`` clock
+        cycles (a source presenting a value drops it, as at any reset), then
+        every queue dropped and the records and counts started afresh;
+        returns just after the first rising edge with ``reset`` low."""
+        self.reset.value = 1
+        await ClockCycles(self.clock, cycles)
+        for e in self.endpoints:
+            e.clear()
+        self.reset.value = 0
+        await RisingEdge(self.clock)
 
     def stop(self):
         """End the coroutines; sources drop everything (valid low)."""

@@ -17,7 +17,7 @@ from cocotb.triggers import ReadOnly, RisingEdge, Timer
 
 from navcores.hdl.edt_bfs.cell import cell_widths, result_layout, state_layout
 from navcores.models.edt_bfs import OFFSETS, bfs_step, edt_step
-from navcores.sim.rtl.edt_bfs_driver import pack, unpack
+from navcores.sim.rtl.stream import pack, unpack
 from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
 
 H = W = 16
