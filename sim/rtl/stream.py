@@ -24,6 +24,8 @@ ArrayLayout or a plain shape).  This module drives them from cocotb::
 * :class:`StreamMonitor` watches a stream it does not drive.  Sources and
   sinks are monitors too: each records ``beats``, the (cycle, value) of every
   handshake, and counts ``stalls``, the cycles with valid high and ready low.
+  On a stream the DUT drives, a stalled beat that is dropped or changed
+  before its handshake fails the test (:class:`StreamProtocolError`).
 * A pause generator is any iterator of booleans, one per cycle (True:
   pause), as in cocotbext-axi; :func:`pauses` makes the seeded random one.
 * Reset: while ``reset`` is high nothing is recorded, a source drops the
@@ -62,7 +64,8 @@ from cocotb.triggers import ClockCycles, Event, First, ReadOnly, RisingEdge, Tim
 
 from .clock import PERIOD_NS
 
-__all__ = ["Streams", "StreamSource", "StreamSink", "StreamMonitor", "pauses", "pack", "unpack"]
+__all__ = ["Streams", "StreamSource", "StreamSink", "StreamMonitor", "StreamProtocolError", "pauses", "pack",
+           "unpack"]
 
 
 # --- payloads -----------------------------------------------------------------
@@ -233,11 +236,18 @@ class Streams:
         return busy
 
 
+class StreamProtocolError(AssertionError):
+    """The DUT broke the stream rules: a stalled beat (valid high, ready
+    low) must stay presented, payload unchanged, until its handshake."""
+
+
 class StreamMonitor:
     """Watches one stream: ``beats`` holds (cycle, value) of every handshake
     (the payload unpacked by ``layout`` if one is given, else the word),
     ``stalls`` counts the cycles with valid high and ready low, ``callback``
-    (if set) is called with (cycle, value) at each handshake."""
+    (if set) is called with (cycle, value) at each handshake.  A beat the
+    DUT drops or changes while stalled raises :class:`StreamProtocolError`
+    (outside reset), which fails the running cocotb test."""
 
     def __init__(self, streams, name, layout=None):
         dut, full = streams.dut, f"{streams.prefix}{name}"
@@ -250,6 +260,7 @@ class StreamMonitor:
         self.callback = None
         self._waiters = []                          # (count, Event): until len(beats) >= count
         self._high = False
+        self._held = None                           # (cycle, word) of a beat stalled in that cycle
 
     def clear(self):
         """Forget the beats and the counts."""
@@ -262,15 +273,29 @@ class StreamMonitor:
     def _pending(self):
         return self._high
 
+    def _ready_now(self):
+        return self.ready.value == 1
+
+    def _take(self, cycle, word):
+        self._record(cycle, unpack(self.layout, word) if self.layout is not None else word)
+
     def _sample(self, cycle, in_reset):
-        self._high = self.valid.value == 1
-        if self._high and not in_reset:
-            if self.ready.value == 1:
-                word = int(self.payload.value)
-                self._record(cycle, unpack(self.layout, word) if self.layout is not None else word)
+        high = self.valid.value == 1
+        held, self._held = self._held, None
+        if high and not in_reset:
+            word = int(self.payload.value)
+            if held is not None and held[0] == cycle - 1 and word != held[1]:
+                raise StreamProtocolError(f"{self.name}: payload changed at cycle {cycle} "
+                                          f"while stalled ({held[1]:#x} -> {word:#x})")
+            if self._ready_now():
+                self._take(cycle, word)
             else:
                 self.stalls += 1
-        return self._high
+                self._held = (cycle, word)
+        elif held is not None and held[0] == cycle - 1 and not in_reset:
+            raise StreamProtocolError(f"{self.name}: valid dropped at cycle {cycle} without a handshake")
+        self._high = high
+        return high
 
     def _record(self, cycle, value):
         self.beats.append((cycle, value))
@@ -342,17 +367,13 @@ class StreamSink(StreamMonitor):
             self.ready.value = int(ready)
             self._ready = ready
 
-    def _sample(self, cycle, in_reset):
-        self._high = self.valid.value == 1
-        if self._high and not in_reset:
-            if self._ready:
-                word = int(self.payload.value)
-                value = unpack(self.layout, word) if self.layout is not None else word
-                self.queue.append(value)
-                self._record(cycle, value)
-            else:
-                self.stalls += 1
-        return self._high
+    def _ready_now(self):
+        return self._ready
+
+    def _take(self, cycle, word):
+        value = unpack(self.layout, word) if self.layout is not None else word
+        self.queue.append(value)
+        self._record(cycle, value)
 
     async def take(self, n, timeout_cycles=None):
         """The next ``n`` values taken, in order (waits for them)."""
