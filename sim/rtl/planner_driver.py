@@ -25,6 +25,7 @@ from navcores.hdl.harmonic.cluster import COLS, ROWS
 from navcores.hdl.harmonic.planner import Code, Op, command_layout, response_layout
 from navcores.models.harmonic import pad_to_blocks, reachable
 
+from .clock import PERIOD_NS
 from .stream import Streams, pauses
 
 __all__ = ["PlannerDriver", "planner_params", "run_planner_rtl", "Op", "Code"]
@@ -92,7 +93,8 @@ class PlannerDriver:
         return await self.command(Op.START, p1=p1, step=step, p_last=p_last, iters=iters)
 
     async def wait_idle(self, poll=POLL, limit=10**8, progress=None):
-        from cocotb.triggers import ClockCycles, FallingEdge
+        """STATUS every ``poll`` cycles until the run is over; its last response."""
+        from cocotb.triggers import FallingEdge, Timer
         waited = 0
         while True:
             st = await self.command(Op.STATUS)
@@ -100,7 +102,7 @@ class PlannerDriver:
                 return st
             if progress:
                 progress(st)
-            await ClockCycles(self.dut.clk, poll)
+            await Timer(poll * PERIOD_NS, unit="ns")    # one wake-up, not one per cycle
             await FallingEdge(self.dut.clk)
             waited += poll
             assert waited < limit, "the planner did not finish"
