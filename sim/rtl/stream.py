@@ -17,10 +17,10 @@ ArrayLayout or a plain shape).  This module drives them from cocotb::
 * :class:`StreamSource` presents the values queued with ``put`` / ``extend``
   one after the other and holds each (valid high, payload stable) until the
   handshake; its pause generator inserts idle cycles (valid low) before a
-  value.  ``await send(v)`` queues and returns the cycle of its handshake.
+  value; its ``beats`` record what was taken, with the cycle.
 * :class:`StreamSink` drives ``ready``: high unless its pause generator
   says pause (random back-pressure); it queues what it takes for ``recv`` /
-  ``take``.
+  ``take``, which wait for it.
 * :class:`StreamMonitor` watches a stream it does not drive.  Sources and
   sinks are monitors too: each records ``beats``, the (cycle, value) of every
   handshake, and counts ``stalls``, the cycles with valid high and ready low.
@@ -36,7 +36,7 @@ ArrayLayout or a plain shape).  This module drives them from cocotb::
   the :class:`Streams` was made (from the simulation time: no coroutine
   runs for it).  A beat's cycle is the cycle in which valid and ready were
   both high; the handshake takes effect at the rising edge that ends it, and
-  ``recv`` / ``send`` / ``take`` return just after that edge.
+  ``recv`` / ``take`` / ``wait_beats`` return just after that edge.
 * :func:`pack` / :func:`unpack`: values <-> payload words by any
   ``data.Layout`` (dicts for structs, lists for arrays, enum members for
   enum fields, signed fields signed): one packing for every core.
@@ -310,8 +310,10 @@ class StreamMonitor:
             self._waiters.remove(w)
             w[1].set()
 
-    async def _wait(self, count, timeout_cycles):
-        """Until ``count`` beats in all (just after the edge that takes the last)."""
+    async def wait_beats(self, count, timeout_cycles=None):
+        """Until ``count`` handshakes have been recorded in all (returns just
+        after the edge that takes the last); TimeoutError after
+        ``timeout_cycles`` (None: no limit)."""
         if len(self.beats) >= count:
             return
         ev = Event()
@@ -324,11 +326,6 @@ class StreamMonitor:
             self._waiters.remove((count, ev))
             raise TimeoutError(f"{self.name}: {len(self.beats)} of {count} handshakes "
                                f"after {timeout_cycles} cycles")
-
-    async def wait_beats(self, count, timeout_cycles=None):
-        """Until ``count`` handshakes have been recorded in all; TimeoutError
-        after ``timeout_cycles`` (None: no limit)."""
-        await self._wait(count, timeout_cycles)
 
 
 class StreamSink(StreamMonitor):
@@ -377,7 +374,7 @@ class StreamSink(StreamMonitor):
 
     async def take(self, n, timeout_cycles=None):
         """The next ``n`` values taken, in order (waits for them)."""
-        await self._wait(len(self.beats) - len(self.queue) + n, timeout_cycles)
+        await self.wait_beats(len(self.beats) - len(self.queue) + n, timeout_cycles)
         return [self.queue.popleft() for _ in range(n)]
 
     async def recv(self, timeout_cycles=None):
@@ -395,61 +392,36 @@ class StreamSource(StreamMonitor):
     def __init__(self, streams, name, layout=None, pause=None):
         super().__init__(streams, name, layout)
         self.pause = pause
-        self.queue = deque()                        # [value, Event or None]
+        self.queue = deque()
         self.idle = self.starved = 0
-        self._current = None
-        self._sent = []                             # send() items taken, to announce
+        self._current = None                        # the value being presented
         self._paused_now = False
         self._valid = False
         self.valid.value = 0
 
     def put(self, value):
-        """Queue ``value`` (a dict / list for the layout, or the word)."""
-        self.queue.append([value, None])
+        """Queue ``value`` (a dict / list for the layout, or the word); the
+        handshake lands in ``beats``."""
+        self.queue.append(value)
         self.streams._wake.set()
 
     def extend(self, values):
         """Queue every value of ``values``."""
-        self.queue.extend([v, None] for v in values)
+        self.queue.extend(values)
         self.streams._wake.set()
-
-    async def send(self, value, timeout_cycles=None):
-        """Queue ``value`` and wait for its handshake; return its cycle, or
-        None if a reset or :meth:`clear` dropped it."""
-        item = [value, Event()]
-        self.queue.append(item)
-        self.streams._wake.set()
-        if timeout_cycles is None:
-            await item[1].wait()
-        else:
-            await First(item[1].wait(), Timer(timeout_cycles * self.streams.period_ns, unit="ns"))
-            if not item[1].is_set():
-                raise TimeoutError(f"{self.name}: not taken after {timeout_cycles} cycles")
-        return item[0]
 
     @property
     def busy(self):
         """Something queued or being presented."""
         return self._current is not None or bool(self.queue)
 
-    async def wait_sent(self, timeout_cycles=None):
-        """Until everything queued so far has been taken."""
-        await self._wait(len(self.beats) + len(self.queue) + (self._current is not None), timeout_cycles)
-
     def clear(self):
         """Drop the queue and the value being presented (valid low), forget the counts."""
-        for item in ([self._current] if self._current else []) + list(self.queue):
-            self._drop(item)
         self.queue.clear()
         self._current = None
         self._set_valid(False)
         super().clear()
         self.idle = self.starved = 0
-
-    def _drop(self, item):
-        if item[1] is not None:
-            item[0] = None
-            item[1].set()
 
     def _set_valid(self, valid):
         if valid != self._valid:
@@ -467,31 +439,19 @@ class StreamSource(StreamMonitor):
                 self._paused_now = True
             else:
                 self._current = self.queue.popleft()
-                self.payload.value = pack(self.layout, self._current[0]) if self.layout is not None \
-                    else int(self._current[0])
+                self.payload.value = pack(self.layout, self._current) if self.layout is not None \
+                    else int(self._current)
         self._set_valid(self._current is not None and not in_reset)
 
     def _sample(self, cycle, in_reset):
         if in_reset:
-            if self._current is not None:           # dropped: the DUT is in reset
-                self._drop(self._current)
-                self._current = None
+            self._current = None                    # dropped: the DUT is in reset
         elif self._current is not None:
             if self.ready.value == 1:
-                item, self._current = self._current, None
-                self._record(cycle, item[0])
-                if item[1] is not None:             # send(): announced after the edge
-                    item[0] = cycle
-                    self._sent.append(item)
-                    self.streams._notify.add(self)
+                self._record(cycle, self._current)
+                self._current = None
             else:
                 self.stalls += 1
         elif self._paused_now and self.ready.value == 1:
             self.starved += 1
         return self._pending()
-
-    def _announce(self):
-        super()._announce()
-        for item in self._sent:
-            item[1].set()
-        self._sent.clear()
