@@ -58,6 +58,8 @@ PAPER = {
                            mhz=150),
     "control_decision": Figures("000", "section 5.4", "XC2V6000",
                                 other=("Control 844 slices", "Decision 3p+682 slices")),
+    "border_36x66": Figures("000", "section 5.4", "XC2V6000", of="36x66 grid's border nodes",
+                            other=("204 border nodes in 12 SRAM blocks",)),
     # paper 003 (DFLC), section 7: the core alone, with the Table 2 parameters
     "dflc_core": Figures("003", "section 7", "XC3S1500-4", of="core alone", lut4=1303, mhz=85,
                          other=("8 MULT18X18", "12 ROM64X1 + 54 ROM256X1")),
@@ -113,6 +115,16 @@ SETS = (
     Set("cluster_pmax255", "harmonic_cluster", {"depth": 1024, "p_max": 255}, emit=True),
     Set("block", "harmonic_block", BLOCK, emit=True, family="xc2v", paper=PAPER["block_48x96"]),
     Set("planner", "harmonic_planner", PLANNER, emit=True, family="xc2v", paper=PAPER["control_decision"]),
+    # The planner at p_max 126 and 254 (issue 19: the Decision's area grows linearly in p).
+    Set("planner_pmax126", "harmonic_planner", {**PLANNER, "p_max": 126, "depth": 512}, family="xc2v",
+        paper=PAPER["control_decision"]),
+    Set("planner_pmax254", "harmonic_planner", {**PLANNER, "p_max": 254, "depth": 1024}, family="xc2v",
+        paper=PAPER["control_decision"]),
+    # The border storage alone at the paper's block sizes (issue 19: its block RAMs).
+    Set("border_36x66", "harmonic_border", {"n": 36, "m": 66, "br": 2, "bc": 2, "p_max": 254}, family="xc2v",
+        paper=PAPER["border_36x66"]),
+    Set("border_48x96", "harmonic_border", {"n": 48, "m": 96, "br": 2, "bc": 2, "p_max": 254}, family="xc2v",
+        beyond="Table 3's 48x96 block"),
     Set("planner_exp", "harmonic_planner", {**PLANNER, "block_exponents": 1}, family="xc2v",
         beyond="the block-exponent option, issue 10"),
     Set("dflc_stream", "dflc_stream", {"fll": "table1"}, emit=True),

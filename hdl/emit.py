@@ -50,8 +50,10 @@ from .dflc.top import DflcStream, core_from_params  # noqa: E402
 from .edt_bfs.array import EdtArray  # noqa: E402
 from .edt_bfs.cell import EdtCell  # noqa: E402
 from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
+from .harmonic.border import Border  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
+from .harmonic.decision import Decision  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
 from .harmonic.planner import Planner  # noqa: E402
 from .harmonic.block import Block  # noqa: E402
@@ -64,6 +66,10 @@ TOPS = {
     "harmonic_node": Node,
     "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
+    "harmonic_decision": Decision,
+    # the border storage of an n x m block, for its unit test and synthesis
+    "harmonic_border": lambda n, m, br=1, bc=1, p_max=30, exponents=0, e_max=255: Border(
+        n, m, (br, bc), p_max, bool(exponents), e_max),
     "harmonic_block": lambda n, m, br=1, bc=1, p_max=30, depth=1024, exponents=0, e_max=255: Block(
         n, m, (br, bc), p_max, depth, bool(exponents), e_max),
     "harmonic_planner": lambda n=6, m=12, br=2, bc=2, p_max=30, depth=1024, block_exponents=0, e_max=255,
@@ -81,6 +87,7 @@ TOPS = {
 
 # The class whose PARAMS / CONSTRAINTS a factory above takes (when it is not a class).
 SPECS = {
+    "harmonic_border": Border,
     "harmonic_block": Block,
     "harmonic_planner": Planner,
     "dflc_core": DflcStream,

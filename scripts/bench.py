@@ -137,9 +137,8 @@ def hardware(jobs=2):
 
 # Tops that do not fit the HX8K, and the placed top whose clock their jobs use.
 CLOCK_FROM = {
-    "planner": ("block", "the planner top does not fit the HX8K (its multipliers become LUTs: the iCE40 HX has "
-                         "no DSP), so its jobs use the 6x12 block's clock, the array every iteration runs on; "
-                         "Control and Decision are not timed"),
+    "planner": ("block", "the planner top does not fit the HX8K, so its jobs use the 6x12 block's clock, "
+                         "the array every iteration runs on; Control and Decision are not timed"),
     "planner_exp": ("block", "as the planner top: the 6x12 block's clock (the exponent option's Control "
                              "and border conversion are not timed)"),
     "edt_8x8": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
