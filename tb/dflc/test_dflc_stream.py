@@ -60,8 +60,8 @@ BUILDS = {"multi": ("dflc_multi", {"set": SET}, DflcMulti), "table1": ("dflc_str
 TOP = os.environ.get("DFLC_TOP", "multi")
 # Stream latency of every instance, by hand from hdl/dflc/core.py's formula
 # (multi.py's comments); the cycles test asserts both agree with the RTL.
-LATENCIES = {"multi": {"n3": 13, "tr": 28, "or": 20, "n1": 20, "n1m": 46, "n4": 37},
-             "table1": {"": 13}}
+LATENCIES = {"multi": {"n3": 13, "tr": 35, "or": 20, "n1": 20, "n1m": 46, "n4": 41},
+             "table1": {"": 20}}
 _CONFIGS = {}
 
 
