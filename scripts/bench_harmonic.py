@@ -39,22 +39,17 @@ sys.path.insert(0, str(ROOT))       # tb/ (not installed): the test maps
 
 from tb.harmonic.harmonic_small_maps import corridor, spiral  # noqa: E402
 from navcores.models.harmonic import plan, plan_explore, reachable  # noqa: E402
-from navcores.sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 CLOCK_HZ = 150e6
 RTL_BLOCK, RTL_ITERS = (6, 12), 6          # plan()'s defaults: a 2x2-cluster block
 
 
 def bundled(name):
-    """(obstacle, [goal]) with the goal of the map's longest scenario."""
+    """(obstacle, [goal]) with the goal of the map's job (models.maps.longest_scenario)."""
     path = ROOT / "maps" / name
     obstacle = load_map(path)
-    scen = path.with_name(path.stem + "-even-10.scen")
-    if scen.exists():
-        goal = max(load_scenarios(scen, obstacle), key=lambda s: s.optimal_length).goal
-    else:
-        goal = tuple(int(x) for x in np.argwhere(~obstacle)[-1])
-    return obstacle, [goal]
+    return obstacle, [tuple(longest_scenario(path, obstacle).goal)]
 
 
 def work(res, block):

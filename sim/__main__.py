@@ -1,9 +1,10 @@
 """``python -m navcores.sim <command> ...`` (``python -m sim`` in a source tree): the project's one command line.
 
 Every command is a module ``sim/<command>.py`` with a docstring (its first
-line is the help), ``add_arguments(parser)`` and ``run(args) -> int``.  Errors
-reach the user as one line and a non-zero exit code, never as a traceback
-(``SIM_DEBUG=1`` shows the traceback of an unexpected error).
+line is the help), ``add_arguments(parser)`` and ``run(args) -> int``.  Exit
+status 0 done, 1 ran but no result, 2 bad input (one line on stderr, never a
+traceback; ``SIM_DEBUG=1`` shows the traceback of an unexpected error, which
+exits with 70).
 """
 
 import sys

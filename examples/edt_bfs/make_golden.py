@@ -20,7 +20,7 @@ import yaml
 from navcores.hdl.edt_bfs.cell import cell_widths
 from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
 from navcores.models.edt_bfs import plan_path
-from navcores.sim.mapfile import load_grid
+from navcores.models.maps import load_grid
 
 HERE = Path(__file__).resolve().parent
 MAX_BEATS = 128         # tb_edt_bfs.v's memory

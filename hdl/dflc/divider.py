@@ -5,8 +5,8 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
 from .arith import Term, mul_terms, tree_sum
-from .mf_gen import bits_for
 from .pipe import check_pipe, delay
 
 __all__ = ["Divider", "DIV_TYPES"]
@@ -41,6 +41,7 @@ class Divider(wiring.Component):
     y : Out(op_sz), zero : Out(1), v_out : Out(1)
     """
 
+    @checked_init
     def __init__(self, config, sw_w, swc_w, cpr=1):
         if config.div_type not in DIV_TYPES:
             raise ValueError(f"div_type = {config.div_type!r}: expected one of {DIV_TYPES}")
@@ -60,7 +61,7 @@ class Divider(wiring.Component):
             m.d.sync += v.eq(vs[-1])
             vs.append(v)
         m.d.sync += self.v_out.eq(vs[-1])
-        v1, v_last = vs[1], vs[-1]
+        v_last = vs[-1]
         sw1, swc1 = Signal(self.sw_w, reset_less=True), Signal(self.swc_w, reset_less=True)
         with m.If(self.v_in):
             m.d.sync += [sw1.eq(self.sw), swc1.eq(self.swc)]

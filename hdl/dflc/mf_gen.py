@@ -7,6 +7,7 @@ from amaranth.hdl import Cat, Const, Module, Mux, Shape, Signal, Value
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
 from .arith import Term, const_terms, tree_sum
 from .pipe import check_pipe, delay
 
@@ -72,6 +73,7 @@ class MfGen(wiring.Component):
     v_out : Out(1)         new degrees this cycle
     """
 
+    @checked_init
     def __init__(self, spec, ip_sz, dy_ip, psr=1, cpr=1, stride=1):
         check_pipe({"psr1_no": psr, "cpr3_no": cpr})
         self.spec, self.ip_sz, self.dy_ip, self.psr, self.cpr = spec, ip_sz, dy_ip, psr, cpr
@@ -89,7 +91,7 @@ class MfGen(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        spec, ip_sz, top = self.spec, self.ip_sz, (1 << self.ip_sz) - 1
+        spec, top = self.spec, (1 << self.ip_sz) - 1
         nseg = len(spec.seg_start)
         slots = (0, 1)
         # The distinct nonzero slopes M (signed); each gets its own constant

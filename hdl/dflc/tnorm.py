@@ -4,6 +4,7 @@ from amaranth.hdl import Const, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
 from .arith import Term, mul_terms, tree_sum
 
 __all__ = ["Tnorm", "SEL_OPS"]
@@ -25,6 +26,7 @@ class Tnorm(wiring.Component):
     w : Out(dy_ip)             firing strength
     """
 
+    @checked_init
     def __init__(self, n, dy_ip, sel_op):
         if sel_op not in SEL_OPS:
             raise ValueError(f"sel_op = {sel_op!r}: expected one of {SEL_OPS}")

@@ -1,12 +1,14 @@
 """An n x m block of 3x6 clusters with its border nodes (paper 000, 5.1, 5.4)."""
 
-from amaranth.hdl import Cat, Module, Signal, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .border import Border, BorderExponentsSignature
 from .cluster import COLS, NODES, ROWS, Cluster
+from .limits import (BLOCKS_WHY, CLUSTERS_WHY, DEPTH_WHY, E_WHY, MAX_BLOCKS_SIDE, MAX_CLUSTERS, MAX_DEPTH, MAX_E,
+                     MAX_WORDS, WORDS_WHY)
 
 __all__ = ["Block", "BlockControlSignature", "BlockHostSignature"]
 
@@ -101,7 +103,9 @@ class BlockHostSignature(wiring.Signature):
         Word address and cluster (k = i*CC + j for cluster (i, j)).
     wdata : Out(18); we : Out(1)
         Write the cluster's word (18 nodes' bits); a write also updates the
-        border storage of the block's edge nodes.
+        border storage of the block's edge nodes, one cycle later (keep the
+        clusters from writing in that cycle: a run writes from its
+        iteration's cycle 2 on).
     rdata : In(18)
         The addressed cluster's word, one cycle after the address.
     """
@@ -160,21 +164,26 @@ class Block(wiring.Component):
 
     # hdl.emit's names: br, bc are ``blocks`` = (BR, BC).
     PARAMS = (
-        Param("n", int, lo=ROWS, doc=f"block rows, a multiple of {ROWS}",
-              message=f"block rows n={{value!r}}: must be a positive multiple of {ROWS}"),
-        Param("m", int, lo=COLS, doc=f"block columns, a multiple of {COLS}",
-              message=f"block columns m={{value!r}}: must be a positive multiple of {COLS}"),
-        Param("br", int, 1, lo=1, doc="block rows of the map (BR)",
-              message="blocks: BR={value!r} must be an integer >= 1"),
-        Param("bc", int, 1, lo=1, doc="block columns of the map (BC)",
-              message="blocks: BC={value!r} must be an integer >= 1"),
-        Param("p_max", int, 30, lo=2, doc="largest precision",
-              message="precision p_max={value!r} is not supported: p must be at least 2"),
-        Param("depth", int, 1024, lo=1, doc="words per cluster RAM"),
+        Param("n", int, lo=ROWS, hi=ROWS * MAX_CLUSTERS,
+              doc=f"block rows, a multiple of {ROWS} (at most {MAX_CLUSTERS} clusters in all, see the constraint)",
+              message=f"block rows n={{value!r}}: must be a positive multiple of {ROWS}, at most {{hi}} "
+                      f"({CLUSTERS_WHY})"),
+        Param("m", int, lo=COLS, hi=COLS * MAX_CLUSTERS,
+              doc=f"block columns, a multiple of {COLS} (at most {MAX_CLUSTERS} clusters in all)",
+              message=f"block columns m={{value!r}}: must be a positive multiple of {COLS}, at most {{hi}} "
+                      f"({CLUSTERS_WHY})"),
+        Param("br", int, 1, lo=1, hi=MAX_BLOCKS_SIDE, doc=f"block rows of the map (BR; {BLOCKS_WHY})",
+              message=f"blocks: BR={{value!r}} must be an integer in 1..{{hi}} ({BLOCKS_WHY})"),
+        Param("bc", int, 1, lo=1, hi=MAX_BLOCKS_SIDE, doc=f"block columns of the map (BC; {BLOCKS_WHY})",
+              message=f"blocks: BC={{value!r}} must be an integer in 1..{{hi}} ({BLOCKS_WHY})"),
+        Param("p_max", int, 30, lo=2, hi=MAX_DEPTH - 2, doc="largest precision (p_max + 2 <= depth)",
+              message="precision p_max={value!r} is not supported: p must be in 2..{hi} (p_max + 2 <= depth)"),
+        Param("depth", int, 1024, lo=1, hi=MAX_DEPTH, doc=f"words per cluster RAM (at most 2**20: {DEPTH_WHY})",
+              message=f"depth={{value!r}}: must be an integer in 1..{{hi}} ({DEPTH_WHY})"),
         Param("exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
               message="exponents={value!r}: must be True or False"),
-        Param("e_max", int, 255, lo=1, doc="largest block exponent (with exponents)",
-              message="e_max={value!r}: must be an integer >= 1"),
+        Param("e_max", int, 255, lo=1, hi=MAX_E, doc=f"largest block exponent (with exponents; {E_WHY})",
+              message=f"e_max={{value!r}}: must be an integer in 1..{{hi}} ({E_WHY})"),
     )
     CONSTRAINTS = (
         Constraint(f"n % {ROWS} == 0", lambda p: p["n"] % ROWS == 0,
@@ -186,8 +195,17 @@ class Block(wiring.Component):
                    "a map of {br}x{bc} = {b} blocks at p_max={p_max} needs "
                    "{b} * (p_max+2) = {words} words per cluster RAM, but the RAM depth is {depth}",
                    lambda p: {"b": p["br"] * p["bc"], "words": p["br"] * p["bc"] * (p["p_max"] + 2)}),
+        Constraint(f"(n / {ROWS}) * (m / {COLS}) <= {MAX_CLUSTERS}",
+                   lambda p: (p["n"] // ROWS) * (p["m"] // COLS) <= MAX_CLUSTERS,
+                   "a {n}x{m} block is {c} clusters; at most " f"{MAX_CLUSTERS} ({CLUSTERS_WHY})",
+                   lambda p: {"c": (p["n"] // ROWS) * (p["m"] // COLS)}, why=CLUSTERS_WHY),
+        Constraint("clusters * depth <= 2**22", lambda p: (p["n"] // ROWS) * (p["m"] // COLS) * p["depth"] <= MAX_WORDS,
+                   "{c} clusters of {depth} words are {w} RAM words; at most " f"{MAX_WORDS} ({WORDS_WHY})",
+                   lambda p: {"c": (p["n"] // ROWS) * (p["m"] // COLS),
+                              "w": (p["n"] // ROWS) * (p["m"] // COLS) * p["depth"]}, why=WORDS_WHY),
     )
 
+    @checked_init
     def __init__(self, n, m, blocks=(1, 1), p_max=30, depth=1024, exponents=False, e_max=255):
         BR, BC = blocks
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=BR, bc=BC, p_max=p_max, depth=depth,
@@ -215,9 +233,9 @@ class Block(wiring.Component):
         n, mm, CR, CC, S = self.n, self.m, self.CR, self.CC, self.stride
         ctl, host = self.control, self.host
         if self.exponents:
-            border = Border(n, mm, (self.BR, self.BC), S, exponents=True, e_max=self.e_max)
+            border = Border(n, mm, (self.BR, self.BC), self.p_max, exponents=True, e_max=self.e_max)
         else:
-            border = Border(n, mm, (self.BR, self.BC), S)
+            border = Border(n, mm, (self.BR, self.BC), self.p_max)
         m.submodules.border = border
         ekw = {"exponents": True} if self.exponents else {}
         cl = [[Cluster(depth=self.depth, p_max=self.p_max, **ekw) for _ in range(CC)] for _ in range(CR)]
@@ -272,16 +290,24 @@ class Block(wiring.Component):
             border.cntR.eq(c0.cntR), border.r_cnt.eq(c0.r_cnt),
         ]
 
-        # Border storage writes: the edge nodes' bits of the clusters' write
-        # port while iterating (all clusters write the same address), or of
-        # the host word for the one cluster the host writes.
-        idle = ~c0.busy
-        m.d.comb += border.w_addr.eq(c0.w_addr)
-        with m.If(idle):
-            m.d.comb += border.w_addr.eq(host.addr)
-        # The border RAMs' segments: each cluster edge that faces another
-        # block, with the word bits of its nodes (top/bottom rows, left/right
-        # columns of the block).
+        # Border storage writes, whole edge words (every lane of the four
+        # edges): while iterating, the edge nodes' bits of the clusters'
+        # write port (all clusters write the same address); after a host
+        # write, one cycle later, the edge words at its address: every
+        # cluster's port A read that address in the write's cycle (the host
+        # port's read while idle), the written cluster's word is the host's.
+        # So LOAD, one cluster at a time, keeps the lane words whole.
+        fill = Signal()
+        fill_addr, fill_k = Signal.like(host.addr), Signal.like(host.cluster)
+        fill_data = Signal.like(host.wdata)
+        m.d.sync += fill.eq(~c0.busy & host.we)
+        with m.If(~c0.busy & host.we):
+            m.d.sync += [fill_addr.eq(host.addr), fill_k.eq(host.cluster), fill_data.eq(host.wdata)]
+        m.d.comb += [border.w_addr.eq(Mux(fill, fill_addr, c0.w_addr)),
+                     border.w_en.eq(fill | (c0.busy & c0.w_en))]
+        # The border nodes by cluster edge segment: each cluster edge that
+        # faces another block, with the word bits of its nodes (top/bottom
+        # rows, left/right columns of the block).
         segments = []
         for j in range(CC):
             cols = slice(COLS * j, COLS * (j + 1))
@@ -293,13 +319,9 @@ class Block(wiring.Component):
                          ("right", i, CC - 1, rows, [bit(r, COLS - 1) for r in range(ROWS)])]
         for side, i, j, sl, bits in segments:
             c = cl[i][j]
-            en = getattr(border, f"en_{side}")[sl]
-            d = getattr(border, f"w_{side}")[sl]
-            with m.If(idle):
-                m.d.comb += [d.eq(Cat(host.wdata[b] for b in bits)),
-                             en.eq(Cat([host.we & (host.cluster == i * CC + j)] * len(bits)))]
-            with m.Else():
-                m.d.comb += [d.eq(Cat(c.w_data[b] for b in bits)), en.eq(Cat([c.w_en] * len(bits)))]
+            word = Mux(fill_k == i * CC + j, fill_data, c.host_rdata)
+            m.d.comb += getattr(border, f"w_{side}")[sl].eq(
+                Mux(fill, Cat(word[b] for b in bits), Cat(c.w_data[b] for b in bits)))
         if self.exponents:
             self._exponents(m, border, [c for row in cl for c in row], base)
         return m

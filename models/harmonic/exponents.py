@@ -323,7 +323,8 @@ class ExponentGrid(BlockGrid):
 
 
 def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
-                   e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False, events=()):
+                   e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False, events=(),
+                   progress=None):
     """The block-synchronous planner (:func:`~models.harmonic.plan`) with one exponent per block.
 
     Number format: block b's node with stored mantissa v (p+1 bits, the word
@@ -415,4 +416,4 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     re-picked every block and changed nothing; asserted here).
     """
     grid = ExponentGrid(obstacle, goals, block, iters, schedule, headroom, e_max, repick, ceiling, rtl)
-    return run(grid, events=events, trace=trace)
+    return run(grid, events=events, trace=trace, progress=progress)

@@ -16,7 +16,7 @@ __all__ = ["plan"]
 
 
 def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=(),
-         block_exponents=False, **exponent_options):
+         block_exponents=False, progress=None, **exponent_options):
     """Block-synchronous relaxation with increasing precision (section 4).
 
     The map (``obstacle``: bool H x W, True = obstacle; ``goals``: mask or
@@ -57,11 +57,12 @@ def plan(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), events=(),
     orders.
 
     ``block_exponents=True``: the block-exponent variant, see
-    :func:`plan_exponents` (``exponent_options`` go there).
+    :func:`plan_exponents` (``exponent_options`` go there).  ``progress``:
+    called after every sweep (:func:`models.harmonic.schedule.run`).
     """
     if block_exponents:
         return plan_exponents(obstacle, goals, block=block, iters=iters, schedule=schedule, events=events,
-                              **exponent_options)
+                              progress=progress, **exponent_options)
     if exponent_options:
         raise ValueError(f"{sorted(exponent_options)}: options of block_exponents=True only")
-    return run(BlockGrid(obstacle, goals, block, iters, schedule), events=events)
+    return run(BlockGrid(obstacle, goals, block, iters, schedule), events=events, progress=progress)

@@ -59,6 +59,8 @@ timing                 the Control module's cycle accounting
 trace                  None or a list that gets (event, p, exponents,
                        values, cycles) after every visit, re-pick, check,
                        clear pass and precision rise
+progress               None or ``progress(result, p, cycles)`` after every
+                       pass (update or check): the commands' progress line
 =====================  =========================================================
 
 Where later work goes: skipping still blocks in plan() and the RTL (issue 19)
@@ -239,7 +241,7 @@ class EveryBlock:
         return changed
 
 
-def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None):
+def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None, progress=None):
     """Run the schedule on ``grid`` (see the hook table above) and
     return its :class:`PlanResult`.
 
@@ -314,6 +316,8 @@ def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None):
         res.sweeps += 1
         level["sweeps"] += 1
         passes += 1
+        if progress is not None:
+            progress(res, grid.p, cycles)
         if cleared() or (changed if visits is None else visits.again(changed)):
             continue
         maxima, extra = grid.check(level)      # a check pass: nothing written

@@ -32,7 +32,7 @@ from navcores.models.edt_bfs import plan_path
 from navcores.models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, TileEngine, Timing, largest_map,
                                   plan_path_tiled, ram_blocks, state_bits)
 from references import MOVES, bfs_hops, exact_di, lowest_parent, scipy_edt
-from navcores.sim.mapfile import load_grid
+from navcores.models.maps import load_grid
 from navcores.sim.rtl.runner import seed_from_env
 
 MAPS = Path(__file__).resolve().parents[2] / "maps"

@@ -18,7 +18,7 @@ import pytest
 
 from harmonic_small_maps import corridor, pocket, spiral
 from navcores.models.harmonic import ASCENT_MOVES, ascent_next, ascent_reaches, one, trajectory
-from navcores.sim.mapfile import load_map, load_scenarios
+from navcores.models.maps import load_map, load_scenarios
 
 import harmonic_fields as hf
 

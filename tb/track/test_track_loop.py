@@ -99,8 +99,20 @@ def test_slip_drift(dflc):
 
 
 def test_params_checked(dflc):
-    with pytest.raises(ValueError, match="lookahead must be > 0"):
-        TrackerParams(lookahead=0)
+    """The run's ranges live in models/tracker.py (check_run), with reasons;
+    a start past the end of a single chain is refused (nothing to track)."""
+    from navcores.models.tracker import MAX_PERIODS, RangeError
+    for kw, match in ((dict(lookahead=0), r"lookahead 0: must be in \(0, 1\]"),
+                      (dict(speed=0.001), r"speed 0.001: must be in \[0.008, 1\] \(m/s: the Khepera II"),
+                      (dict(speed=float("nan")), "speed nan: must be a finite number"),
+                      (dict(kappa_fs=-1), "kappa_fs -1")):
+        with pytest.raises(RangeError, match=match):
+            TrackerParams(**kw)
+    with pytest.raises(ValueError, match="past the end of the path"):
+        ClosedLoop(CURVE, dflc, start=(5.0, 0.0, 0.0))
+    long = Swam([[0, 0], [3e4, 1]])
+    with pytest.raises(ValueError, match=f"may need 144002800 control periods of 12.5 ms .a 3e.04 m path.* at most {MAX_PERIODS}"):
+        ClosedLoop(long, dflc)
 
 
 def test_fired_rules(dflc):
