@@ -43,7 +43,7 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, RisingEdge
 
-from navcores.hdl.dflc.top import config_for, split_params, stream_latency
+from navcores.hdl.dflc.top import config_for, fifo_depth, split_params, stream_latency
 from navcores.models.dflc import Dflc
 from navcores.sim.rtl.clock import PERIOD_NS
 from navcores.sim.rtl.dflc_driver import DflcDriver
@@ -245,7 +245,10 @@ async def reset_mid_stream(dut):
 
 
 async def _reset_mid_stream(dut, drv, config, par, model, rng):
-    codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(30)]
+    # more samples than the output FIFO's credits, so the source is still
+    # busy when the reset comes whatever the instance's latency
+    count = fifo_depth(config, **par) + 30
+    codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(count)]
     drv.source.extend(codes)
     await ClockCycles(dut.clk, rng.randrange(20, 40))
     assert len(drv.source.beats) > 0 and drv.source.busy, "some samples entered before the reset, some not"
