@@ -154,25 +154,6 @@ class _View:
         self.__dict__.update(fields)
 
 
-def _sum3(m, a, b, c, width, name):
-    """``a + b + c`` in ``width`` signed bits as one carry chain: a carry-save
-    level (sum and majority bits, one LUT each) before a single adder.  (yosys
-    builds two chains in series from ``a + b + c``.)"""
-    terms = [v for v in (a, b, c) if not (isinstance(v, int) and v == 0)]
-    if len(terms) < 3:
-        return sum(terms[1:], terms[0])
-    ops = []
-    for k, v in enumerate(terms):
-        x = Signal(signed(width), name=f"{name}_op{k}")
-        m.d.comb += x.eq(v)
-        ops.append(x)
-    a, b, c = ops
-    s = Signal(signed(width), name=f"{name}_s")
-    cy = Signal(signed(width), name=f"{name}_c")
-    m.d.comb += [s.eq(a ^ b ^ c), cy.eq(((a & b) | (a & c) | (b & c)) << 1)]
-    return s + cy
-
-
 def cell_logic(m, w, ctl, regs, nbs):
     """Fig. 2's logic of one cell into module ``m``; returns its ``changed`` value.
 
@@ -191,7 +172,7 @@ def cell_logic(m, w, ctl, regs, nbs):
         big_x = (Cat(C(1, 1), nb.dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), nb.dx).as_signed()) if sr else 0
         big_y = (Cat(C(1, 1), nb.dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), nb.dy).as_signed()) if sc else 0
         d = Signal(signed(cw), name=f"d2_{i}")
-        m.d.comb += d.eq(_sum3(m, nb.d2, big_x, big_y, cw, f"csa_{i}"))
+        m.d.comb += d.eq(nb.d2 + big_x + big_y)
         x = Signal(signed(w["dx"]), name=f"dx_{i}")
         y = Signal(signed(w["dy"]), name=f"dy_{i}")
         m.d.comb += [x.eq((nb.dx + sr) if sr else nb.dx), y.eq((nb.dy + sc) if sc else nb.dy)]   # INC (eq. 1)
