@@ -31,7 +31,7 @@ def result_layout(config):
 
 def latency(config, parallel=False, **pipe):
     """Cycles from the ``i_stream`` handshake to ``o_stream.valid`` (the
-    timing table of :class:`DflcCore`); 2^n + 8 (9 parallel) at the default
+    timing table of :class:`DflcCore`); 2^n + 15 (16 parallel) at the default
     generics."""
     g = check_pipe(pipe, op_sz=config.op_sz)
     p = 1 if parallel else 1 << config.n

@@ -10,9 +10,12 @@ PIPE_KEYS = ("psr1_no", "psr2_no", "psr3_no", "psr4_no",
              "cpr1_no", "cpr2_no", "cpr3_no", "cpr4_no", "cpr5_no",
              "cpr6_no", "cpr7_no", "cpr8_no", "cpr9_no")
 
-# This core's default (the design as it was before the generics were opened:
-# same latency 2^n + 8, same size); every value is a register count on the
-# route / in the component hdl/dflc/core.py's docstring names.
+# This core's default: the design as it was before the generics were opened
+# (latency 2^n + 8), with cpr6 3 and cpr9 6 so that one adder level of the
+# fabric products (hdl/dflc/arith.py) lies between registers: 182 MHz on the
+# LFE5U-85F (issue 17); latency 2^n + 15, still 2^n clocks per sample.  Every
+# value is a register count on the route / in the component hdl/dflc/core.py's
+# docstring names.
 PIPE_DEFAULTS = {"psr1_no": 1, "psr2_no": 0, "psr3_no": 0, "psr4_no": 1,
                  "cpr1_no": 0, "cpr2_no": 1, "cpr3_no": 1, "cpr4_no": 0, "cpr5_no": 2,
                  "cpr6_no": 3, "cpr7_no": 0, "cpr8_no": 0, "cpr9_no": 6}
