@@ -40,8 +40,10 @@ class EdtBfs(wiring.Component):
     """Parallel_Path_Plan on a ``height`` x ``width`` array: EDT, cfr, BFS, path.
 
     One job: a command, then the image, then the results.  The controller
-    holds the k counter and runs the paper's three modes (section IV) one
-    iteration per clock, each until an iteration changes nothing.
+    holds the k counter (and ``kk`` = k² + k, the cells' threshold in the
+    squared-distance form, :class:`EdtCell`) and runs the paper's three modes
+    (section IV) one iteration per clock, each until an iteration changes
+    nothing.
 
     Ports
     -----
