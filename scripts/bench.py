@@ -625,7 +625,9 @@ def main(argv=None):
         ap.error(f"--skip: unknown part(s) {sorted(skip - set(PARTS))}; parts: {','.join(PARTS)}")
     OUT.mkdir(parents=True, exist_ok=True)
     t0 = time.time()
-    previous = previous_report(Path(args.md)) if skip else None
+    previous = (previous_results(Path(args.json)) or previous_report(Path(args.md))) if skip else None
+    if previous and not previous["hardware"]:       # the last full run's table, from its report
+        previous["hardware"] = (previous_report(Path(args.md)) or {}).get("hardware", [])
     hw = hardware() if "hardware" not in skip else {t[0]: {} for t in TOPS}
     for (key, core, name, params, *_), h in zip(TOPS, hw.values()):
         h["top"] = top_name(name, params)
@@ -634,7 +636,7 @@ def main(argv=None):
         if part not in skip:
             rows += fn(speeds, problems)
         elif previous:
-            rows += [r for r in previous["rows"] if r["core"] == CORE_OF_PART[part]]
+            rows += [carry(r) for r in previous["rows"] if r["core"] == CORE_OF_PART[part]]
     if "simspeed" not in skip:
         probes(speeds)
     extra = study_sections() if "study" not in skip else []
@@ -671,6 +673,37 @@ def main(argv=None):
 CORE_OF_PART = {"harmonic": "harmonic", "dflc": "dflc", "edt": "edt_bfs"}
 _CARRIED = ("carried from the run of {date}: its cycles and software time; its clock, another top's "
             "(issue 17), is dropped")
+
+
+def previous_results(path):
+    """The results.json a partial run replaces, as :func:`previous_report`
+    returns it, each job row with the (name, params) of its top; None when
+    there is none."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    tops = data.get("job_tops") or {}
+    rows = [{**r, "job_top": (tops[r["top"]]["name"], tops[r["top"]]["params"]) if r.get("top") in tops else None,
+             "carried_from": r.get("carried_from") or data["date"]} for r in data.get("rows", [])]
+    hw = data.get("hardware_carried")
+    return {"date": data["date"], "hardware": hw or [], "rows": rows}
+
+
+def carry(r):
+    """A job row of an earlier run: its cycles and software time; its clock
+    measured anew (the fit flow's cache makes that quick when the top is
+    unchanged) when the row names its top, else none."""
+    r = dict(r)
+    top = r.pop("job_top", None)
+    if top is None:
+        return {**r, "fmax_mhz": None, "hw_seconds": None, "speedup": None,
+                "note": _CARRIED.format(date=r["carried_from"])}
+    new = row(job_clock(*top), r["core"], r["job"], r["cycles"], r["cycles_source"], r["software"],
+              r["sw_seconds"], r["paper"])
+    new["note"] = "; ".join(x for x in (f"cycles and software time carried from the run of {r['carried_from']}",
+                                        new["note"]) if x)
+    return {**new, "carried_from": r["carried_from"]}
 
 
 def previous_report(path):
