@@ -175,7 +175,7 @@ def job_clock(name, params, larger_than=None):
         else:
             over = ", ".join(f"{o['resource']} {o['used']}/{o['available']}" for o in f["overflow"])
             r = {**base, **{k: f[k] for k in ("fits", "fmax_mhz", "lut4", "ff", "bram", "dsp", "critical_path")},
-                 "seeds": f["seeds"], "tools": f["tools"],
+                 "seeds": f["seeds"], "tools": f["tools"], "utilisation": f["utilisation"],
                  "why": "" if f["fits"] else f"does not fit the {JOB_PART.name}: {over}"}
     _CLOCKS[module] = r
     return r
@@ -374,18 +374,34 @@ EDT_MAPS = ("room-32-32-4.map", "random-32-32-10.map", "maze-32-32-2.map",
             "room-64-64-8.map", "random-64-64-10.map")
 EDT_DFAR = 0            # cfr = every free pixel (d_i > 0)
 EDT_SIZES = (8, 16, 32)  # RTL jobs on crops of room-32-32-4 (Verilator refuses > 256 cells: not simulated)
-# The untiled array that runs a job has the map's size; arrays of these sizes
-# are placed in ascending order, and one larger than an array that does not
-# fit is not placed (it holds that array and more).
-EDT_FIT_SIZES = (8, 9)
+# The untiled array that runs a job has the map's size.  The 8x8 array is
+# placed; a larger one is placed too unless the 8x8's LUT4s scaled by the cell
+# count exceed the part by EDT_MARGIN (a larger array's cells are no smaller:
+# fewer of them are edge cells and its widths are no narrower), and then it
+# does not fit.
+EDT_PLACED = 8
+EDT_MARGIN = 1.5
 
 
 def edt_clock(h, w):
-    """job_clock of the edt_bfs top at h x w (not placed when a placed array
-    no larger in either side does not fit)."""
-    smaller = [job_clock("edt_bfs", {"height": s, "width": s}) for s in EDT_FIT_SIZES if s <= min(h, w)]
-    no_fit = next((c for c in smaller if c["fits"] is False), None)
-    return job_clock("edt_bfs", {"height": h, "width": w}, larger_than=no_fit)
+    """job_clock of the edt_bfs top at h x w (see EDT_PLACED)."""
+    base = job_clock("edt_bfs", {"height": EDT_PLACED, "width": EDT_PLACED})
+    if (h, w) == (EDT_PLACED, EDT_PLACED):
+        return base
+    if base["fits"] is False and h >= EDT_PLACED and w >= EDT_PLACED:
+        return job_clock("edt_bfs", {"height": h, "width": w}, larger_than=base)
+    cap = (base.get("utilisation") or {}).get("TRELLIS_COMB")
+    est = base["lut4"] * h * w / EDT_PLACED ** 2 if base.get("lut4") else None
+    if base["fits"] and est and cap and est > EDT_MARGIN * cap[1]:
+        module = top_name("edt_bfs", {"height": h, "width": w})
+        _CLOCKS[module] = {**base, "top": module, "params": {"height": h, "width": w}, "fits": False,
+                           "fmax_mhz": None, "lut4": None, "ff": None, "bram": None, "dsp": None,
+                           "critical_path": None, "seeds": [],
+                           "why": f"does not fit the {JOB_PART.name}: about {est:,.0f} LUT4 ({h * w} cells at the "
+                                  f"{EDT_PLACED}x{EDT_PLACED} array's {base['lut4']:,} LUT4 per "
+                                  f"{EDT_PLACED ** 2}), over {EDT_MARGIN}x its {cap[1]:,} (not placed)"}
+        return _CLOCKS[module]
+    return job_clock("edt_bfs", {"height": h, "width": w})
 
 
 def _free_corners(grid):
