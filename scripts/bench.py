@@ -656,6 +656,10 @@ def main(argv=None):
     if "simspeed" not in skip:
         probes(speeds)
     extra = study_sections() if "study" not in skip else []
+    if "study" in skip and previous:            # the studies of the report this one replaces, as they were
+        carried = (previous_report(Path(args.md)) or {}).get("extra", [])
+        extra = [(title, f"(Not measured by this run: carried from the run of {previous['date']}.)\n\n{text}")
+                 for title, text in carried]
     reg_file = ROOT / "build" / "regression.json"
     reg = json.loads(reg_file.read_text()) if reg_file.exists() else {}
     data = {
@@ -748,7 +752,15 @@ def previous_report(path):
                          "software": None if cells["software"] == "—" else cells["software"],
                          "sw_seconds": _seconds(cells["software time"]), "speedup": None,
                          "paper": cells["paper"], "note": _CARRIED.format(date=date), "carried_from": date})
-    return {"date": date, "hardware": hw_lines, "rows": rows}
+    extra = []              # the study sections (titles as study_sections() writes them)
+    for part in text.split("\n## ")[1:]:
+        title, _, body = part.partition("\n")
+        if title.startswith("Harmonic planner"):
+            body = body.strip("\n")
+            if body.startswith("(Not measured by this run"):
+                body = body.split("\n\n", 1)[1] if "\n\n" in body else ""
+            extra.append((title, body.split("\nBench run time:")[0].rstrip()))
+    return {"date": date, "hardware": hw_lines, "rows": rows, "extra": extra}
 
 
 def _number(text):
