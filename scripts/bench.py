@@ -641,6 +641,7 @@ def main(argv=None):
         ap.error(f"--skip: unknown part(s) {sorted(skip - set(PARTS))}; parts: {','.join(PARTS)}")
     OUT.mkdir(parents=True, exist_ok=True)
     t0 = time.time()
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None     # the software times depend on it
     previous = (previous_results(Path(args.json)) or previous_report(Path(args.md))) if skip else None
     if previous and not previous["hardware"]:       # the last full run's table, from its report
         previous["hardware"] = (previous_report(Path(args.md)) or {}).get("hardware", [])
@@ -665,7 +666,9 @@ def main(argv=None):
     data = {
         "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
         "machine": f"{platform.node()}: {platform.processor() or platform.machine()}, "
-                   f"{os.cpu_count()} CPUs, Python {platform.python_version()}, {_cpu_model()}",
+                   f"{os.cpu_count()} CPUs, Python {platform.python_version()}, {_cpu_model()}"
+                   + (f", load average {load:.1f} at the start (other work on the machine slows the "
+                      f"software timings)" if load is not None and load > (os.cpu_count() or 1) else ""),
         "rows": rows,
         "regression_seconds": reg.get("seconds") if reg.get("passed") else None,
         "regression_jobs": reg.get("jobs"), "regression_date": reg.get("date"),
