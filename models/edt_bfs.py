@@ -53,6 +53,21 @@ obstacle every pixel is reached; in an image **without obstacles** no pixel
 ever is: there ``distance`` is -1, ``nearest`` is (-1, -1), and such pixels
 count as infinitely far from any obstacle, i.e. they are in the cfr.
 
+The squared-distance form (what the RTL cell holds)
+---------------------------------------------------
+For a done pixel ``delta_k = K(k) - d2`` with ``K(k) = k^2 + k``, so a cell
+may hold ``d2`` instead of ``delta`` and the iteration becomes
+(:func:`edt_step_d2`): ``d2_i = d2(p_i) + DX_i + DY_i`` (= dx_i^2 + dy_i^2),
+the MAX of delta_i is the MIN of d2_i (same ties: the smallest index), the
+third enable condition ``delta_m + 2k >= 0`` is ``d2_m <= K(k)``, the new
+cell stores ``d2_m``, and eq. (4) is no operation (a done pixel's d2 never
+changes).  With ``delta = K(k-1) - d2`` on the way in and ``K(k) - d2`` on
+the way out the two forms are the same map for *any* integer inputs, not
+only on the invariant: :func:`edt_step` (the paper's form) is computed by
+:func:`edt_step_d2` through that change of variable.  The hardware gains an
+iteration without the +2k adder after the MAX tree and without the done
+pixels' eq. (4) adder; the controller broadcasts ``K(k)`` (hdl/edt_bfs/cell.py).
+
 8-neighbour propagation is not an exact EDT (a pixel inherits only its
 neighbours' nearest obstacles); tb/edt_bfs/test_edt_model.py measures how
 often di and d2 differ from scipy's exact EDT.
@@ -81,7 +96,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = [
-    "OFFSETS", "EdtResult", "EdtBfsResult", "widths", "edt", "edt_step",
+    "OFFSETS", "EdtResult", "EdtBfsResult", "widths", "k_square", "edt", "edt_step", "edt_step_d2",
     "cfr_map", "bfs", "bfs_step", "trace_path", "plan_path", "job_cycles",
 ]
 
@@ -167,41 +182,61 @@ def _shift(a, off, fill):
     return out
 
 
-def edt_step(k, done, delta, dx, dy, di, nb):
-    """One EDT iteration of a cell (or of arrays of cells, elementwise).
+def k_square(k):
+    """``K(k) = k^2 + k``: a done pixel holds ``delta_k = K(k) - d2`` (the invariant above)."""
+    return k * k + k
 
-    ``nb[i]`` for i = 1..8 is ``(done_i, delta_i, dx_i, dy_i)`` of neighbour
+
+def edt_step_d2(k, done, d2, dx, dy, di, nb):
+    """One EDT iteration in the squared-distance form (the RTL cell's), of a
+    cell or of arrays of cells, elementwise.
+
+    ``nb[i]`` for i = 1..8 is ``(done_i, d2_i, dx_i, dy_i)`` of neighbour
     p_i (done_i = 0 outside the array).  Returns
-    ``(done, delta, dx, dy, di, changed)`` after the iteration.  This is the
-    cell of Fig. 2: ADD-SUB + INC per neighbour, the MAX tree with its
-    tie-break, the +2k adder and the three enable conditions.
+    ``(done, d2, dx, dy, di, changed)`` after the iteration.  Fig. 2 with
+    ``d2 = K(k) - delta``: ADD-SUB (``d2_i = d2(p_i) + DX_i + DY_i``) + INC
+    per neighbour, the MIN tree with its tie-break, the enable conditions
+    (the third is ``d2_m <= K(k)``).
     """
     cands = []
     for i in range(1, 9):
-        nd, ndelta, ndx, ndy = nb[i]
+        nd, nd2, ndx, ndy = nb[i]
         sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
-        cx = ndx + sr
-        cy = ndy + sc
         big_x = (2 * sr * ndx + 1) if sr else 0
         big_y = (2 * sc * ndy + 1) if sc else 0
-        cands.append((np.asarray(nd, dtype=bool), ndelta - big_x - big_y, cx, cy))
+        cands.append((np.asarray(nd, dtype=bool), nd2 + big_x + big_y, ndx + sr, ndy + sc))
 
     def cmp_mux(a, b):
-        # keep a (lower indices) unless b is valid and (a invalid or b > a)
+        # keep a (lower indices) unless b is valid and (a invalid or b < a)
         va, da, xa, ya = a
         vb, db, xb, yb = b
-        sel = vb & (~va | (db > da))
+        sel = vb & (~va | (db < da))
         return (va | vb, np.where(sel, db, da), np.where(sel, xb, xa), np.where(sel, yb, ya))
 
     lvl1 = [cmp_mux(cands[j], cands[j + 1]) for j in (0, 2, 4, 6)]
     lvl2 = [cmp_mux(lvl1[0], lvl1[1]), cmp_mux(lvl1[2], lvl1[3])]
     vm, dm, xm, ym = cmp_mux(lvl2[0], lvl2[1])
-    dnew = dm + 2 * k
     done = np.asarray(done, dtype=bool)
-    enable = ~done & vm & (dnew >= 0)
-    out_delta = np.where(enable, dnew, np.where(done, delta + 2 * k, delta))
-    return (done | enable, out_delta, np.where(enable, xm, dx), np.where(enable, ym, dy),
+    enable = ~done & vm & (dm <= k_square(k))
+    return (done | enable, np.where(enable, dm, d2), np.where(enable, xm, dx), np.where(enable, ym, dy),
             np.where(enable, k, di), enable)
+
+
+def edt_step(k, done, delta, dx, dy, di, nb):
+    """One EDT iteration in the paper's form (eq. 1-4, Fig. 2), of a cell or
+    of arrays of cells, elementwise.
+
+    ``nb[i]`` for i = 1..8 is ``(done_i, delta_i, dx_i, dy_i)`` of neighbour
+    p_i (done_i = 0 outside the array).  Returns
+    ``(done, delta, dx, dy, di, changed)`` after the iteration: ADD-SUB +
+    INC per neighbour, the MAX tree with its tie-break, the +2k adder and the
+    three enable conditions; a done pixel adds 2k (eq. 4).  Computed as
+    :func:`edt_step_d2` of ``d2 = K(k-1) - delta`` (exact for any integers).
+    """
+    base = k_square(k - 1)
+    nb2 = {i: (nd, base - nde, ndx, ndy) for i, (nd, nde, ndx, ndy) in nb.items()}
+    done_out, d2, dx, dy, di, enable = edt_step_d2(k, done, base - np.asarray(delta), dx, dy, di, nb2)
+    return done_out, np.where(done_out, k_square(k) - d2, delta), dx, dy, di, enable
 
 
 def edt(obstacle, progress=None):
@@ -214,13 +249,13 @@ def edt(obstacle, progress=None):
     h, w = obstacle.shape
     done = obstacle.copy()
     zero = np.zeros((h, w), dtype=np.int64)
-    delta, dx, dy, di = zero.copy(), zero.copy(), zero.copy(), zero.copy()
+    d2, dx, dy, di = zero.copy(), zero.copy(), zero.copy(), zero.copy()
     k = 0
     while True:
         k += 1
-        nb = {i: (_shift(done, OFFSETS[i], False), _shift(delta, OFFSETS[i], 0),
+        nb = {i: (_shift(done, OFFSETS[i], False), _shift(d2, OFFSETS[i], 0),
                   _shift(dx, OFFSETS[i], 0), _shift(dy, OFFSETS[i], 0)) for i in range(1, 9)}
-        done, delta, dx, dy, di, changed = edt_step(k, done, delta, dx, dy, di, nb)
+        done, d2, dx, dy, di, changed = edt_step_d2(k, done, d2, dx, dy, di, nb)
         if progress is not None:
             progress(k)
         if not changed.any():
@@ -231,7 +266,7 @@ def edt(obstacle, progress=None):
     distance = np.where(done, di, -1)
     sq = np.where(done, dx * dx + dy * dy, -1)
     return EdtResult(distance=distance, vector=np.stack([dx, dy], axis=-1), nearest=nearest,
-                     sqdist=sq, done=done, delta=delta, iterations=k)
+                     sqdist=sq, done=done, delta=np.where(done, k_square(k) - d2, 0), iterations=k)
 
 
 def cfr_map(done, distance, dfar):

@@ -20,7 +20,11 @@ by this run on this machine; only the papers' column is copied.
    which must equal the cycle-exact models (the report says "DIFFERENT" and
    the run exits 1 otherwise); whole-map cycle counts of maps too large to
    simulate come from the models, whose cycle counts the regression proves
-   equal to the RTL's.  Time per job = cycles / the top's iCE40 clock.
+   equal to the RTL's.  Time per job = cycles / the clock of the top that
+   runs the job (its own parameters: the map's array, the stream top) on
+   the LFE5U-85F (:data:`JOB_PART`, scripts/fmax.py's fit flow, the median
+   of 3 seeds); a job whose top does not fit that part has no hardware time
+   and says so.  No job borrows another top's clock.
 3. The software a user would pick instead (scripts/software.py), timed on
    the same inputs: median of several repeats (the count is in the table).
 4. Simulation speed: simulated cycles per wall second, from the cocotb
@@ -36,6 +40,12 @@ the options (a re-run only redoes what changed).
 
     python scripts/bench.py [--md BENCHMARKS.md] [--json build/bench/results.json]
                             [--skip study,simspeed,...]
+
+A run that skips some parts (``--skip``) rewrites the report with the parts
+it ran; the job rows of the cores it skipped and the hardware table, when
+skipped, are carried from the report it replaces, marked as such, with
+their clocks and hardware times dropped unless a job clock of this run
+covers them (so a partial run never shows a borrowed clock).
 """
 
 import argparse
@@ -135,17 +145,40 @@ def hardware(jobs=2):
         return dict(zip([t[0] for t in TOPS], pool.map(one, TOPS)))
 
 
-# Tops that do not fit the HX8K, and the placed top whose clock their jobs use.
-CLOCK_FROM = {
-    "planner": ("block", "the planner top does not fit the HX8K, so its jobs use the 6x12 block's clock, "
-                         "the array every iteration runs on; Control and Decision are not timed"),
-    "planner_exp": ("block", "as the planner top: the 6x12 block's clock (the exponent option's Control "
-                             "and border conversion are not timed)"),
-    "edt_8x8": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
-                            "registered in the harness as its neighbours' registers drive them in the array)"),
-    "edt_16x16": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
-                              "registered in the harness as its neighbours' registers drive them in the array)"),
-}
+# Every job's clock: the top that runs it, placed and routed on this part (issue 17).
+JOB_PART = fmax_mod.part("LFE5U-85F")
+_CLOCKS = {}
+
+
+def job_clock(name, params, larger_than=None):
+    """The clock of top ``name`` at ``params`` on :data:`JOB_PART`: the fit
+    flow's figures (cached under build/cache), as a dict with top, part,
+    fits, fmax_mhz, lut4, ff, bram, dsp, critical_path and why (the reason
+    when there is no clock).  ``larger_than``: a job_clock() result of a
+    smaller top of the same kind that does not fit; this one then is not
+    placed (it holds that top and more)."""
+    module = top_name(name, params)
+    if module in _CLOCKS:
+        return _CLOCKS[module]
+    base = {"top": module, "name": name, "params": params, "part": JOB_PART.name, "fits": None,
+            "fmax_mhz": None, "lut4": None, "ff": None, "bram": None, "dsp": None, "critical_path": None}
+    if larger_than is not None and larger_than.get("fits") is False:
+        r = {**base, "fits": False,
+             "why": f"does not fit the {JOB_PART.name}: larger than {larger_than['top']}, which does not "
+                    f"({larger_than['why']})"}
+    else:
+        log(f"fit {module} on {JOB_PART.name}")
+        try:
+            f = fmax_mod.fit(name, params, JOB_PART, jobs=1)
+        except fmax_mod.FlowError as e:
+            r = {**base, "why": f"no clock: {str(e).splitlines()[0]}"}
+        else:
+            over = ", ".join(f"{o['resource']} {o['used']}/{o['available']}" for o in f["overflow"])
+            r = {**base, **{k: f[k] for k in ("fits", "fmax_mhz", "lut4", "ff", "bram", "dsp", "critical_path")},
+                 "seeds": f["seeds"], "tools": f["tools"], "utilisation": f["utilisation"],
+                 "why": "" if f["fits"] else f"does not fit the {JOB_PART.name}: {over}"}
+    _CLOCKS[module] = r
+    return r
 
 
 # --- simulation helpers -------------------------------------------------------
@@ -206,18 +239,16 @@ def hw_time(cycles, mhz):
     return cycles / (mhz * 1e6) if cycles is not None and mhz else None
 
 
-def row(hw, core, job, top_key, cycles, cycles_source, software_=None, sw_seconds=None,
-        paper="-", note=""):
-    """One job: resources of ``top_key``'s top; its clock, or where that top
-    does not fit the HX8K the clock named in CLOCK_FROM (and the note says so)."""
-    h = hw.get(top_key, {})
-    mhz = h.get("fmax_mhz")
-    if mhz is None and top_key in CLOCK_FROM and hw.get(CLOCK_FROM[top_key][0], {}).get("fmax_mhz"):
-        mhz = hw[CLOCK_FROM[top_key][0]]["fmax_mhz"]
-        note = "; ".join(x for x in (note, CLOCK_FROM[top_key][1]) if x)
+def row(clock, core, job, cycles, cycles_source, software_=None, sw_seconds=None, paper="-", note=""):
+    """One job on the top of ``clock`` (a :func:`job_clock` result): its
+    resources and clock on that part; no clock when it does not fit (the
+    note says why)."""
+    mhz = clock["fmax_mhz"] if clock["fits"] else None
+    if not mhz and clock.get("why"):
+        note = "; ".join(x for x in (note, f"{clock['top']}: {clock['why']}") if x)
     t = hw_time(cycles, mhz)
-    return {"core": core, "job": job, "top": h.get("top") or top_key,
-            "ff": h.get("ff"), "lut4": h.get("lut4"), "mult": h.get("mult"), "bram": h.get("bram"),
+    return {"core": core, "job": job, "top": clock["top"], "part": clock["part"], "fits": clock["fits"],
+            "ff": clock["ff"], "lut4": clock["lut4"], "dsp": clock["dsp"], "bram": clock["bram"],
             "fmax_mhz": mhz, "cycles": cycles, "cycles_source": cycles_source,
             "hw_seconds": t, "software": software_, "sw_seconds": sw_seconds,
             "speedup": sw_seconds / t if t and sw_seconds else None, "paper": paper, "note": note}
@@ -231,7 +262,7 @@ HARMONIC_SCHEDULE = tuple(range(16, 257, 16))      # the command line's default 
 HARMONIC_BLOCK, HARMONIC_I = (6, 12), 6           # the synthesized planner's block, plan()'s I
 
 
-def harmonic_jobs(hw, speeds, problems):
+def harmonic_jobs(speeds, problems):
     from navcores.models.harmonic import plan
     from navcores.sim.rtl.planner_driver import planner_params
     from navcores.sim.rtl.runner import run
@@ -252,23 +283,24 @@ def harmonic_jobs(hw, speeds, problems):
     rng = np.random.default_rng(36)
     block = rng.random((36, 66)) < 0.1
     sw = software.jacobi_iteration(block, [(35, 65)])
-    rows.append(row(hw, "harmonic", "one iteration, 36x66 block, p = 128", "block", per_iter,
+    # the job's top: a 36x66 block (6 x 11 clusters) at the cluster's p_max
+    rows.append(row(job_clock("harmonic_block", {**catalog.BLOCK, "n": 36, "m": 66, "br": 1, "bc": 1}),
+                    "harmonic", "one iteration, 36x66 block, p = 128", per_iter,
                     "cluster RTL (icarus), done-to-done", sw["software"] + " (10% random obstacles)",
-                    sw["sw_seconds"], catalog.PAPER_JOBS["harmonic_iteration"],
-                    "clock: the 6x12 block top's (a 36x66 block is the same array, larger)"))
+                    sw["sw_seconds"], catalog.PAPER_JOBS["harmonic_iteration"]))
     # Whole maps: the model's cycles (cycle-exact), one confirmed on the RTL below.
     for name in HARMONIC_MAPS:
         ob, goal, _ = bundled(name)
         log(f"harmonic model on {name}")
         r = plan(ob, [goal], block=HARMONIC_BLOCK, iters=HARMONIC_I, schedule=HARMONIC_SCHEDULE)
         sw = software.dirichlet_solve(ob, [goal])
-        rows.append(row(hw, "harmonic", f"converged field, {name[:-4]} ({ob.shape[0]}x{ob.shape[1]}), p = {r.p}",
-                        "planner", r.cycles if r.converged else None,
+        # the job's top: a planner with the map's blocks and a RAM for them
+        rows.append(row(job_clock("harmonic_planner", planner_params(ob.shape, HARMONIC_BLOCK, HARMONIC_SCHEDULE[-1])),
+                        "harmonic", f"converged field, {name[:-4]} ({ob.shape[0]}x{ob.shape[1]}), p = {r.p}",
+                        r.cycles if r.converged else None,
                         f"model (cycle-exact), {HARMONIC_BLOCK[0]}x{HARMONIC_BLOCK[1]} blocks, I = {HARMONIC_I}, "
                         f"p 16:16:{r.p}, {r.block_iterations} block iterations", sw["software"], sw["sw_seconds"],
-                        catalog.PAPER_JOBS["harmonic_map"],
-                        "resources: the synthesized planner top's (6x12 blocks, 2x2, depth 256); this map "
-                        "needs more blocks and a deeper RAM"))
+                        catalog.PAPER_JOBS["harmonic_map"]))
     # The model's cycle count confirmed on the planner RTL (3x6 blocks: it simulates in minutes).
     ob, goal, _ = bundled("empty-16-16.map")
     model = plan(ob, [goal], block=(3, 6), iters=HARMONIC_I, schedule=HARMONIC_SCHEDULE)
@@ -278,9 +310,10 @@ def harmonic_jobs(hw, speeds, problems):
         cyc = out.get("cycles")
         if cyc != model.cycles:
             problems.append(f"planner RTL on {sim}: {out.get('error') or cyc} cycles, model {model.cycles}")
-        _job_speed(speeds, speed, sim, "harmonic_planner", planner_params(ob.shape, (3, 6), HARMONIC_SCHEDULE[-1]))
-        rows.append(row(hw, "harmonic", f"converged field, empty-16-16, 3x6 blocks, p = {model.p}", "planner",
-                        cyc, f"planner RTL ({sim}); model {model.cycles}"
+        top = planner_params(ob.shape, (3, 6), HARMONIC_SCHEDULE[-1])
+        _job_speed(speeds, speed, sim, "harmonic_planner", top)
+        rows.append(row(job_clock("harmonic_planner", top), "harmonic",
+                        f"converged field, empty-16-16, 3x6 blocks, p = {model.p}", cyc, f"planner RTL ({sim}); model {model.cycles}"
                         + ("" if cyc == model.cycles else " DIFFERENT"),
                         paper="-"))
     return rows
@@ -288,7 +321,7 @@ def harmonic_jobs(hw, speeds, problems):
 
 # --- jobs: DFLC --------------------------------------------------------------------
 
-def dflc_jobs(hw, speeds, problems):
+def dflc_jobs(speeds, problems):
     from navcores.hdl.dflc.top import stream_latency
     from navcores.sim.dflc import rtl_params
     from navcores.models.dflc import Dflc, load_fll
@@ -305,7 +338,7 @@ def dflc_jobs(hw, speeds, problems):
     log("pyfuzzylite on the Table 1 controller")
     sw = software.fuzzylite_engine(fll, many)
     rows = []
-    for key, par in (("dflc", False), ("dflc_par", True)):
+    for par in (False, True):
         want_cps = 1 if par else 1 << model.config.n
         want_lat = stream_latency(model.config, par)
         got = {}
@@ -313,16 +346,18 @@ def dflc_jobs(hw, speeds, problems):
             out, speed = sim_cli(["dflc", "--input", str(csv)] + (["--parallel"] if par else []), sim, "dflc_stream")
             got[sim] = (out.get("cycles_per_sample"), out.get("latency"))
             if got[sim] != (want_cps, want_lat):
-                problems.append(f"DFLC {key} on {sim}: {out.get('error') or got[sim]}, model {(want_cps, want_lat)}")
+                problems.append(f"DFLC {'parallel' if par else 'sequential'} on {sim}: "
+                                f"{out.get('error') or got[sim]}, model {(want_cps, want_lat)}")
             _job_speed(speeds, speed, sim, "dflc_stream", rtl_params(fll, model.config, "lut", par))
         cps, lat = got["verilator"] if got["verilator"][0] else got["icarus"]
         what = "parallel option" if par else "Table 1 controller"
         src = (f"DFLC stream RTL (icarus, verilator): {cps} clocks/sample, latency {lat}"
                + ("" if all(g == (want_cps, want_lat) for g in got.values()) else " DIFFERENT"))
         paper = "-" if par else catalog.PAPER_JOBS["dflc_sample"]
-        rows.append(row(hw, "dflc", f"one sample, {what}, single call", key, cps, src,
+        clock = job_clock("dflc_stream", rtl_params(fll, model.config, "lut", par))   # the stream top runs it
+        rows.append(row(clock, "dflc", f"one sample, {what}, single call", cps, src,
                         sw["software"] + " (one call per sample)", sw["sw_seconds"], paper))
-        rows.append(row(hw, "dflc", f"one sample, {what}, vectorized", key, cps, src,
+        rows.append(row(clock, "dflc", f"one sample, {what}, vectorized", cps, src,
                         sw["software"] + f" (numpy arrays of {sw['vectorized_samples']} samples)",
                         sw["vectorized_seconds_per_sample"], paper))
     return rows
@@ -339,8 +374,34 @@ EDT_MAPS = ("room-32-32-4.map", "random-32-32-10.map", "maze-32-32-2.map",
             "room-64-64-8.map", "random-64-64-10.map")
 EDT_DFAR = 0            # cfr = every free pixel (d_i > 0)
 EDT_SIZES = (8, 16, 32)  # RTL jobs on crops of room-32-32-4 (Verilator refuses > 256 cells: not simulated)
-EDT_BIG_NOTE = ("resources: the 16x16 array's (the largest synthesized); a map's job needs an array of the "
-                "map's size, 4x (32x32) or 16x (64x64) the cells")
+# The untiled array that runs a job has the map's size.  The 8x8 array is
+# placed; a larger one is placed too unless the 8x8's LUT4s scaled by the cell
+# count exceed the part by EDT_MARGIN (a larger array's cells are no smaller:
+# fewer of them are edge cells and its widths are no narrower), and then it
+# does not fit.
+EDT_PLACED = 8
+EDT_MARGIN = 1.5
+
+
+def edt_clock(h, w):
+    """job_clock of the edt_bfs top at h x w (see EDT_PLACED)."""
+    base = job_clock("edt_bfs", {"height": EDT_PLACED, "width": EDT_PLACED})
+    if (h, w) == (EDT_PLACED, EDT_PLACED):
+        return base
+    if base["fits"] is False and h >= EDT_PLACED and w >= EDT_PLACED:
+        return job_clock("edt_bfs", {"height": h, "width": w}, larger_than=base)
+    cap = (base.get("utilisation") or {}).get("TRELLIS_COMB")
+    est = base["lut4"] * h * w / EDT_PLACED ** 2 if base.get("lut4") else None
+    if base["fits"] and est and cap and est > EDT_MARGIN * cap[1]:
+        module = top_name("edt_bfs", {"height": h, "width": w})
+        _CLOCKS[module] = {**base, "top": module, "params": {"height": h, "width": w}, "fits": False,
+                           "fmax_mhz": None, "lut4": None, "ff": None, "bram": None, "dsp": None,
+                           "critical_path": None, "seeds": [],
+                           "why": f"does not fit the {JOB_PART.name}: about {est:,.0f} LUT4 ({h * w} cells at the "
+                                  f"{EDT_PLACED}x{EDT_PLACED} array's {base['lut4']:,} LUT4 per "
+                                  f"{EDT_PLACED ** 2}), over {EDT_MARGIN}x its {cap[1]:,} (not placed)"}
+        return _CLOCKS[module]
+    return job_clock("edt_bfs", {"height": h, "width": w})
 
 
 def _free_corners(grid):
@@ -348,7 +409,7 @@ def _free_corners(grid):
     return tuple(int(x) for x in free[0]), tuple(int(x) for x in free[-1])
 
 
-def edt_jobs(hw, speeds, problems):
+def edt_jobs(speeds, problems):
     from navcores.models.edt_bfs import plan_path
     rows = []
     room = load_map(ROOT / "maps" / "room-32-32-4.map")
@@ -369,24 +430,23 @@ def edt_jobs(hw, speeds, problems):
                 problems.append(f"EDT/BFS {size}x{size} on {sim}: {cyc} cycles, model {model.cycles}")
             _job_speed(speeds, speed, sim, "edt_bfs", {"height": size, "width": size})
             if cyc is not None:
-                rows.append(row(hw, "edt_bfs", f"room-32-32-4 crop {size}x{size}: EDT, cfr, BFS, path, read-out",
-                                "edt_8x8" if size == 8 else "edt_16x16", cyc, f"EDT/BFS RTL ({sim}); model {model.cycles}"
-                                + ("" if cyc == model.cycles else " DIFFERENT"),
-                                note="" if size <= 16 else EDT_BIG_NOTE))
+                rows.append(row(edt_clock(size, size), "edt_bfs",
+                                f"room-32-32-4 crop {size}x{size}: EDT, cfr, BFS, path, read-out",
+                                cyc, f"EDT/BFS RTL ({sim}); model {model.cycles}"
+                                + ("" if cyc == model.cycles else " DIFFERENT")))
     for name in EDT_MAPS:
         ob, goal, start = bundled(name)
         model = plan_path(ob, [goal], start, EDT_DFAR)
         sw = software.edt_bfs(ob, [goal], EDT_DFAR)
         compute = model.iterations_edt + 1 + model.iterations_bfs
-        rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): whole job", "edt_16x16",
+        clock = edt_clock(*ob.shape)
+        rows.append(row(clock, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): whole job",
                         model.cycles, f"model (cycle-exact): EDT {model.iterations_edt} + cfr 1 + BFS "
                         f"{model.iterations_bfs} iterations, path {len(model.path)}, load and read-out",
-                        sw["software"], sw["sw_seconds"], catalog.PAPER_JOBS["edt_job"],
-                        EDT_BIG_NOTE))
-        rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): EDT + cfr + BFS only", "edt_16x16",
+                        sw["software"], sw["sw_seconds"], catalog.PAPER_JOBS["edt_job"]))
+        rows.append(row(clock, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): EDT + cfr + BFS only",
                         compute, "model (cycle-exact): the computing cycles, without load, path and read-out",
-                        sw["software"], sw["sw_seconds"], catalog.PAPER_JOBS["edt_job"],
-                        EDT_BIG_NOTE))
+                        sw["software"], sw["sw_seconds"], catalog.PAPER_JOBS["edt_job"]))
     return rows
 
 
@@ -473,26 +533,53 @@ def markdown(data, hw, extra):
         "| top | family | FF | LUT4 | MULT18X18 | BRAM | iCE40 clock (MHz) | iCE40 logic cells | paper |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    for key, core, name, params, family, hier, paper in TOPS:
+    if data.get("hardware_carried"):        # a partial run: the last full table, as it was
+        lines[-4:] = [f"Not measured by this run: the table of the run of {data['carried_from']}, as it was "
+                      "(its resources from yosys `synth_xilinx -nowidelut`, its clocks from nextpnr-ice40 on "
+                      "the iCE40-HX8K, each the top's own).", "", *data["hardware_carried"]]
+    if data.get("carried_from"):
+        lines[2] = lines[2].replace("except the papers' column.", "except the papers' column and what is "
+                                    f"marked as carried from the run of {data['carried_from']} (a partial run: "
+                                    f"`--skip {data['skipped']}`).")
+    for key, core, name, params, family, hier, paper in ([] if data.get("hardware_carried") else TOPS):
         h = hw[key]
         util = (h.get("utilization") or {}).get("ICESTORM_LC", "").replace(" ", "")
         clock = _fmt(h.get("fmax_mhz")) if h.get("fmax_mhz") else h.get("error", "—")
         lines.append(f"| {top_name(name, params)}{' (hierarchical)' if hier else ''} | {family} | {_fmt(h.get('ff'))} | "
                      f"{_fmt(h.get('lut4'))} | {_fmt(h.get('mult'))} | {_fmt(h.get('bram'))} | {clock} | {util or '—'} | {paper} |")
     lines += ["", "## Jobs: hardware time against the software a user would pick", "",
-              f"Hardware time = cycles / the top's iCE40 clock above. Software: median of "
+              f"Hardware time = cycles / the clock of the top that runs the job (the *top* column: its own "
+              f"parameters, e.g. an EDT/BFS array of the map's size), placed and routed on the **{JOB_PART.name}** "
+              f"({JOB_PART.package}, speed {JOB_PART.speed_grade}) in the registered harness of scripts/fmax.py "
+              f"(`make fit`, median of 3 seeds; *job tops* below). A job whose top does not fit that part has "
+              f"no hardware time. Software: median of "
               f"{software.REPEATS} runs after a warm-up (pyfuzzylite single calls: 3 runs of 50 calls; "
               "vectorized: 3 runs), on this machine.", "",
-              "| core | job | cycles | cycles from | clock (MHz) | hardware time | software | software time | "
+              "| core | job | cycles | cycles from | top | clock (MHz) | hardware time | software | software time | "
               "speed-up | paper |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in data["rows"]:
-        lines.append(f"| {r['core']} | {r['job']} | {_fmt(r['cycles'])} | {r['cycles_source']} | {_fmt(r['fmax_mhz'])} | "
-                     f"{_fmt(r['hw_seconds'], 's')} | {r['software'] or '—'} | {_fmt(r['sw_seconds'], 's')} | "
+        clock = (f"{_fmt(r['fmax_mhz'])} ({r['part']})" if r["fmax_mhz"] else
+                 f"does not fit the {r['part']}" if r["fits"] is False else "—")
+        lines.append(f"| {r['core']} | {r['job']} | {_fmt(r['cycles'])} | {r['cycles_source']} | {r['top'] or '—'} | "
+                     f"{clock} | {_fmt(r['hw_seconds'], 's')} | {r['software'] or '—'} | {_fmt(r['sw_seconds'], 's')} | "
                      f"{_fmt(r['speedup'])}{'×' if r['speedup'] else ''} | {r['paper']} |")
     notes = sorted({r["note"] for r in data["rows"] if r["note"]})
     if notes:
         lines += ["", "Notes: " + "; ".join(notes) + "."]
+    tops = data.get("job_tops", {})
+    if tops:
+        lines += ["", f"### Job tops on the {JOB_PART.name}", "",
+                  "| top | fits | LUT4 | FF | BRAM | DSP | clock (MHz) | seeds | critical path |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for t in tops.values():
+            cp = t.get("critical_path")
+            path = f"{cp['from']['cell']} -> {cp['to']['cell']}, {cp['delay_ns']} ns, {cp['logic_levels']} levels" \
+                if cp else "—"
+            fits = "yes" if t["fits"] else (t.get("why") or "—")
+            seeds = ", ".join(f"{x['fmax_mhz']:.1f}" for x in t.get("seeds", [])) or "—"
+            lines.append(f"| {t['top']} | {fits} | {_fmt(t['lut4'])} | {_fmt(t['ff'])} | {_fmt(t['bram'])} | "
+                         f"{_fmt(t['dsp'])} | {_fmt(t['fmax_mhz'])} | {seeds} | {path} |")
     lines += ["", "## Simulation speed", "",
               "Simulated clock cycles per wall-clock second, build excluded. *Probe*: sim/rtl/simspeed.py, reset "
               "and then the clock runs with the inputs at 0 for "
@@ -554,22 +641,34 @@ def main(argv=None):
         ap.error(f"--skip: unknown part(s) {sorted(skip - set(PARTS))}; parts: {','.join(PARTS)}")
     OUT.mkdir(parents=True, exist_ok=True)
     t0 = time.time()
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else None     # the software times depend on it
+    previous = (previous_results(Path(args.json)) or previous_report(Path(args.md))) if skip else None
+    if previous and not previous["hardware"]:       # the last full run's table, from its report
+        previous["hardware"] = (previous_report(Path(args.md)) or {}).get("hardware", [])
     hw = hardware() if "hardware" not in skip else {t[0]: {} for t in TOPS}
     for (key, core, name, params, *_), h in zip(TOPS, hw.values()):
         h["top"] = top_name(name, params)
     speeds, problems, rows = {}, [], []
     for part, fn in (("harmonic", harmonic_jobs), ("dflc", dflc_jobs), ("edt", edt_jobs)):
         if part not in skip:
-            rows += fn(hw, speeds, problems)
+            rows += fn(speeds, problems)
+        elif previous:
+            rows += [carry(r) for r in previous["rows"] if r["core"] == CORE_OF_PART[part]]
     if "simspeed" not in skip:
         probes(speeds)
     extra = study_sections() if "study" not in skip else []
+    if "study" in skip and previous:            # the studies of the report this one replaces, as they were
+        carried = (previous_report(Path(args.md)) or {}).get("extra", [])
+        extra = [(title, f"(Not measured by this run: carried from the run of {previous['date']}.)\n\n{text}")
+                 for title, text in carried]
     reg_file = ROOT / "build" / "regression.json"
     reg = json.loads(reg_file.read_text()) if reg_file.exists() else {}
     data = {
         "date": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
         "machine": f"{platform.node()}: {platform.processor() or platform.machine()}, "
-                   f"{os.cpu_count()} CPUs, Python {platform.python_version()}, {_cpu_model()}",
+                   f"{os.cpu_count()} CPUs, Python {platform.python_version()}, {_cpu_model()}"
+                   + (f", load average {load:.1f} at the start (other work on the machine slows the "
+                      f"software timings)" if load is not None and load > (os.cpu_count() or 1) else ""),
         "rows": rows,
         "regression_seconds": reg.get("seconds") if reg.get("passed") else None,
         "regression_jobs": reg.get("jobs"), "regression_date": reg.get("date"),
@@ -577,6 +676,10 @@ def main(argv=None):
                                   for top, by in speeds.items()},
         "sim_cycles_per_second_detail": speeds,
         "hardware": hw,
+        "job_tops": {k: v for k, v in _CLOCKS.items()},
+        "hardware_carried": previous["hardware"] if previous and "hardware" in skip else None,
+        "carried_from": previous["date"] if previous else None,
+        "skipped": ",".join(sorted(skip)),
         "problems": problems,
         "bench_seconds": None,
     }
@@ -588,6 +691,91 @@ def main(argv=None):
     for p in problems:
         log(f"PROBLEM: {p}")
     return 1 if problems else 0
+
+
+CORE_OF_PART = {"harmonic": "harmonic", "dflc": "dflc", "edt": "edt_bfs"}
+_CARRIED = ("carried from the run of {date}: its cycles and software time; its clock, another top's "
+            "(issue 17), is dropped")
+
+
+def previous_results(path):
+    """The results.json a partial run replaces, as :func:`previous_report`
+    returns it, each job row with the (name, params) of its top; None when
+    there is none."""
+    try:
+        data = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return None
+    tops = data.get("job_tops") or {}
+    rows = [{**r, "job_top": (tops[r["top"]]["name"], tops[r["top"]]["params"]) if r.get("top") in tops else None,
+             "carried_from": r.get("carried_from") or data["date"]} for r in data.get("rows", [])]
+    hw = data.get("hardware_carried")
+    return {"date": data["date"], "hardware": hw or [], "rows": rows}
+
+
+def carry(r):
+    """A job row of an earlier run: its cycles and software time; its clock
+    measured anew (the fit flow's cache makes that quick when the top is
+    unchanged) when the row names its top, else none."""
+    r = dict(r)
+    top = r.pop("job_top", None)
+    if top is None:
+        return {**r, "fmax_mhz": None, "hw_seconds": None, "speedup": None,
+                "note": _CARRIED.format(date=r["carried_from"])}
+    new = row(job_clock(*top), r["core"], r["job"], r["cycles"], r["cycles_source"], r["software"],
+              r["sw_seconds"], r["paper"])
+    new["note"] = "; ".join(x for x in (f"cycles and software time carried from the run of {r['carried_from']}",
+                                        new["note"]) if x)
+    return {**new, "carried_from": r["carried_from"]}
+
+
+def previous_report(path):
+    """The report a partial run replaces: {date, hardware (the table's lines),
+    rows (job rows as :func:`row` dicts, clock and hardware time dropped)};
+    None when there is none."""
+    if not path.exists():
+        return None
+    text = path.read_text()
+    date = re.search(r"on (\d{4}-\d\d-\d\d \d\d:\d\d UTC)", text)
+    date = date.group(1) if date else "an earlier run"
+    hw = text.split("## Hardware", 1)[1].split("\n## ", 1)[0] if "## Hardware" in text else ""
+    hw_lines = [line for line in hw.splitlines() if line.startswith("|")]
+    jobs = text.split("## Jobs", 1)[1].split("\n## ", 1)[0] if "## Jobs" in text else ""
+    rows = []
+    table = [line for line in jobs.splitlines() if line.startswith("| ")]
+    if table:
+        head = [c.strip() for c in table[0].strip("|").split("|")]
+        for line in table[1:]:
+            cells = dict(zip(head, (c.strip() for c in line.strip("|").split("|"))))
+            if "core" not in cells or cells["core"] == "---":
+                continue
+            rows.append({"core": cells["core"], "job": cells["job"], "top": None,
+                         "part": None, "fits": None, "fmax_mhz": None, "cycles": _number(cells["cycles"]),
+                         "cycles_source": cells["cycles from"], "hw_seconds": None,
+                         "software": None if cells["software"] == "—" else cells["software"],
+                         "sw_seconds": _seconds(cells["software time"]), "speedup": None,
+                         "paper": cells["paper"], "note": _CARRIED.format(date=date), "carried_from": date})
+    extra = []              # the study sections (titles as study_sections() writes them)
+    for part in text.split("\n## ")[1:]:
+        title, _, body = part.partition("\n")
+        if title.startswith("Harmonic planner"):
+            body = body.strip("\n")
+            if body.startswith("(Not measured by this run"):
+                body = body.split("\n\n", 1)[1] if "\n\n" in body else ""
+            extra.append((title, body.split("\nBench run time:")[0].rstrip()))
+    return {"date": date, "hardware": hw_lines, "rows": rows, "extra": extra}
+
+
+def _number(text):
+    try:
+        return int(text.replace(",", ""))
+    except ValueError:
+        return None
+
+
+def _seconds(text):
+    m = re.fullmatch(r"([\d.]+) (s|ms|µs|ns|ps)", text.strip())
+    return float(m.group(1)) * {"s": 1, "ms": 1e-3, "µs": 1e-6, "ns": 1e-9, "ps": 1e-12}[m.group(2)] if m else None
 
 
 def _cpu_model():

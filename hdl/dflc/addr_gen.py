@@ -1,6 +1,6 @@
 """Address generator of the DFLC (paper 003 Fig. 8 addr_gen_p)."""
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Module, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -37,8 +37,10 @@ class AddrGen(wiring.Component):
         last_k = (1 << self.n) - 1
         k_reg = Signal(self.n)
         busy = Signal()
+        # k is the counter itself: it wraps to 0 after the last combination
+        # and samples come at least 2^n cycles apart, so it is 0 at every start.
         m.d.comb += [
-            self.k.eq(Mux(self.start, 0, k_reg)),
+            self.k.eq(k_reg),
             self.active.eq(self.start | busy),
             self.first.eq(self.start),
             self.last.eq(self.active & (self.k == last_k)),

@@ -48,9 +48,13 @@ class ConsMap(wiring.Component):
         m.submodules.rule_rom = rule_rom = Memory(shape=self.idx_w, depth=len(c.rules), init=list(c.rules))
         m.submodules.s_rom = s_rom = Memory(shape=c.mf_op_sz, depth=c.mf_op_no + 1,
                                             init=list(c.singletons) + [0])
-        rp = rule_rom.read_port(domain="comb" if self.cpr == 0 else "sync")
+        # cpr2 >= 1: the rule index registered, then the ROM read (for a ROM in
+        # LUTs the register is then before the lookup, not after it; a block
+        # RAM takes the address register in); cpr2 - 1 delays of its word.
+        rp = rule_rom.read_port(domain="comb")
         sp = s_rom.read_port()
-        idx, = delay(m, [rp.data], max(self.cpr - 1, 0), "cpr")
-        m.d.comb += [rp.addr.eq(self.rule), sp.addr.eq(idx), self.c.eq(sp.data)]
+        addr, = delay(m, [self.rule], min(self.cpr, 1), "addr", reset_less=True)
+        idx, = delay(m, [rp.data], max(self.cpr - 1, 0), "cpr", reset_less=True)
+        m.d.comb += [rp.addr.eq(addr), sp.addr.eq(idx), self.c.eq(sp.data)]
         m.d.sync += self.none.eq(idx == c.mf_op_no)
         return m

@@ -6,6 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from ..params import Param, checked_init
 from .addr_gen import AddrGen
+from .arith import Term, mul_terms, tree_sum
 from .cons_map import ConsMap
 from .divider import Divider
 from .integrator import Integrator
@@ -30,7 +31,7 @@ def result_layout(config):
 
 def latency(config, parallel=False, **pipe):
     """Cycles from the ``i_stream`` handshake to ``o_stream.valid`` (the
-    timing table of :class:`DflcCore`); 2^n + 8 (9 parallel) at the default
+    timing table of :class:`DflcCore`); 2^n + 15 (16 parallel) at the default
     generics."""
     g = check_pipe(pipe, op_sz=config.op_sz)
     p = 1 if parallel else 1 << config.n
@@ -180,19 +181,21 @@ class DflcCore(wiring.Component):
         m = Module()
         c, g = self.config, self.pipe
         n, K = c.n, 1 << c.n
+        full = (1 << c.dy_ip) - 1
         accept = Signal()
         m.d.comb += accept.eq(self.i_stream.valid & self.i_stream.ready)
 
         gens = []
         for j, spec in enumerate(c.inputs):
-            gen = MfGen(spec, c.ip_sz, c.dy_ip, psr=g["psr1_no"], cpr=g["cpr3_no"])
+            gen = MfGen(spec, c.ip_sz, c.dy_ip, psr=g["psr1_no"], cpr=g["cpr3_no"], stride=c.strides[j])
             m.submodules[f"mf_gen{j}"] = gen
             m.d.comb += [gen.x.eq(self.i_stream.payload[j]), gen.v_in.eq(accept)]
             gens.append(gen)
         # psr3 (route into rul_sel_p) delays the degrees and the start alike;
         # cpr1 (addr_gen_p's outputs) delays the degrees alongside.
         v2, = delay(m, [gens[0].v_out], g["psr3_no"], "psr3_")
-        degs = [delay(m, [gen.base, gen.mu0, gen.mu1], g["psr3_no"] + g["cpr1_no"], "psr3_")
+        degs = [delay(m, [gen.r0, gen.r1, gen.mu0, gen.mu1], g["psr3_no"] + g["cpr1_no"], "psr3_",
+                      reset_less=True)
                 for gen in gens]
 
         if self.parallel:
@@ -202,8 +205,8 @@ class DflcCore(wiring.Component):
         else:
             m.submodules.addr_gen = ag = AddrGen(n)
             m.d.comb += [ag.start.eq(v2), ag.accept.eq(accept), self.i_stream.ready.eq(ag.ready)]
-            k_d, v_sel, first_d, last_d = delay(m, [ag.k, ag.active, ag.first, ag.last],
-                                                g["cpr1_no"], "cpr1_")
+            k_d, = delay(m, [ag.k], g["cpr1_no"], "cpr1_", reset_less=True)
+            v_sel, first_d, last_d = delay(m, [ag.active, ag.first, ag.last], g["cpr1_no"], "cpr1_")
             combos = [(k_d, v_sel, first_d, last_d)]
 
         # Where the w and c routes meet (the multiplier), and where w and w*c
@@ -220,54 +223,42 @@ class DflcCore(wiring.Component):
             m.submodules[f"tnorm{q}"] = tn
             m.submodules[f"cons_map{q}"] = cm
             m.d.comb += sel.k.eq(k)
-            for j, (base, mu0, mu1) in enumerate(degs):
-                m.d.comb += [sel.base[j].eq(base), sel.mu0[j].eq(mu0), sel.mu1[j].eq(mu1)]
+            for j, (r0, r1, mu0, mu1) in enumerate(degs):
+                m.d.comb += [sel.r0[j].eq(r0), sel.r1[j].eq(r1), sel.mu0[j].eq(mu0), sel.mu1[j].eq(mu1)]
             # cpr4 (rule_sel_p): the rule index and the selected degrees.
-            sel_out = delay(m, [sel.rule, *sel.deg], g["cpr4_no"], f"cpr4_{q}_")
+            sel_out = delay(m, [sel.rule, *sel.deg], g["cpr4_no"], f"cpr4_{q}_", reset_less=True)
             m.d.comb += cm.rule.eq(sel_out[0])
             m.d.comb += [tn.deg[j].eq(sel_out[1 + j]) for j in range(n)]
             # cpr5 (minmax_p) on w, then the synchronization to the c route.
-            if (g["cpr5_no"], d_wc) == (2, 2):   # the default: stages R and C of the table
-                w_r, w_c = Signal(c.dy_ip, name=f"w_r{q}"), Signal(c.dy_ip, name=f"w_c{q}")
-                m.d.sync += [w_r.eq(tn.w), w_c.eq(w_r)]
-            else:
-                w_c, = delay(m, [tn.w], d_wc, f"w_cpr5_{q}_")
+            w_c, = delay(m, [tn.w], d_wc, f"w_cpr5_{q}_", reset_less=True)
             # psr2 (s_rom -> mult) on the singleton code, then synchronization to w.
-            c_c, none_c = delay(m, [cm.c, cm.none], d_wc - g["cpr2_no"] - 1, f"psr2_{q}_")
-            # Implication PROD (the multiplier); no rule -> weight 0.
-            w_e, wc_e = Mux(none_c, 0, w_c), Mux(none_c, 0, w_c * c_c)
-            if d_m == 1:    # the default: stage M of the table (psr4 = cpr6 = 1)
-                w_m = Signal(c.dy_ip, name=f"w_m{q}")
-                wc_m = Signal(c.dy_ip + c.mf_op_sz, name=f"wc_m{q}")
-                m.d.sync += [w_m.eq(w_e), wc_m.eq(wc_e)]
-            else:           # psr4 on w, cpr6 on w*c, the shorter synchronized
-                w_p = Signal(c.dy_ip, name=f"w_p{q}")
-                wc_p = Signal(c.dy_ip + c.mf_op_sz, name=f"wc_p{q}")
-                m.d.comb += [w_p.eq(w_e), wc_p.eq(wc_e)]
-                w_m, = delay(m, [w_p], d_m, f"psr4_{q}_")
-                wc_m, = delay(m, [wc_p], d_m, f"cpr6_{q}_")
+            c_c, none_c = delay(m, [cm.c, cm.none], d_wc - g["cpr2_no"] - 1, f"psr2_{q}_",
+                                  reset_less=True)
+            # Implication PROD (the multiplier, cpr6): partial products in an
+            # adder tree with max(psr4, cpr6) register layers, w beside it
+            # (psr4).  No rule: weight 0, and c = 0 (the singleton ROM's last
+            # word), so w*c = 0 too.
+            w_e = Signal(c.dy_ip, name=f"w_e{q}")
+            m.d.comb += w_e.eq(Mux(none_c, 0, w_c))
+            w_m, = delay(m, [w_e], d_m, f"psr4_{q}_", reset_less=True)
+            wc = tree_sum(m, mul_terms(Term(w_c, 0, full), Term(c_c, 0, (1 << c.mf_op_sz) - 1)), d_m,
+                          f"cpr6_{q}")
+            wc_m = Signal(c.dy_ip + c.mf_op_sz, name=f"wc_m{q}")
+            m.d.comb += wc_m.eq(wc.value << wc.shift)
             w_m_all.append(w_m)
             wc_m_all.append(wc_m)
             if q == 0:      # the valid and first/last flags follow the same stages
-                d_flags = g["cpr4_no"] + d_wc + d_m
-                if d_flags == 3:
-                    flags = []
-                    for name, src in (("v", v_sel), ("first", first), ("last", last)):
-                        r, cc, mm = (Signal(name=f"{name}_r"), Signal(name=f"{name}_c"),
-                                     Signal(name=f"{name}_m"))
-                        m.d.sync += [r.eq(src), cc.eq(r), mm.eq(cc)]
-                        flags.append(mm)
-                else:
-                    srcs = [v_sel, Signal(name="first_s"), Signal(name="last_s")]
-                    m.d.comb += [srcs[1].eq(first), srcs[2].eq(last)]
-                    flags = delay(m, srcs, d_flags, "fl")
+                srcs = [Signal(name=name) for name in ("v_s", "first_s", "last_s")]
+                m.d.comb += [a.eq(b) for a, b in zip(srcs, (v_sel, first, last))]
+                flags = delay(m, srcs, g["cpr4_no"] + d_wc + d_m, "fl")
         v_m, first_m, last_m = flags
 
-        in_w = (self.sw_w, self.swc_w) if self.parallel else (c.dy_ip, c.dy_ip + c.mf_op_sz)
-        m.submodules.integrator = integ = Integrator(*in_w, self.sw_w, self.swc_w,
-                                                     cpr_uns=g["cpr7_no"], cpr_sig=g["cpr8_no"])
-        if self.parallel:   # adder tree: the whole sample in one cycle
-            m.d.comb += [integ.w.eq(sum(w_m_all)), integ.wc.eq(sum(wc_m_all))]
+        m.submodules.integrator = integ = Integrator(c.dy_ip, c.dy_ip + c.mf_op_sz, self.sw_w, self.swc_w,
+                                                     cpr_uns=g["cpr7_no"], cpr_sig=g["cpr8_no"],
+                                                     terms=len(w_m_all))
+        if self.parallel:   # adder trees: the whole sample in one cycle
+            m.d.comb += [integ.w[i].eq(v) for i, v in enumerate(w_m_all)]
+            m.d.comb += [integ.wc[i].eq(v) for i, v in enumerate(wc_m_all)]
         else:
             m.d.comb += [integ.w.eq(w_m_all[0]), integ.wc.eq(wc_m_all[0])]
         m.d.comb += [integ.valid.eq(v_m), integ.first.eq(first_m), integ.last.eq(last_m)]

@@ -1,16 +1,18 @@
 """Divider of the DFLC (paper 003 Fig. 8 div_array, Table 2 div_type)."""
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Array, Const, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..params import checked_init
-from .pipe import check_pipe
+from .arith import Term, mul_terms, tree_sum
+from .pipe import check_pipe, delay
 
 __all__ = ["Divider", "DIV_TYPES"]
 
 DIV_TYPES = ("array", "lut")
+ROM_PAGE_BITS = 7       # the reciprocal ROM's pages: 128 words, 7-input functions
 
 
 class Divider(wiring.Component):
@@ -59,29 +61,50 @@ class Divider(wiring.Component):
             m.d.sync += v.eq(vs[-1])
             vs.append(v)
         m.d.sync += self.v_out.eq(vs[-1])
-        v1, v_last = vs[1], vs[-1]
-        sw1, swc1 = Signal(self.sw_w), Signal(self.swc_w)
+        v_last = vs[-1]
+        sw1, swc1 = Signal(self.sw_w, reset_less=True), Signal(self.swc_w, reset_less=True)
         with m.If(self.v_in):
             m.d.sync += [sw1.eq(self.sw), swc1.eq(self.swc)]
         if c.div_type == "lut":
             r = c.recip_bits
-            init = [0] + [c.recip(s) for s in range(1, c.s_max + 1)]
-            m.submodules.recip_rom = rom = Memory(shape=r + 1, depth=c.s_max + 1, init=init)
-            rp = rom.read_port()
-            m.d.comb += rp.addr.eq(self.sw)              # R arrives with sw1, swc1
-            prod = Signal(self.swc_w + f + r + 1)
             z = Signal()
-            if self.cpr == 0:
-                m.d.comb += [prod.eq((swc1 << f) * rp.data), z.eq(sw1 == 0)]
-            else:
-                with m.If(v1):
-                    m.d.sync += [prod.eq((swc1 << f) * rp.data), z.eq(sw1 == 0)]
-            for k in range(self.cpr - 1):                # cpr9: registers after the multiplier
-                prod_d, z_d = Signal.like(prod, name=f"prod_d{k}"), Signal(name=f"z_d{k}")
-                m.d.sync += [prod_d.eq(prod), z_d.eq(z)]
-                prod, z = prod_d, z_d
+            m.d.comb += z.eq(sw1 == 0)
+            # The reciprocal table R(Sw) in LUTs (a distributed ROM, as the
+            # paper's 12 ROM64X1 + 54 ROM256X1), read from the input register:
+            # pages of 256 words (one 8-input function per bit), then the
+            # page selected by the address's top bits.  cpr9's first register
+            # holds the pages' words, its second the selected R.  (A block RAM
+            # is no faster: the ECP5 EBR's unregistered read takes 5.6 ns, and
+            # yosys cannot use its output register, so it alone caps the core
+            # at 150 MHz.)
+            init = [0] + [c.recip(s) for s in range(1, c.s_max + 1)]
+            page = 1 << min(ROM_PAGE_BITS, len(sw1))
+            pages = []
+            for i in range(-(-len(init) // page)):
+                rom = Memory(shape=r + 1, depth=page, init=init[i * page:(i + 1) * page],
+                             attrs={"rom_style": "logic"})
+                m.submodules[f"recip_rom{i}"] = rom
+                rp = rom.read_port(domain="comb")
+                m.d.comb += rp.addr.eq(sw1)
+                pages.append(rp.data)
+            top = Signal(max(len(sw1) - len(rp.addr), 1))
+            m.d.comb += top.eq(sw1 >> len(rp.addr))
+            ops = min(self.cpr, 2)
+            *pages, top, swc, z = delay(m, [*pages, top, swc1, z], min(ops, 1), "page", reset_less=True)
+            big_r = Signal(r + 1)
+            m.d.comb += big_r.eq(Array(pages)[top] if len(pages) > 1 else pages[0])
+            big_r, swc, z = delay(m, [big_r, swc, z], ops - min(ops, 1), "op", reset_less=True)
+            # y = (2^f Swc R + 2^(r-1)) >> r: the rows of the product and the
+            # rounding constant in one adder tree cut into cpr9 - ops + 1
+            # groups with a register between them; the last group ends in the
+            # output register.
+            swc_max = c.s_max * ((1 << c.mf_op_sz) - 1)
+            rows = mul_terms(Term(swc, 0, swc_max, f), Term(big_r, 0, 1 << r))
+            groups = self.cpr - ops + 1
+            total = tree_sum(m, rows + [Term(Const(1), 1, 1, r - 1)], groups, "prod", last=False)
+            z, = delay(m, [z], groups - 1, "z", reset_less=True)
             q = Signal(c.op_sz)
-            m.d.comb += q.eq((prod + (1 << (r - 1))) >> r)
+            m.d.comb += q.eq(total.value >> (r - total.shift))
         else:
             num = Signal(self.swc_w + f + 2)
             den = Signal(self.sw_w + 1)
@@ -110,8 +133,10 @@ class Divider(wiring.Component):
                 if self.cpr == 0:
                     q = nq
                     break
-                rq, rr, rd, rz = (Signal(c.op_sz, name=f"q_r{g}"), Signal(len(num), name=f"rem_r{g}"),
-                                  Signal(len(den), name=f"den_r{g}"), Signal(name=f"z_r{g}"))
+                rq, rr, rd, rz = (Signal(c.op_sz, name=f"q_r{g}", reset_less=True),
+                                  Signal(len(num), name=f"rem_r{g}", reset_less=True),
+                                  Signal(len(den), name=f"den_r{g}", reset_less=True),
+                                  Signal(name=f"z_r{g}", reset_less=True))
                 m.d.sync += [rq.eq(nq), rr.eq(rem), rd.eq(den), rz.eq(z)]
                 q, rem, den, z = rq, rr, rd, rz
         with m.If(v_last):

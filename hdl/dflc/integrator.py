@@ -5,6 +5,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from ..params import checked_init
+from .arith import Term, tree_sum
 from .pipe import check_pipe, delay
 
 __all__ = ["Integrator"]
@@ -13,43 +14,65 @@ __all__ = ["Integrator"]
 class Integrator(wiring.Component):
     """Accumulate ``sum w`` and ``sum w*c`` over the 2^n active rules of a sample.
 
-    Aggregation SUM (Table 3).  ``first`` restarts both sums; with ``last`` the
-    sums are final one cycle later, when ``done`` is high.  Exact: the widths
-    hold 2^n * full and 2^n * full * (2^MF_op_sz - 1).
+    Aggregation SUM (Table 3).  Exact: the widths hold 2^n * full and
+    2^n * full * (2^MF_op_sz - 1).
 
+    One rule per clock (``terms`` = 1): ``first`` restarts both sums; with
+    ``last`` the sums are final one cycle later, when ``done`` is high.
     ``cpr_uns`` / ``cpr_sig`` = Table 2 cpr7_no (int_uns, the Sigma w
     integrator) / cpr8_no (int_sig, Sigma w c), 0 .. 4 plain registers after
     each sum.  The divider takes both sums in the same cycle, so the shorter
     chain gets the difference as path synchronization registers: ``done``
     comes max(cpr_uns, cpr_sig) cycles after the sums are final.
 
+    All the rules of a sample at once (the parallel option, ``terms`` = 2^n
+    inputs ``w[i]``, ``wc[i]`` every cycle): two adder trees with
+    1 + max(cpr_uns, cpr_sig) registers between their levels (the
+    accumulator's register and cpr7 / cpr8); the trees' last level comes
+    after the last register, combinationally, into the divider's input
+    register, so ``sw``, ``swc`` and ``done`` have the same timing as above.
+
     Ports
     -----
-    w : In(dy_ip), wc : In(dy_ip + MF_op_sz), valid, first, last : In(1)
+    w : In(dy_ip), wc : In(dy_ip + MF_op_sz) (arrays of ``terms`` when terms > 1)
+    valid, first, last : In(1) (first and last unused when terms > 1)
     sw : Out(bits(2^n full)), swc : Out(...), done : Out(1)
     """
 
     @checked_init
-    def __init__(self, w_w, wc_w, sw_w, swc_w, cpr_uns=0, cpr_sig=0):
+    def __init__(self, w_w, wc_w, sw_w, swc_w, cpr_uns=0, cpr_sig=0, terms=1):
         check_pipe({"cpr7_no": cpr_uns, "cpr8_no": cpr_sig})
         self.sw_w, self.swc_w, self.cpr_uns, self.cpr_sig = sw_w, swc_w, cpr_uns, cpr_sig
-        super().__init__({"w": In(w_w), "wc": In(wc_w), "valid": In(1), "first": In(1), "last": In(1),
+        self.terms, self.w_max, self.wc_max = terms, (1 << w_w) - 1, (1 << wc_w) - 1
+        w, wc = (In(w_w), In(wc_w)) if terms == 1 else (In(w_w).array(terms), In(wc_w).array(terms))
+        super().__init__({"w": w, "wc": wc, "valid": In(1), "first": In(1), "last": In(1),
                           "sw": Out(sw_w), "swc": Out(swc_w), "done": Out(1)})
 
     def elaborate(self, platform):
         m = Module()
-        if self.cpr_uns == self.cpr_sig == 0:      # the accumulators are the outputs
+        d = max(self.cpr_uns, self.cpr_sig)
+        if self.terms > 1:      # adder trees, the last level after the last register
+            done = Signal()
+            m.d.sync += done.eq(self.valid)
+            done_o, = delay(m, [done], d, "cpr")
+            m.d.comb += self.done.eq(done_o)
+            for ins, hi, out, tag in ((self.w, self.w_max, self.sw, "sw"), (self.wc, self.wc_max, self.swc, "swc")):
+                total = tree_sum(m, [Term(v, 0, hi) for v in ins], 2 + d, tag, last=False)
+                m.d.comb += out.eq(total.value << total.shift)
+            return m
+        if d == 0:      # the accumulators are the outputs
             sw, swc, done = self.sw, self.swc, self.done
         else:
-            sw, swc, done = Signal(self.sw_w, name="acc_w"), Signal(self.swc_w, name="acc_wc"), Signal()
+            sw = Signal(self.sw_w, name="acc_w", reset_less=True)
+            swc = Signal(self.swc_w, name="acc_wc", reset_less=True)
+            done = Signal()
         m.d.sync += done.eq(self.valid & self.last)
         with m.If(self.valid):
             m.d.sync += [sw.eq(Mux(self.first, 0, sw) + self.w),
                          swc.eq(Mux(self.first, 0, swc) + self.wc)]
         if sw is not self.sw:
-            d = max(self.cpr_uns, self.cpr_sig)
-            sw_o, = delay(m, [sw], d, "cpr")            # cpr7 + (d - cpr7) sync
-            swc_o, = delay(m, [swc], d, "cpr")
+            sw_o, = delay(m, [sw], d, "cpr", reset_less=True)            # cpr7 + (d - cpr7) sync
+            swc_o, = delay(m, [swc], d, "cpr", reset_less=True)
             done_o, = delay(m, [done], d, "cpr")
             m.d.comb += [self.sw.eq(sw_o), self.swc.eq(swc_o), self.done.eq(done_o)]
         return m

@@ -1,10 +1,11 @@
 """Antecedent operator of the DFLC (paper 003 Fig. 8 minmax_p, Table 2 sel_op)."""
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Const, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from ..params import checked_init
+from .arith import Term, mul_terms, tree_sum
 
 __all__ = ["Tnorm", "SEL_OPS"]
 
@@ -38,7 +39,10 @@ class Tnorm(wiring.Component):
         dy = self.dy
         t = Signal(2 * dy + 1, name=f"t{j}")
         p = Signal(dy, name=f"p{j}")
-        m.d.comb += t.eq(a * b + (1 << (dy - 1)))
+        full = (1 << dy) - 1        # a * b in fabric (hdl/dflc/arith.py: no DSP block)
+        ab = tree_sum(m, mul_terms(Term(a, 0, full), Term(b, 0, full)) + [Term(Const(1), 1, 1, dy - 1)],
+                      0, f"ab{j}")
+        m.d.comb += t.eq(ab.value << ab.shift)
         m.d.comb += p.eq((t + (t >> dy)) >> dy)
         return p
 

@@ -47,8 +47,8 @@ class EdtArray(wiring.Component):
 
     Ports
     -----
-    shift, step_edt, step_cfr, step_bfs, k, dfar : In
-        Broadcast to every cell (see :class:`EdtCell`).
+    shift, step_edt, step_cfr, step_bfs, k, kk, dfar : In
+        Broadcast to every cell (see :class:`EdtCell`; ``kk`` = k² + k).
     in_obst, in_goal : In(height)
         The column entering the leftmost cells, bit r = row r.
     changed : Out(1)
@@ -73,7 +73,7 @@ class EdtArray(wiring.Component):
         w = self.w = cell_widths(height, width)
         super().__init__({
             "shift": In(1), "step_edt": In(1), "step_cfr": In(1), "step_bfs": In(1),
-            "k": In(w["k"]), "dfar": In(w["di"]),
+            "k": In(w["k"]), "kk": In(w["delta"]), "dfar": In(w["di"]),
             "in_obst": In(height), "in_goal": In(height),
             "changed": Out(1),
             "rd_row": In(w["row"]), "rd_col": In(w["col"]),
@@ -111,7 +111,7 @@ class EdtArray(wiring.Component):
                 me = cells[r][c]
                 ins = {
                     "shift": self.shift, "step_edt": self.step_edt, "step_cfr": self.step_cfr,
-                    "step_bfs": self.step_bfs, "k": self.k, "dfar": self.dfar,
+                    "step_bfs": self.step_bfs, "k": self.k, "kk": self.kk, "dfar": self.dfar,
                 }
                 for i, (dr, dc) in OFFSETS.items():
                     inside = 0 <= r + dr < h and 0 <= c + dc < wd

@@ -1,5 +1,8 @@
 """One cell of the EDT/NNT + BFS array (paper 004, section IV, Fig. 2)."""
 
+from functools import reduce
+from operator import or_
+
 from amaranth.hdl import C, Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
@@ -27,7 +30,7 @@ def cell_widths(height, width):
 
 def state_layout(w):
     """The registers a cell's neighbours read (port ``state``, inputs ``n1`` .. ``n8``)."""
-    return data.StructLayout({"done": 1, "delta": w["delta"], "dx": signed(w["dx"]),
+    return data.StructLayout({"done": 1, "d2": w["delta"], "dx": signed(w["dx"]),
                               "dy": signed(w["dy"]), "visited": 1})
 
 
@@ -37,7 +40,20 @@ def result_layout(w):
 
 
 class EdtCell(wiring.Component):
-    """Processing element of Fig. 2: ADD-SUB, INC, MAX tree, +2k adder, registers.
+    """Processing element of Fig. 2 in the squared-distance form: ADD-SUB, INC, MIN select, registers.
+
+    The cell holds ``d2`` = Δx² + Δy² where the paper holds δ = k² + k - d2
+    (:func:`models.edt_bfs.edt_step_d2`, the same map): the MAX tree of
+    δ_i is a MIN of d2_i, the third enable condition δ_m + 2k >= 0 is
+    ``d2_m <= kk`` with ``kk`` = k² + k broadcast by the controller, and a
+    done cell's register never changes (eq. 4 is no operation).  So no adder
+    follows the selection.  The selection is flat: the 28 pairwise
+    comparisons of the eight candidates at once, a one-hot winner (the
+    smallest index among the smallest d2, the tree's tie-break), an AND-OR
+    multiplexer; the enable tests every candidate against ``kk`` beside it.
+    One iteration is one clock, as in the paper; the logic between the
+    neighbours' registers and this cell's is an adder, a comparator and a few
+    LUT levels (the tree had seven adders/comparators in series).
 
     Parameters
     ----------
@@ -54,14 +70,13 @@ class EdtCell(wiring.Component):
     shift : In(1)
         Load pipeline (section IV): ``done <- n3.done``, ``visited <-
         n3.visited``, the marks of the cell on the left (p_3; the array feeds
-        column 0's p_3 input with the incoming column during a shift); δ,
+        column 0's p_3 input with the incoming column during a shift); d2,
         Δx, Δy, d_i, cfr and parent are cleared, so nothing of a previous
         image survives a load.
     step_edt : In(1)
-        EDT iteration ``k`` (mode 1, step 2).  The registers δ, Δx, Δy, d_i,
-        done load the MAX tree's winner only under the paper's three
-        conditions: done = 0, some neighbour done, ``δ_m + 2k >= 0`` (MSB 0);
-        a done cell adds 2k to δ (eq. 4).
+        EDT iteration ``k`` (mode 1, step 2).  The registers d2, Δx, Δy, d_i,
+        done load the winner only under the paper's three conditions: done
+        = 0, some neighbour done, ``d2_m <= kk`` (δ_m + 2k >= 0).
     step_cfr : In(1)
         Mode 2 (step 3): ``cfr <- ~done | (d_i > dfar)`` (a never reached
         cell, possible only without obstacles, is infinitely far);
@@ -70,14 +85,16 @@ class EdtCell(wiring.Component):
         Mode 3 (step 4): a cfr cell not yet visited with a visited neighbour
         becomes visited, ``parent`` = the smallest such neighbour index.
     k : In(k bits)
-        Iteration number from the controller's counter.
+        Iteration number from the controller's counter (d_i of a new cell).
+    kk : In(δ bits)
+        ``k² + k`` (:func:`models.edt_bfs.k_square`), from the controller.
     dfar : In(d_i bits)
         d_far.
     n1 .. n8 : In(state_layout)
         Neighbour p_i's ``state`` (tie it to 0 outside the array).
     state : Out(state_layout)
-        The registers the neighbours read: ``done``, ``delta`` (δ), ``dx``
-        (Δx), ``dy`` (Δy), ``visited``.  (Δx, Δy) = p - nearest obstacle
+        The registers the neighbours read: ``done``, ``d2`` (Δx² + Δy² of
+        a done cell; δ = k² + k - d2), ``dx`` (Δx), ``dy`` (Δy), ``visited``.  (Δx, Δy) = p - nearest obstacle
         pixel, signed (the NNT).
     result : Out(result_layout)
         ``di`` (integer distance: the iteration that set done), ``cfr``
@@ -109,7 +126,7 @@ class EdtCell(wiring.Component):
         ports = {
             "shift": In(1),
             "step_edt": In(1), "step_cfr": In(1), "step_bfs": In(1),
-            "k": In(w["k"]), "dfar": In(w["di"]),
+            "k": In(w["k"]), "kk": In(w["delta"]), "dfar": In(w["di"]),
         }
         ports.update({f"n{i}": In(state_layout(w)) for i in range(1, 9)})
         ports.update({"state": Out(state_layout(w)), "result": Out(result_layout(w)), "changed": Out(1)})
@@ -122,10 +139,10 @@ class EdtCell(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         st, res = self.state, self.result
-        regs = _View(done=st.done, delta=st.delta, dx=st.dx, dy=st.dy, visited=st.visited,
+        regs = _View(done=st.done, d2=st.d2, dx=st.dx, dy=st.dy, visited=st.visited,
                      di=res.di, cfr=res.cfr, parent=res.parent)
         nbs = {i: getattr(self, f"n{i}") for i in range(1, 9)}
-        ctl = {n: getattr(self, n) for n in ("shift", "step_edt", "step_cfr", "step_bfs", "k", "dfar")}
+        ctl = {n: getattr(self, n) for n in ("shift", "step_edt", "step_cfr", "step_bfs", "k", "kk", "dfar")}
         m.d.comb += self.changed.eq(cell_logic(m, self.w, ctl, regs, nbs))
         return m
 
@@ -145,48 +162,52 @@ def cell_logic(m, w, ctl, regs, nbs):
     """
     cw = w["cand"]
 
-    # ADD-SUB and INC (eq. 1-3): candidate δ_i, Δx_i, Δy_i of each neighbour.
+    # ADD-SUB and INC (eq. 1-3 in the d2 form): candidate d2_i = d2(p_i) +
+    # ΔX_i + ΔY_i (= Δx_i² + Δy_i²), Δx_i, Δy_i of each neighbour, and the
+    # third enable condition of each, d2_i <= k² + k, beside the selection.
     cands = []
     for i in range(1, 9):
         nb = nbs[i]
         sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
         big_x = (Cat(C(1, 1), nb.dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), nb.dx).as_signed()) if sr else 0
         big_y = (Cat(C(1, 1), nb.dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), nb.dy).as_signed()) if sc else 0
-        d = Signal(signed(cw), name=f"delta_{i}")
-        m.d.comb += d.eq(nb.delta - big_x - big_y)
-        x = (nb.dx + sr) if sr else nb.dx                 # INC: Δx_i (eq. 1)
-        y = (nb.dy + sc) if sc else nb.dy
-        cands.append((i, nb.done, d, x, y))
+        d = Signal(signed(cw), name=f"d2_{i}")
+        m.d.comb += d.eq(nb.d2 + big_x + big_y)
+        x = Signal(signed(w["dx"]), name=f"dx_{i}")
+        y = Signal(signed(w["dy"]), name=f"dy_{i}")
+        m.d.comb += [x.eq((nb.dx + sr) if sr else nb.dx), y.eq((nb.dy + sc) if sc else nb.dy)]   # INC (eq. 1)
+        near = Signal(name=f"near_{i}")
+        m.d.comb += near.eq(nb.done & (d <= ctl["kk"]))
+        cands.append((nb.done, d, x, y, near))
 
-    # MAX: seven CMP-MUX in three levels.  A CMP-MUX keeps its left
-    # (lower-indexed) set unless the right one is valid and strictly greater,
-    # so ties go to the smallest neighbour index.
-    def cmp_mux(a, b, name):
-        va, da, xa, ya = a
-        vb, db, xb, yb = b
-        sel = Signal(name=f"sel_{name}")
-        v = Signal(name=f"v_{name}")
-        d = Signal(signed(cw), name=f"d_{name}")
-        x = Signal(signed(w["dx"]), name=f"x_{name}")
-        y = Signal(signed(w["dy"]), name=f"y_{name}")
-        m.d.comb += [
-            sel.eq(vb & (~va | (db > da))),
-            v.eq(va | vb),
-            d.eq(Mux(sel, db, da)), x.eq(Mux(sel, xb, xa)), y.eq(Mux(sel, yb, ya)),
-        ]
-        return v, d, x, y
+    # MIN: candidate i wins when it is valid and no valid candidate beats it:
+    # one of lower index with a d2 <= its own, or of higher index with a
+    # smaller d2 (the CMP-MUX tree's result: the smallest index among the
+    # smallest d2).  One comparator per pair, all at once.
+    better = {}             # better[a, b], a < b: candidate b's d2 is smaller than a's
+    for a in range(8):
+        for b in range(a + 1, 8):
+            better[a, b] = Signal(name=f"lt_{b + 1}_{a + 1}")
+            m.d.comb += better[a, b].eq(cands[b][1] < cands[a][1])
+    win = []
+    for i in range(8):
+        beaten = [cands[j][0] & ~better[j, i] for j in range(i)] + \
+                 [cands[j][0] & better[i, j] for j in range(i + 1, 8)]
+        wi = Signal(name=f"win_{i + 1}")
+        m.d.comb += wi.eq(cands[i][0] & ~Cat(*beaten).any())
+        win.append(wi)
 
-    by_index = {i: (v, d, x, y) for i, v, d, x, y in cands}
-    l1 = [cmp_mux(by_index[j], by_index[j + 1], f"{j}{j + 1}") for j in (1, 3, 5, 7)]
-    l2 = [cmp_mux(l1[0], l1[1], "1234"), cmp_mux(l1[2], l1[3], "5678")]
-    vm, dm, xm, ym = cmp_mux(l2[0], l2[1], "m")
-
-    # +2k adder; its sign is the third enable condition.
-    dnew = Signal(signed(cw + 1), name="dnew")
-    k2 = Cat(C(0, 1), ctl["k"])
-    m.d.comb += dnew.eq(dm + k2)
+    def pick(field, shape, name):
+        """The winner's ``field``: an AND-OR multiplexer on the one-hot ``win``."""
+        out = Signal(shape, name=name)
+        terms = [Mux(win[i], cands[i][field].as_unsigned()[:len(out)], 0) for i in range(8)]
+        m.d.comb += out.eq(reduce(or_, terms))
+        return out
+    dm = pick(1, w["delta"], "d2_m")
+    xm = pick(2, signed(w["dx"]), "x_m")
+    ym = pick(3, signed(w["dy"]), "y_m")
     en_edt = Signal(name="en_edt")
-    m.d.comb += en_edt.eq(ctl["step_edt"] & ~regs.done & vm & ~dnew[-1])
+    m.d.comb += en_edt.eq(ctl["step_edt"] & ~regs.done & Cat(*[c[4] for c in cands]).any())
 
     # BFS: the smallest visited neighbour index (priority encoder).
     vis = [(i, nbs[i].visited) for i in range(1, 9)]
@@ -203,16 +224,15 @@ def cell_logic(m, w, ctl, regs, nbs):
         m.d.sync += [
             # load pipeline: take the west neighbour's (p_3's) marks
             regs.done.eq(nbs[3].done), regs.visited.eq(nbs[3].visited),
-            regs.delta.eq(0), regs.dx.eq(0), regs.dy.eq(0), regs.di.eq(0),
+            regs.d2.eq(0), regs.dx.eq(0), regs.dy.eq(0), regs.di.eq(0),
             regs.cfr.eq(0), regs.parent.eq(0),
         ]
     with m.Elif(en_edt):
         m.d.sync += [
-            regs.done.eq(1), regs.delta.eq(dnew), regs.dx.eq(xm), regs.dy.eq(ym),
+            regs.done.eq(1), regs.d2.eq(dm), regs.dx.eq(xm), regs.dy.eq(ym),
             regs.di.eq(ctl["k"]),
         ]
-    with m.Elif(ctl["step_edt"] & regs.done):
-        m.d.sync += regs.delta.eq(regs.delta + k2)                 # eq. 4
+    # a done cell keeps d2 (eq. 4, δ += 2k, is the broadcast kk's growth)
     with m.Elif(ctl["step_cfr"]):
         m.d.sync += [regs.cfr.eq(cfr_new), regs.visited.eq(regs.visited & cfr_new)]
     with m.Elif(en_bfs):

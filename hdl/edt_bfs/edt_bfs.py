@@ -4,7 +4,7 @@ from amaranth.hdl import Module, Mux, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from navcores.models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs import OFFSETS, k_square
 
 from ..params import check, checked_init
 from .array import EdtArray, default_cell_module
@@ -40,8 +40,10 @@ class EdtBfs(wiring.Component):
     """Parallel_Path_Plan on a ``height`` x ``width`` array: EDT, cfr, BFS, path.
 
     One job: a command, then the image, then the results.  The controller
-    holds the k counter and runs the paper's three modes (section IV) one
-    iteration per clock, each until an iteration changes nothing.
+    holds the k counter (and ``kk`` = k² + k, the cells' threshold in the
+    squared-distance form, :class:`EdtCell`) and runs the paper's three modes
+    (section IV) one iteration per clock, each until an iteration changes
+    nothing.
 
     Ports
     -----
@@ -127,12 +129,13 @@ class EdtBfs(wiring.Component):
         start_col = Signal(w["col"])
         want_path = Signal()
         k = Signal(w["k"])
+        kk = Signal(w["delta"])         # k² + k (models.edt_bfs.k_square), the cells' threshold
         kb = Signal(self._bfs_bits)
         count = Signal(range(wd + 1))
         row = Signal(w["row"])
         col = Signal(w["col"])
 
-        m.d.comb += [arr.k.eq(k), arr.dfar.eq(dfar)]
+        m.d.comb += [arr.k.eq(k), arr.kk.eq(kk), arr.dfar.eq(dfar)]
         it_edt = Signal(w["k"])
         it_bfs = Signal(self._bfs_bits)
         m.d.comb += [self.iterations_edt.eq(it_edt), self.iterations_bfs.eq(it_bfs)]
@@ -178,13 +181,13 @@ class EdtBfs(wiring.Component):
             with m.If(self.i_stream.valid):
                 m.d.sync += count.eq(count + 1)
                 with m.If(count == wd - 1):
-                    m.d.sync += k.eq(1)
+                    m.d.sync += [k.eq(1), kk.eq(k_square(1))]
                     m.d.sync += state.eq(STATES.index("EDT"))
         with m.Elif(ongoing["EDT"]):
             # Mode 1 (step 2): iteration k, until one sets no done flag.
             m.d.sync += it_edt.eq(k)
             with m.If(arr.changed):
-                m.d.sync += k.eq(k + 1)
+                m.d.sync += [k.eq(k + 1), kk.eq(kk + 2 * (k + 1))]        # K(k+1) = K(k) + 2(k+1)
             with m.Else():
                 m.d.sync += state.eq(STATES.index("CFR"))
         with m.Elif(ongoing["CFR"]):

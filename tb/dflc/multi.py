@@ -23,7 +23,9 @@ FIXTURES = Path(__file__).resolve().parent / "fll"
 # antecedent operators, both dividers, n = 1, 2, 3 and 4, fewer and unequal MF
 # counts, trapezoids with gaps, missing rules, the parallel option, and the
 # Table 2 pipeline generics (hdl/dflc/pipe.py): every generic at 0 (its
-# minimum) and at 4 somewhere, in sequential and parallel instances, both
+# minimum) and at 4 somewhere (cpr9, whose range goes to 8, at 0, 2, 4, 6 and
+# 8), the LUT divider's combinational and deepest pipelines, the parallel
+# option at the default back end, in sequential and parallel instances, both
 # orders of each pair of routes the core synchronizes (w vs c, psr4 vs cpr6,
 # cpr7 vs cpr8), and the paper's own Table 2 values.  The paper's default
 # configuration (Table 1, default generics) is not here: the regression runs
@@ -32,11 +34,11 @@ FIXTURES = Path(__file__).resolve().parent / "fll"
 _ZERO = {"psr1_no": 0, "cpr3_no": 1, "cpr2_no": 0, "cpr5_no": 0, "psr4_no": 0, "cpr6_no": 0}
 SETS = {
     "regress": {
-        "n3": {"fll": "n3_prod", "div": "array",                  # prod, array, n=3, 5/3/4 MFs,
+        "n3": {"fll": "n3_prod",                                  # prod, LUT, n=3, 5/3/4 MFs,
                **_ZERO, "cpr9_no": 0},                            #   every register at 0 / min; L 12
         "tr": {"fll": "trap_max", "par": 1,                       # max, LUT, trapezoids, parallel,
-               "psr1_no": 4, "cpr3_no": 4, "psr3_no": 4,          #   the front at 4; L 27
-               "cpr1_no": 4, "cpr4_no": 4},
+               "psr1_no": 4, "cpr3_no": 4, "psr3_no": 4,          #   the front at 4, the back at
+               "cpr1_no": 4, "cpr4_no": 4},                       #   the defaults; L 34
         "or": {"fll": "mf5_or", "div": "array", "par": 1,         # probor, array, 5/4 MFs, parallel,
                **_ZERO, "psr2_no": 4, "cpr6_no": 3,               #   c longer than w, cpr6 > psr4,
                "cpr7_no": 3, "cpr9_no": 4},                       #   cpr7 > cpr8, array in 4; L 19
@@ -50,7 +52,7 @@ SETS = {
                                   "cpr9_no")}},
         "n4": {"fll": "n4", "cpr2_no": 0, "psr2_no": 1,           # n=4, 16 rules per sample, LUT,
                "cpr5_no": 4, "psr4_no": 4, "cpr6_no": 2,          #   w longer than c, psr4 > cpr6,
-               "cpr7_no": 1, "cpr8_no": 4, "cpr9_no": 4},         #   cpr8 > cpr7, the back at 4; L 36
+               "cpr7_no": 1, "cpr8_no": 4, "cpr9_no": 8},         #   cpr8 > cpr7, cpr9 8; L 40
     },
 }
 # The stems above name the fixtures tb/dflc/fll/<stem>.fll, which hdl takes by path.

@@ -67,28 +67,35 @@ def test_component_pipeline_refusals():
         ConsMap(c, cpr=-1)
     with pytest.raises(ValueError, match="cpr8_no = 7"):
         Integrator(8, 20, 10, 22, cpr_sig=7)
-    with pytest.raises(ValueError, match="cpr9_no = 5"):
-        Divider(c, 10, 22, cpr=5)
+    with pytest.raises(ValueError, match=r"cpr9_no = 9: pipeline registers must be 0 \.\. 8"):
+        Divider(c, 10, 22, cpr=9)
+    with pytest.raises(ValueError, match=r"cpr9_no = 7: pipeline registers must be 0 \.\. 6"):
+        latency(config_for(op_sz=6, mf_op_sz=6), cpr9_no=7)     # the array has op_sz rows to cut
+    with pytest.raises(ValueError, match="stride = 0"):
+        MfGen(spec, 12, 8, stride=0)
     with pytest.raises(ValueError, match=r"unknown pipeline generic\(s\) \['cpr_mf'\]"):
         DflcCore(c, cpr_mf=1)
 
 
 def test_latency_formula():
     c = config_for()
-    assert latency(c) == 12 and stream_latency(c) == 13            # 2^n + 8 (+1 FIFO)
-    assert stream_latency(c, parallel=True) == 10
-    assert latency(c, **PIPE_DEFAULTS) == 12
+    assert latency(c) == 19 and stream_latency(c) == 20            # 2^n + 15 (+1 FIFO)
+    assert latency(c, parallel=True) == 16 and stream_latency(c, parallel=True) == 17
+    assert latency(c, **PIPE_DEFAULTS) == 19
     # the paper's Table 2 values at this core's places: 2^n + 17
     assert latency(c, **PIPE_TABLE2) == 21
     # one more register on a route nothing runs beside adds one cycle
     for key in ("psr1_no", "cpr3_no", "psr3_no", "cpr1_no", "cpr4_no", "cpr9_no"):
-        assert latency(c, **{key: PIPE_DEFAULTS[key] + 1}) == 13, key
+        assert latency(c, **{key: PIPE_DEFAULTS[key] + 1}) == 20, key
+    # the design before the timing work (cpr6 1, cpr9 1): 2^n + 8
+    assert latency(c, cpr6_no=1, cpr9_no=1) == 12
     # synchronized routes: the longer one counts
-    assert latency(c, cpr5_no=0) == 12 and latency(c, cpr5_no=3) == 13     # w vs cpr2 + s_rom + psr2
-    assert latency(c, psr2_no=1) == 13 and latency(c, cpr2_no=0) == 12
-    assert latency(c, cpr2_no=0, cpr5_no=0) == 11
-    assert latency(c, psr4_no=0) == 12 and latency(c, psr4_no=0, cpr6_no=0) == 11
-    assert latency(c, cpr7_no=2, cpr8_no=1) == 14 == latency(c, cpr7_no=1, cpr8_no=2)
+    assert latency(c, cpr5_no=0) == 19 and latency(c, cpr5_no=3) == 20     # w vs cpr2 + s_rom + psr2
+    assert latency(c, psr2_no=1) == 20 and latency(c, cpr2_no=0) == 19
+    assert latency(c, cpr2_no=0, cpr5_no=0) == 18
+    assert latency(c, cpr6_no=1) == 17 and latency(c, psr4_no=0, cpr6_no=0) == 16    # psr4 vs cpr6
+    assert latency(c, cpr6_no=1, psr4_no=2) == 18
+    assert latency(c, cpr7_no=2, cpr8_no=1) == 21 == latency(c, cpr7_no=1, cpr8_no=2)
     zero = dict(psr1_no=0, cpr3_no=1, cpr2_no=0, cpr5_no=0, psr4_no=0, cpr6_no=0, cpr9_no=0)
     assert latency(c, **zero) == 4 + 4          # P + cpr3 + the s_rom read + divider in/out
     assert latency(c, True, **{k: 4 for k in PIPE_KEYS}) == 1 + 20 + 9 + 4 + 4 + 4 + 2
@@ -98,7 +105,7 @@ def test_fifo_depth_follows_latency():
     """The output FIFO (= the credit count) holds ceil(L / P) + 2 samples, so a
     consumer that is always ready never throttles the input, whatever the generics."""
     c = config_for()
-    assert unelaborated(DflcStream(fll="table1")).depth == 3 + 2      # today's size: ceil(12 / 4) + 2
+    assert unelaborated(DflcStream(fll="table1")).depth == 5 + 2                 # ceil(19 / 4) + 2
     deep = {k: 4 for k in PIPE_KEYS}
     s = unelaborated(DflcStream(fll="table1", **deep))
     L = latency(c, **deep)

@@ -43,7 +43,7 @@ import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, RisingEdge
 
-from navcores.hdl.dflc.top import config_for, split_params, stream_latency
+from navcores.hdl.dflc.top import config_for, fifo_depth, split_params, stream_latency
 from navcores.models.dflc import Dflc
 from navcores.sim.rtl.clock import PERIOD_NS
 from navcores.sim.rtl.dflc_driver import DflcDriver
@@ -62,8 +62,8 @@ BUILDS = {"multi": ("dflc_multi", {"set": SET}, DflcMulti), "table1": ("dflc_str
 TOP = os.environ.get("DFLC_TOP", "multi")
 # Stream latency of every instance, by hand from hdl/dflc/core.py's formula
 # (multi.py's comments); the cycles test asserts both agree with the RTL.
-LATENCIES = {"multi": {"n3": 13, "tr": 28, "or": 20, "n1": 20, "n1m": 46, "n4": 37},
-             "table1": {"": 13}}
+LATENCIES = {"multi": {"n3": 13, "tr": 35, "or": 20, "n1": 20, "n1m": 46, "n4": 41},
+             "table1": {"": 20}}
 _CONFIGS = {}
 
 
@@ -245,7 +245,10 @@ async def reset_mid_stream(dut):
 
 
 async def _reset_mid_stream(dut, drv, config, par, model, rng):
-    codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(30)]
+    # more samples than the output FIFO's credits, so the source is still
+    # busy when the reset comes whatever the instance's latency
+    count = fifo_depth(config, **par) + 30
+    codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(count)]
     drv.source.extend(codes)
     await ClockCycles(dut.clk, rng.randrange(20, 40))
     assert len(drv.source.beats) > 0 and drv.source.busy, "some samples entered before the reset, some not"

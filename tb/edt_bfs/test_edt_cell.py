@@ -1,12 +1,14 @@
-"""One EdtCell (hdl/edt_bfs/cell.py) against models.edt_bfs.edt_step / bfs_step, every cycle.
+"""One EdtCell (hdl/edt_bfs/cell.py) against models.edt_bfs.edt_step_d2 / bfs_step, every cycle.
 
-The test drives random neighbour registers (done, δ, Δx, Δy, visited) and
+The test drives random neighbour registers (done, d2, Δx, Δy, visited) and
 a random mode each cycle: a load shift (the west neighbour's marks), an EDT
-iteration with a random k, the cfr step with a random d_far, a BFS step, or
-nothing.  Neighbour values are drawn so that candidates stay within the
-widths the array guarantees, with many ties (equal δ_i) so the MAX tree's
-smallest-index rule is exercised; the cell's registers are compared with the
-model after every cycle.  Counts of enables and ties are asserted.
+iteration with a random k (and kk = k² + k), the cfr step with a random
+d_far, a BFS step, or nothing.  Neighbour values are drawn so that
+candidates stay within the widths the array guarantees (d2_i >= 0), with
+many ties (equal d2_i) so the selection's smallest-index rule is exercised,
+and candidates on both sides of k² + k; the cell's registers are compared
+with the model after every cycle.  Counts of enables, ties and of winners
+that are not the first valid candidate are asserted.
 """
 
 import cocotb
@@ -16,7 +18,7 @@ from cocotb.clock import Clock
 from cocotb.triggers import ReadOnly, RisingEdge, Timer
 
 from navcores.hdl.edt_bfs.cell import cell_widths, result_layout, state_layout
-from navcores.models.edt_bfs import OFFSETS, bfs_step, edt_step
+from navcores.models.edt_bfs import OFFSETS, bfs_step, edt_step_d2, k_square
 from navcores.sim.rtl.stream import pack, unpack
 from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
 
@@ -37,53 +39,56 @@ async def random_cycles(dut):
     dut.rst.value = 1
     await RisingEdge(dut.clk)
     dut.rst.value = 0
-    st = {"done": False, "delta": 0, "dx": 0, "dy": 0, "di": 0, "visited": False, "cfr": False, "parent": 0}
-    counts = {"edt_en": 0, "bfs_en": 0, "ties": 0, "shift": 0, "cfr": 0}
+    st = {"done": False, "d2": 0, "dx": 0, "dy": 0, "di": 0, "visited": False, "cfr": False, "parent": 0}
+    counts = {"edt_en": 0, "bfs_en": 0, "ties": 0, "not_first": 0, "shift": 0, "cfr": 0}
     lim = H - 2
     for cyc in range(CYCLES):
         mode = rng.choice(["shift", "edt", "cfr", "bfs", "none"], p=[0.15, 0.45, 0.1, 0.25, 0.05])
-        if st["delta"] > w["delta_max"] - 4 * w["k_max"]:
-            mode = "shift"                   # keep δ in the range a real array reaches
         k = int(rng.integers(1, w["k_max"] + 1))
+        kk = k_square(k)
         dfar = int(rng.integers(0, 1 << w["di"]))
         dfar = dfar if rng.random() < 0.3 else int(rng.integers(0, 3))
-        # half of the cycles: every neighbour proposes the same candidate δ_i
-        # (δ = T + ΔX_i + ΔY_i), so the MAX tree must break ties by index
-        target = int(rng.integers(-2 * k, 2 * k + 1)) if rng.random() < 0.5 else None
+        # candidates d2_i = d2 + ΔX_i + ΔY_i around kk = k² + k; half of the
+        # cycles every neighbour proposes the same d2_i, so the selection
+        # must break ties by index
+        target = int(rng.integers(max(kk - 2 * k, 0), kk + 2 * k + 1)) if rng.random() < 0.5 else None
         nb = {}
         for i in range(1, 9):
             x, y = int(rng.integers(-lim, lim + 1)), int(rng.integers(-lim, lim + 1))
             sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
             big = ((2 * sr * x + 1) if sr else 0) + ((2 * sc * y + 1) if sc else 0)
-            delta = target + big if target is not None else int(rng.integers(0, 4 * k + 3))
-            if delta < 0:
-                delta = int(rng.integers(0, 4 * k + 3))
-            nb[i] = (bool(rng.random() < 0.6), delta, x, y, bool(rng.random() < 0.3))
+            want = target if target is not None else int(rng.integers(max(kk - 4 * k, 0), kk + 4 * k + 3))
+            d2 = want - big
+            if d2 < 0 or d2 > w["delta_max"]:      # a register value: 0 .. δ_max
+                d2 = int(rng.integers(max(-big, 0), w["delta_max"] + 1))
+            nb[i] = (bool(rng.random() < 0.6), d2, x, y, bool(rng.random() < 0.3))
         dut.k.value = k
+        dut.kk.value = kk
         dut.dfar.value = dfar
         dut.shift.value = int(mode == "shift")
         dut.step_edt.value = int(mode == "edt")
         dut.step_cfr.value = int(mode == "cfr")
         dut.step_bfs.value = int(mode == "bfs")
         for i, (d, de, x, y, v) in nb.items():
-            getattr(dut, f"n{i}").value = pack(st_layout, {"done": d, "delta": de, "dx": x, "dy": y, "visited": v})
+            getattr(dut, f"n{i}").value = pack(st_layout, {"done": d, "d2": de, "dx": x, "dy": y, "visited": v})
         # model
         changed = False
         if mode == "shift":
-            st = {"done": nb[3][0], "delta": 0, "dx": 0, "dy": 0, "di": 0, "visited": nb[3][4],
+            st = {"done": nb[3][0], "d2": 0, "dx": 0, "dy": 0, "di": 0, "visited": nb[3][4],
                   "cfr": False, "parent": 0}
             counts["shift"] += 1
         elif mode == "edt":
             nbm = {i: (np.bool_(v[0]), v[1], v[2], v[3]) for i, v in nb.items()}
-            done, delta, dx, dy, di, en = edt_step(k, np.bool_(st["done"]), st["delta"], st["dx"],
+            done, d2, dx, dy, di, en = edt_step_d2(k, np.bool_(st["done"]), st["d2"], st["dx"],
                                                    st["dy"], st["di"], nbm)
             changed = bool(en)
             if en:
-                cands = [v[1] - ((2 * (-o[0]) * v[2] + 1) if o[0] else 0) - ((2 * (-o[1]) * v[3] + 1) if o[1] else 0)
+                cands = [v[1] + ((2 * (-o[0]) * v[2] + 1) if o[0] else 0) + ((2 * (-o[1]) * v[3] + 1) if o[1] else 0)
                          for v, o in ((nb[i], OFFSETS[i]) for i in range(1, 9)) if v[0]]
-                counts["ties"] += cands.count(max(cands)) > 1
+                counts["ties"] += cands.count(min(cands)) > 1
+                counts["not_first"] += cands.index(min(cands)) > 0
             counts["edt_en"] += changed
-            st.update(done=bool(done), delta=int(delta), dx=int(dx), dy=int(dy), di=int(di))
+            st.update(done=bool(done), d2=int(d2), dx=int(dx), dy=int(dy), di=int(di))
         elif mode == "cfr":
             cfr = (not st["done"]) or st["di"] > dfar
             st.update(cfr=cfr, visited=st["visited"] and cfr)
@@ -102,7 +107,7 @@ async def random_cycles(dut):
         assert got == st, f"cycle {cyc} ({mode}, k={k}): rtl {got} model {st}"
         await Timer(1, unit="ns")      # leave the read-only phase before driving
     dut._log.info(f"{CYCLES} cycles: {counts}")
-    assert counts["edt_en"] > 100 and counts["bfs_en"] > 15 and counts["ties"] > 4
+    assert counts["edt_en"] > 100 and counts["bfs_en"] > 15 and counts["ties"] > 4 and counts["not_first"] > 20
 
 
 # Icarus only: the cell is also checked on Verilator inside every array of

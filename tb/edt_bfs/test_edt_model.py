@@ -235,3 +235,62 @@ def test_widths():
         assert edt(img).iterations <= ww["k_max"]
     with pytest.raises(ValueError):
         widths(0, 4)
+
+
+def _paper_edt(obstacle):
+    """Step 2 as the paper writes it (eq. 1-4, Fig. 2: delta, the MAX tree,
+    the +2k adder, done pixels adding 2k), pixel by pixel in plain Python: an
+    independent reference for the model's squared-distance form."""
+    h, w = obstacle.shape
+    done = obstacle.copy()
+    delta = np.zeros((h, w), dtype=np.int64)
+    dx, dy, di = (np.zeros((h, w), dtype=np.int64) for _ in range(3))
+    k = 0
+    while True:
+        k += 1
+        new = [a.copy() for a in (done, delta, dx, dy, di)]
+        changed = False
+        for r in range(h):
+            for c in range(w):
+                if done[r, c]:
+                    new[1][r, c] = delta[r, c] + 2 * k                  # eq. 4
+                    continue
+                cands = []
+                for i in range(1, 9):
+                    rr, cc = r + OFFSETS[i][0], c + OFFSETS[i][1]
+                    ok = 0 <= rr < h and 0 <= cc < w and done[rr, cc]
+                    sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
+                    nx, ny, nd = (int(a[rr, cc]) if ok else 0 for a in (dx, dy, delta))
+                    big = ((2 * sr * nx + 1) if sr else 0) + ((2 * sc * ny + 1) if sc else 0)
+                    cands.append((ok, nd - big, nx + sr, ny + sc))        # eq. 1-3
+
+                def cmp_mux(a, b):
+                    return b if b[0] and (not a[0] or b[1] > a[1]) else (a[0] or b[0],) + a[1:]
+                l1 = [cmp_mux(cands[j], cands[j + 1]) for j in (0, 2, 4, 6)]
+                vm, dm, xm, ym = cmp_mux(cmp_mux(l1[0], l1[1]), cmp_mux(l1[2], l1[3]))
+                if vm and dm + 2 * k >= 0:
+                    changed = True
+                    for a, v in zip(new, (True, dm + 2 * k, xm, ym, k)):
+                        a[r, c] = v
+        done, delta, dx, dy, di = new
+        if not changed:
+            return done, delta, dx, dy, di, k
+
+
+def test_squared_distance_form_is_the_papers():
+    """models.edt_bfs.edt (the RTL's d2 form, d2 = k^2 + k - delta) equals the
+    paper's delta form pixel for pixel: done, delta, vector, d_i, iterations."""
+    seed = seed_from_env()
+    rng = np.random.default_rng(seed)
+    names = [n for n in FAMILIES if n != "empty"]
+    for n in range(12):
+        h, w = (int(x) for x in rng.integers(3, 14, 2))
+        img = FAMILIES[names[n % len(names)]](rng, h, w)
+        if not img.any():
+            img[rng.integers(h), rng.integers(w)] = True
+        done, delta, dx, dy, di, k = _paper_edt(img)
+        e = edt(img)
+        assert e.iterations == k, f"seed {seed} image {n}"
+        assert (e.done == done).all() and (e.delta == np.where(done, delta, 0)).all(), f"seed {seed} image {n}"
+        assert (e.vector[..., 0] == dx).all() and (e.vector[..., 1] == dy).all(), f"seed {seed} image {n}"
+        assert (e.distance == np.where(done, di, -1)).all(), f"seed {seed} image {n}"
