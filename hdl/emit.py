@@ -40,6 +40,7 @@ from .dflc.top import DflcStream, config_for  # noqa: E402
 from .edt_bfs.array import EdtArray  # noqa: E402
 from .edt_bfs.cell import EdtCell  # noqa: E402
 from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
+from .edt_bfs.tile_engine import TileEngine  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
@@ -67,6 +68,7 @@ TOPS = {
     "edt_cell": EdtCell,
     "edt_array": EdtArray,
     "edt_bfs": EdtBfs,
+    "edt_tile_engine": TileEngine,
 }
 
 # The class whose PARAMS / CONSTRAINTS a factory above takes (when it is not a class).
@@ -90,6 +92,7 @@ DEFAULT_SETS = [
     ("edt_cell", {"height": 32, "width": 32}),
     ("edt_bfs", {"height": 16, "width": 16}),
     ("edt_bfs", {"height": 32, "width": 32}),
+    ("edt_tile_engine", {"t_r": 8, "t_c": 8, "max_h": 64, "max_w": 64}),
 ]
 
 _SHORT = {"p_max": "pmax", "fll": ""}
