@@ -112,7 +112,7 @@ class FrontierFlags(wiring.Component):
         # The flag RAM: tile row R in bank R mod 2 at R // 2.
         done_prev = named(m, "done_prev", self.beat & to_prev & self.row_end)   # tile row R - 1 is final
         done_cur = named(m, "done_cur", self.beat & self.last)                  # the last tile row is final
-        half = -(-w["tile_rows"] // 2)
+        half = max(2, -(-w["tile_rows"] // 2))         # depth 2 at least: no 0-bit address
         rd_odd = Signal()
         with m.If(self.scan_en):
             m.d.sync += rd_odd.eq(self.scan_row[0])

@@ -104,7 +104,7 @@ class StateRam(wiring.Component):
 
         # Reads: bank b reads whichever of wcol - 1, wcol, wcol + 1 it holds.
         cmd = self.rd.payload
-        q = named(m, "rd_q", cmd.wcol // BANKS, range(S))
+        q = named(m, "rd_q", cmd.wcol // BANKS, range(max(S, 2)))        # no 0-bit signal
         r = named(m, "rd_r", cmd.wcol % BANKS, range(BANKS))
         base = named(m, "rd_base", cmd.row * S, range(self.depth))
         take = Signal()
@@ -125,7 +125,7 @@ class StateRam(wiring.Component):
             # (k - r) mod 3: 0 middle, 1 right (k = r + 1), 2 left
             rel = Signal(range(BANKS), name=f"rel{k}")
             m.d.comb += rel.eq(Mux(k >= r, k - r, k + BANKS - r))
-            col = Signal(range(S), name=f"col{k}")
+            col = Signal(range(max(S, 2)), name=f"col{k}")
             m.d.comb += col.eq(Mux(rel == 0, q, Mux(rel == 1, Mux(q == S - 1, q, q + (r == BANKS - 1)),
                                                     Mux(q == 0, q, q - (r == 0)))))
             addr = named(m, f"rd_addr{k}", base + col, range(self.depth))

@@ -93,12 +93,13 @@ class TileEngine(wiring.Component):
     Parameters
     ----------
     t_r, t_c : int
-        The physical array (T_r x T_c cells, at most 256; a RAM word holds
-        ``T_c`` pixels).
+        The physical array (T_r x T_c cells, 2..32 a side, at most 256; a RAM
+        word holds ``T_c`` pixels).
     max_h, max_w : int
         The largest map (the RAM: ``max_h * ceil(ceil(max_w / T_c) / 3)``
-        words of ``T_c`` pixels in each of 3 banks; up to 4096 a side and 2^20
-        pixels).  The widths follow it (:func:`~hdl.edt_bfs.tile_layouts.tile_widths`).
+        words of ``T_c`` pixels in each of 3 banks; more than one tile each
+        way, up to 4096 a side and 2^20 pixels).  The widths follow it
+        (:func:`~hdl.edt_bfs.tile_layouts.tile_widths`).
 
     Ports
     -----
@@ -160,16 +161,19 @@ class TileEngine(wiring.Component):
     """
 
     PARAMS = (
-        Param("t_r", int, lo=1, hi=32, doc="array rows T_r",
+        Param("t_r", int, lo=2, hi=32, doc="array rows T_r",
               message="array rows t_r {value!r}: must be an integer in {lo}..{hi}"),
-        Param("t_c", int, lo=1, hi=32, doc="array columns T_c (pixels per RAM word)",
+        Param("t_c", int, lo=2, hi=32, doc="array columns T_c (pixels per RAM word)",
               message="array columns t_c {value!r}: must be an integer in {lo}..{hi}"),
-        Param("max_h", int, lo=1, hi=MAX_SIDE, doc="largest map height (the RAM)",
+        Param("max_h", int, lo=3, hi=MAX_SIDE, doc="largest map height (the RAM)",
               message="largest map height max_h {value!r}: must be an integer in {lo}..{hi}"),
-        Param("max_w", int, lo=1, hi=MAX_SIDE, doc="largest map width (the RAM)",
+        Param("max_w", int, lo=3, hi=MAX_SIDE, doc="largest map width (the RAM)",
               message="largest map width max_w {value!r}: must be an integer in {lo}..{hi}"),
     )
     CONSTRAINTS = (
+        Constraint("max_h > t_r and max_w > t_c", lambda p: p["max_h"] > p["t_r"] and p["max_w"] > p["t_c"],
+                   "largest map {max_h}x{max_w} fits one {t_r}x{t_c} tile: the RAM must hold at least two "
+                   "tiles each way (a map of one tile is the untiled core's, edt_bfs)"),
         Constraint(f"t_r * t_c <= {MAX_CELLS}", lambda p: p["t_r"] * p["t_c"] <= MAX_CELLS,
                    "array {t_r}x{t_c} has {n} cells: at most " + str(MAX_CELLS) +
                    " (16x16 is ~120k LUT4, more than the largest ECP5)", lambda p: {"n": p["t_r"] * p["t_c"]}),

@@ -92,21 +92,21 @@ async def bundled_and_random(dut):
     for name in BUNDLED:
         img = load_grid(MAPS / f"{name}.map")
         cells = free_cells(img, rng, 4)
-        c, model, _ = await _check(drv, img, cells[1:], cells[0], 1)
+        c, model, _ = await _check(drv, img, cells[1:], cells[0], 0)
         compared, visits, paths = compared + c, visits + model.tile_visits, paths + model.path_found
         dut._log.info(f"{name}: {model.tile_visits} visits, {model.cycles} cycles, path {len(model.path)}")
     # the largest map and partial last tiles (TILE_LARGE: at the RAM's size, else at the mid size),
     # thin maps along the RAM's full width and height, then random sizes up to the mid size
     big = (MAX_H, MAX_W) if LARGE else MID
-    shapes = [big, (_partial(2, big[0], T_R), _partial(2, big[1], T_C)), (1, MAX_W), (MAX_H, 1)]
+    shapes = [(_partial(2, big[0], T_R), _partial(2, big[1] * 3 // 4, T_C)), (1, MAX_W), (MAX_H, 1)]
     for n in range(JOBS):
         shape = shapes[n] if n < len(shapes) else tuple(int(v) for v in rng.integers(1, [MID[0] + 1, MID[1] + 1]))
         img, start, goals = _case(rng, shape)
-        c, model, _ = await _check(drv, img, goals, start, int(rng.integers(0, 3)))
+        c, model, _ = await _check(drv, img, goals, start, int(rng.integers(0, 2)))
         compared, visits, paths = compared + c, visits + model.tile_visits, paths + model.path_found
         partial += shape[0] % T_R != 0 and shape[1] % T_C != 0
     dut._log.info(f"{compared} values compared, {visits} tile visits, {paths} paths, {partial} partial maps")
-    assert visits > 10 * JOBS and paths >= 2 and (partial >= 1 or T_R == T_C == 1)
+    assert visits > 5 * JOBS and paths >= 2 and partial >= 1
 
 
 @cocotb.test()
@@ -237,21 +237,22 @@ def _params(p):
 
 
 # One build per simulator and parameter set.  An 8x8 array on a 64x64 RAM on
-# both simulators: the bundled 64x64 maps, the largest random map and maps
-# whose last row and column of tiles are partial; the other cases on 21x29
-# maps (3 x 4 tiles, partial both ways).  Icarus simulates the 8x8 array
-# slowly (every loaded window row wakes the cells around it: about 5 ms a
-# cycle on the shared machine, against Verilator's 0.3 ms, mostly cocotb),
-# so there it runs one bundled map and the sized cases; the controller and
-# stream cases run on Verilator at 8x8 and on Icarus with a non-square,
+# both simulators; on Verilator the bundled room-64-64-8 (64x64) and a 63x47
+# map (the last row and column of tiles partial), on both thin maps along the
+# RAM's full width and height and the other cases on 13x21 maps (2 x 3
+# tiles, partial both ways).  Icarus simulates the 8x8 array slowly (every
+# loaded window row wakes the cells around it: about 5 ms a cycle on the
+# shared machine, against about 2 ms for Verilator's -O0 build, mostly
+# cocotb), so there it runs the sized cases on small maps; the controller
+# and stream cases run on Verilator at 8x8 and on Icarus with a non-square,
 # non-power-of-two 3x5 array on a 23x31 RAM (constant divisions, partial
 # tiles everywhere).
 # (sim, (t_r, t_c, max_h, max_w), random jobs, mid size, bundled maps, large, cocotb test filter or None)
 SIZED = "bundled_and_random|edge_cases"
 CASES = [
-    ("verilator", (8, 8, 64, 64), 6, "21x29", "room-64-64-8,random-64-64-10", 1, None),
-    ("icarus", (8, 8, 64, 64), 4, "21x29", "random-64-64-10", 0, SIZED),
-    ("icarus", (3, 5, 23, 31), 6, "23x31", "", 1, None),
+    ("verilator", (8, 8, 64, 64), 4, "13x21", "room-64-64-8", 1, None),
+    ("icarus", (8, 8, 64, 64), 4, "13x21", "", 0, SIZED),
+    ("icarus", (3, 5, 23, 31), 4, "11x17", "", 1, None),
 ]
 
 
