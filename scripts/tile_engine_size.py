@@ -60,8 +60,10 @@ def store_blocks(t_c, n, family):
     return sum(blocks(w, d, ECP5 if family == "ecp5" else ICE40) for _, w, d in ram.blocks())
 
 
-def largest(fits):
-    n = 1
+def largest(fits, n=1):
+    """The largest side n (from ``n`` on) with ``fits(n)``; None if not even ``n``."""
+    if not fits(n):
+        return None
     while fits(n + 1):
         n += 1
     return n
@@ -80,10 +82,10 @@ def ram_report(t_cs=(8, 16)):
     for part, (family, count) in PARTS.items():
         bits = count * BLOCK_BITS[family] + SPRAM.get(part, 0)
         raw = largest(lambda n: n * n * state_bits(n, n)["total"] <= bits)
-        rtl = [largest(lambda n: store_blocks(t, n, family) <= count) for t in t_cs]
+        rtl = [largest(lambda n: store_blocks(t, n, family) <= count, t + 1) for t in t_cs]
         lines.append(f"| {part} | {count} x {BLOCK_BITS[family] // 1024} Kbit"
                      + (" + 4 SPRAM" if part in SPRAM else "") + f" | {raw}x{raw} | "
-                     + " / ".join(f"{n}x{n}" for n in rtl) + " |")
+                     + " / ".join(f"{n}x{n}" if n else "none" for n in rtl) + " |")
     return "\n".join(lines)
 
 
