@@ -1,4 +1,4 @@
-"""FuseSoC generator of the navcores cores: runs ``python -m hdl.emit``.
+"""FuseSoC generator of the navcores cores: runs ``python -m navcores.hdl.emit``.
 
 FuseSoC calls ``<interpreter> gen_<family>.py <input.yml>`` in an empty
 working directory (GAPI 1.0: ``parameters``, ``vlnv``, ``files_root``).
@@ -42,12 +42,12 @@ def main(family):
     # YAML booleans (par: true) are the command line's 1 / 0; null is the default.
     params = {k: int(v) if isinstance(v, bool) else v for k, v in params.items() if v is not None}
     python = os.environ.get("NAVCORES_PYTHON", sys.executable)
-    args = [python, "-m", "hdl.emit", str(top)] + [f"{k}={v}" for k, v in params.items()] + ["-o", "."]
+    args = [python, "-m", "navcores.hdl.emit", str(top)] + [f"{k}={v}" for k, v in params.items()] + ["-o", "."]
     r = subprocess.run(args, capture_output=True, text=True)
     if r.returncode:
         err = (r.stderr.strip().splitlines() or ["?"])[-1]
-        if "No module named hdl" in r.stderr:
-            err = f"{python} cannot import hdl.emit: pip install -e <navcores clone> (or set NAVCORES_PYTHON)"
+        if "No module named navcores" in r.stderr:
+            err = f"{python} cannot import navcores.hdl.emit: pip install <navcores clone> (or set NAVCORES_PYTHON)"
         fail(err)
     verilog = [Path(line).name for line in r.stdout.split() if line.endswith(".v")]
     manifest = [Path(line).name for line in r.stdout.split() if line.endswith(".json")]

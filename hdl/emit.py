@@ -6,7 +6,7 @@ module: the file and module names carry the parameters
 
     python -m hdl.emit --list [--json]                  # tops, parameters, types, defaults, ranges
     python -m hdl.emit TOP [name=value ...] [-o DIR]    # DIR/<module>.v + DIR/<module>.json
-    python -m hdl.emit [OUT_DIR]                        # every top at its listed sets (make verilog)
+    python -m hdl.emit [OUT_DIR]                        # every top at its default sets (make verilog)
     python -m hdl.emit --manifests docs/manifests       # only their manifests (the committed copies)
 
 The parameters' types, defaults and ranges are the components' own
@@ -17,8 +17,17 @@ its direction and width, the stream it belongs to and its role (valid,
 ready, payload with the payload's fields and bit ranges), clock and reset,
 and the cycle figures of the component's ``timing()``; emitting checks it
 against the port list of the Verilog it wrote.  Bad parameters print the
-component's one-line message and exit with status 2.
+component's one-line message and exit with status 2.  The default sets are
+the catalog's (:mod:`hdl.catalog`, with the papers' figures).
 """
+
+if __name__ == "__main__":
+    # `python -m navcores.hdl.emit`, or `python -m hdl.emit` in a source tree:
+    # run the module under its package name, so that no class is loaded a
+    # second time as __main__'s (or as the top-level hdl's).
+    import sys
+    from navcores.hdl.emit import main
+    sys.exit(main())
 
 import argparse
 import inspect
@@ -31,22 +40,25 @@ from pathlib import Path
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 from amaranth.back import verilog  # noqa: E402
-from amaranth.hdl import Shape  # noqa: E402
+from amaranth.hdl import Const, Shape, ValueCastable  # noqa: E402
 from amaranth.lib import data, stream, wiring  # noqa: E402
 
+# The sets `make verilog` emits (the tests emit their own): the catalog's.
+from .catalog import DEFAULT_SETS  # noqa: E402
 from .dflc.core import DflcCore  # noqa: E402
-from .dflc.multi import DflcMulti  # noqa: E402
-from .dflc.top import DflcStream, config_for  # noqa: E402
+from .dflc.top import DflcStream, core_from_params  # noqa: E402
 from .edt_bfs.array import EdtArray  # noqa: E402
 from .edt_bfs.cell import EdtCell  # noqa: E402
 from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
 from .edt_bfs.tile_engine import TileEngine  # noqa: E402
+from .harmonic.border import Border  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
+from .harmonic.decision import Decision  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
 from .harmonic.planner import Planner  # noqa: E402
 from .harmonic.block import Block  # noqa: E402
-from .params import REQUIRED, Param, check, parse  # noqa: E402
+from .params import REQUIRED, Param, check, parse, unelaborated  # noqa: E402
 
 __all__ = ["TOPS", "DEFAULT_SETS", "SPECS", "top_name", "emit", "manifest", "params_of", "main"]
 
@@ -55,45 +67,35 @@ TOPS = {
     "harmonic_node": Node,
     "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
+    "harmonic_decision": Decision,
+    # the border storage of an n x m block, for its unit test and synthesis
+    "harmonic_border": lambda n, m, br=1, bc=1, p_max=30, exponents=0, e_max=255: Border(
+        n, m, (br, bc), p_max, bool(exponents), e_max),
     "harmonic_block": lambda n, m, br=1, bc=1, p_max=30, depth=1024, exponents=0, e_max=255: Block(
         n, m, (br, bc), p_max, depth, bool(exponents), e_max),
     "harmonic_planner": lambda n=6, m=12, br=2, bc=2, p_max=30, depth=1024, block_exponents=0, e_max=255,
     headroom=1: Planner(n, m, (br, bc), p_max, depth, bool(block_exponents), e_max, headroom),
-    # DFLC: fll = a .fll stem (models/dflc_<fll>.fll or tb/dflc/fll/<fll>.fll),
+    # DFLC: fll = a .fll path or the stem of a shipped one (models/dflc_<fll>.fll),
     # widths ip_sz, dy_ip, mf_op_sz, op_sz, div (lut/array), op (sel_op), par (1 = parallel),
     # psr1_no .. psr4_no, cpr1_no .. cpr9_no (Table 2 pipeline registers)
     "dflc_stream": DflcStream,
-    "dflc_core": lambda **kw: DflcCore.from_params(**kw),
-    "dflc_multi": DflcMulti,     # test top: the regression's configurations in one build
+    "dflc_core": core_from_params,
     "edt_cell": EdtCell,
-    "edt_array": EdtArray,
-    "edt_bfs": EdtBfs,
+    # The array's cells instantiate one module, named after the top (instance_modules).
+    "edt_array": lambda height, width: EdtArray(height, width, cell_module=_cell_module("edt_array", height, width)),
+    "edt_bfs": lambda height, width: EdtBfs(height, width, cell_module=_cell_module("edt_bfs", height, width)),
     "edt_tile_engine": TileEngine,
 }
 
 # The class whose PARAMS / CONSTRAINTS a factory above takes (when it is not a class).
 SPECS = {
+    "harmonic_border": Border,
     "harmonic_block": Block,
     "harmonic_planner": Planner,
     "dflc_core": DflcStream,
+    "edt_array": EdtArray,
+    "edt_bfs": EdtBfs,
 }
-
-# Parameter sets `make verilog` emits (the tests emit their own on demand).
-DEFAULT_SETS = [
-    ("harmonic_node", {}),
-    ("harmonic_counters", {"p_max": 1022}),
-    ("harmonic_cluster", {"depth": 1024}),
-    ("harmonic_cluster", {"depth": 1024, "p_max": 255}),
-    ("harmonic_block", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024}),
-    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}),
-    ("dflc_stream", {"fll": "table1"}),
-    ("dflc_core", {"fll": "table1"}),
-    ("dflc_core", {"fll": "table1", "par": 1}),
-    ("edt_cell", {"height": 32, "width": 32}),
-    ("edt_bfs", {"height": 16, "width": 16}),
-    ("edt_bfs", {"height": 32, "width": 32}),
-    ("edt_tile_engine", {"t_r": 8, "t_c": 8, "max_h": 64, "max_w": 64}),
-]
 
 _SHORT = {"p_max": "pmax", "fll": ""}
 
@@ -116,9 +118,15 @@ def top_name(name, params):
     return name + tail
 
 
-def params_of(name):
-    """(PARAMS, CONSTRAINTS) of top ``name``: the component's declarations."""
-    cls = SPECS.get(name, TOPS[name])
+def _cell_module(top, height, width):
+    """The EDT/BFS cell's module name in the Verilog of ``top``: ``<top module>_cell``."""
+    return top_name(top, {"height": height, "width": width}) + "_cell"
+
+
+def params_of(name, factory=None):
+    """(PARAMS, CONSTRAINTS) of top ``name``: the component's declarations
+    (``factory``'s, for a top that is not in TOPS)."""
+    cls = factory or SPECS.get(name, TOPS[name])
     params = getattr(cls, "PARAMS", None)
     if params is None:      # a top without declarations: its signature, no ranges
         sig = inspect.signature(cls)
@@ -129,11 +137,15 @@ def params_of(name):
     return params, getattr(cls, "CONSTRAINTS", ())
 
 
-def build(name, params):
-    """The component of ``name`` at ``params`` (checked by the component itself)."""
-    if name not in TOPS:
+def build(name, params, factory=None):
+    """The component of ``name`` at ``params`` (checked by the component itself).
+
+    ``factory``: the component class (or a function of the parameters) of a
+    top that is not in TOPS, e.g. a test's own top; ``name`` then only names
+    its module (:func:`top_name`)."""
+    if factory is None and name not in TOPS:
         raise ValueError(f"unknown top {name!r}; tops: {', '.join(TOPS)}")
-    decl, _ = params_of(name)
+    decl, _ = params_of(name, factory)
     missing = [p.name for p in decl if p.default is REQUIRED and p.name not in params]
     if missing:
         raise ValueError(f"{name}: missing parameter{'s' * (len(missing) > 1)} {', '.join(missing)} "
@@ -142,7 +154,7 @@ def build(name, params):
     # the rest (a parameter a top takes but does not declare passes through).
     names = {p.name for p in decl}
     check(decl, **{k: v for k, v in params.items() if k in names})
-    return TOPS[name](**params)
+    return (factory or TOPS[name])(**params)
 
 
 # -- manifest
@@ -164,11 +176,33 @@ def _fields(shape, offset=0, prefix=""):
     return [entry]
 
 
+def _signature_ports(component):
+    """(path, member, value) of every port of the component's signature that
+    becomes a module port: a constant member (the ``ready`` of an
+    ``always_ready`` stream, the ``valid`` of an ``always_valid`` one) is
+    none.  Amaranth 0.5 refuses constants as ports
+    (amaranth-lang/amaranth#1574), so :func:`emit` passes these explicitly."""
+    return [(path, member, value) for path, member, value in component.signature.flatten(component)
+            if not isinstance(value, Const)]
+
+
+def _convert(component, module):
+    """The component's Verilog: ``verilog.convert`` with the ports it would
+    take from the signature itself, minus the constant members."""
+    from amaranth.hdl._ir import PortDirection     # what verilog.convert uses for a component's ports
+    ports = {}
+    for path, member, value in _signature_ports(component):
+        value = value.as_value() if isinstance(value, ValueCastable) else value
+        ports["__".join(map(str, path))] = (
+            value, PortDirection.Input if member.flow == wiring.Flow.In else PortDirection.Output)
+    return verilog.convert(component, name=module, emit_src=False, ports=ports)
+
+
 def ports_of(component):
     """The component's ports from its signature, in signature order."""
     sig = component.signature
     ports = []
-    for path, member_, value in sig.flatten(component):
+    for path, member_, value in _signature_ports(component):
         shape = value.shape()
         s = Shape.cast(shape)
         port = {"name": "__".join(str(p) for p in path),
@@ -193,11 +227,15 @@ def streams_of(component, ports):
             s = member.signature
             out[name] = {
                 "direction": "sink (into the core)" if member.flow == wiring.Flow.In else "source (out of the core)",
-                "valid": f"{name}__valid", "ready": f"{name}__ready", "payload": f"{name}__payload",
+                "valid": None if s.always_valid else f"{name}__valid",
+                "ready": None if s.always_ready else f"{name}__ready",
+                "payload": f"{name}__payload",
                 "payload_width": Shape.cast(s.members["payload"].shape).width,
                 "always_valid": s.always_valid, "always_ready": s.always_ready,
-                "protocol": "a beat moves on a rising clk edge with valid and ready both high; "
-                            "valid never depends on ready",
+                "protocol": ("a beat moves on a rising clk edge with valid and ready both high; "
+                             "valid never depends on ready") if not s.always_ready else
+                            ("always_ready, no ready port (no back-pressure): a beat moves on every "
+                             "rising clk edge with valid high; the consumer must take it"),
             }
     return out
 
@@ -212,12 +250,11 @@ def _value(component, p, params):
     return None if p.default is REQUIRED else p.default
 
 
-def manifest(name, params, component=None):
-    """The manifest of ``name`` at ``params`` (a dict; JSON-ready)."""
+def manifest(name, params, component=None, factory=None):
+    """The manifest of ``name`` at ``params`` (a dict; JSON-ready); ``factory`` as in :func:`build`."""
     if component is None:
-        component = build(name, params)
-        _silence(component)         # only its signature is read
-    decl, constraints = params_of(name)
+        component = unelaborated(build(name, params, factory))     # only described
+    decl, constraints = params_of(name, factory)
     timing = component.timing() if hasattr(component, "timing") else {}
     ports = ports_of(component)
     return {
@@ -236,13 +273,7 @@ def manifest(name, params, component=None):
     }
 
 
-def _silence(component):
-    """No "created but never used" warning for a component (and the parts its
-    constructor built) that is only described, not elaborated."""
-    for obj in (component, *vars(component).values()):
-        if hasattr(obj, "elaborate"):
-            obj._MustUse__silence = True
-
+_TOP_ATTR = "(* top =  1  *)\n"          # as yosys' write_verilog prints the attribute
 
 _PORT = re.compile(r"^\s*(input|output)\s+(?:signed\s+)?(?:\[(\d+):(\d+)\]\s*)?(\S+)\s*;", re.M)
 
@@ -254,17 +285,24 @@ def verilog_ports(text, module):
     return {m[4]: (m[1], int(m[2]) - int(m[3]) + 1 if m[2] else 1) for m in _PORT.finditer(body)}
 
 
-def emit(name, params, out_dir, with_manifest=True):
-    """Write ``out_dir/<top_name>.v`` and ``.json`` (only if their text changed);
-    returns the Verilog file's path."""
+def emit(name, params, out_dir, with_manifest=True, factory=None, before_work=None):
+    """Write ``out_dir/<top_name>.v`` and ``.json`` (only if their text changed,
+    both after the manifest is checked, each replaced in one step); returns
+    the Verilog file's path.  ``factory`` as in :func:`build`;
+    ``before_work()``: called once the component accepted its parameters,
+    before the conversion (the command line checks the output folder there)."""
     module = top_name(name, params)
-    component = build(name, params)
-    man = manifest(name, params, component) if with_manifest else None
-    text = verilog.convert(component, name=module, emit_src=False)
+    component = build(name, params, factory)
+    if before_work is not None:
+        try:
+            before_work()
+        except BaseException:
+            unelaborated(component)         # refused before any work: never elaborated
+            raise
+    man = manifest(name, params, component, factory) if with_manifest else None
+    text = verilog_text(component, module)
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     path = out / f"{module}.v"
-    _write(path, text)
     if man is not None:
         # The manifest describes what was emitted: same ports, same widths.
         # (Amaranth emits no zero-width port: such a member is absent from the module.)
@@ -276,8 +314,23 @@ def emit(name, params, out_dir, with_manifest=True):
                                f"{sorted(set(got.items()) ^ set(want.items()))}")
         if CLOCK["name"] not in clocking:
             man["clock"] = man["reset"] = None
+    out.mkdir(parents=True, exist_ok=True)
+    _write(path, text)
+    if man is not None:
         _write(out / f"{module}.json", json.dumps(man, indent=1) + "\n")
     return path
+
+
+def verilog_text(component, module):
+    """The Verilog of ``component`` as module ``module``, followed by the
+    modules it instantiates by name (``component.instance_modules()``:
+    {module name: component}, e.g. the EDT/BFS array's cell), each converted
+    under its name: one self-contained file.  Only ``module`` keeps the
+    ``top`` attribute, so tools that look for it find the one top."""
+    text = _convert(component, module)
+    for sub_name, sub in getattr(component, "instance_modules", dict)().items():
+        text += _convert(sub, sub_name).replace(_TOP_ATTR, "", 1)
+    return text
 
 
 def manifest_text(name, params):
@@ -287,11 +340,35 @@ def manifest_text(name, params):
 
 
 def _write(path, text):
-    if not path.exists() or path.read_text() != text:
-        path.write_text(text)
+    """``text`` into ``path`` if it differs, through a temporary file renamed
+    over it (no partial file)."""
+    if path.exists() and path.read_text() == text:
+        return
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    try:
+        tmp.write_text(text)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
 
 
 # -- command line
+
+def plain(text):
+    """Docstring text as plain words: Sphinx roles and literals unwrapped
+    (:class:`~a.B` -> B, ``x`` -> x), lines joined."""
+    text = re.sub(r":[a-z]+:`~?([^`<]*?)(?:\s*<[^>]*>)?`", lambda m: m[1].split(".")[-1] if m[0].count("~")
+                  else m[1], text)
+    text = re.sub(r"``([^`]*)``", r"\1", text)
+    text = re.sub(r"`([^`]*)`", r"\1", text)
+    return " ".join(text.split())
+
+
+def _summary(cls):
+    """The first paragraph of a class's docstring, whole and plain."""
+    doc = inspect.getdoc(cls) or ""
+    return plain(doc.split("\n\n")[0])
+
 
 def listing():
     """Every top with its parameters (the components' declarations)."""
@@ -299,47 +376,117 @@ def listing():
     for name in TOPS:
         decl, constraints = params_of(name)
         cls = {"dflc_core": DflcCore}.get(name, SPECS.get(name, TOPS[name]))
-        doc = (inspect.getdoc(cls) or "").split("\n")[0]
-        out[name] = {"doc": doc, "parameters": [p.describe() for p in decl],
-                     "constraints": [c.text for c in constraints]}
+        params = []
+        for p in decl:
+            d = p.describe()
+            d["doc"] = plain(d["doc"])
+            params.append(d)
+        out[name] = {"doc": _summary(cls), "parameters": params,
+                     "constraints": [c.text for c in constraints],
+                     "constraint_reasons": {c.text: c.why for c in constraints if getattr(c, "why", "")}}
     return out
 
 
-def _print_listing(tops):
+def _print_listing(tops, width=100):
+    import textwrap
+    wrap = lambda text, indent: textwrap.fill(text, width, initial_indent=indent,       # noqa: E731
+                                              subsequent_indent=indent + "    ")
     for name, t in tops.items():
-        print(f"{name}: {t['doc']}")
+        print(wrap(f"{name}: {t['doc']}", ""))
         if not t["parameters"]:
             print("    (no parameters)")
         for p in t["parameters"]:
-            default = "required" if p["required"] else f"default {p['default']}"
-            print(f"    {p['name']}: {p['type']}, {p['allowed']}, {default}"
-                  + (f"  -- {p['doc']}" if p["doc"] else ""))
+            default = ("required" if p["required"] else "default derived (see its text)" if p["default"] is None
+                       else f"default {int(p['default']) if isinstance(p['default'], bool) else p['default']}")
+            print(wrap(f"{p['name']}: {p['type']}, {p['allowed']}, {default}"
+                       + (f" -- {p['doc']}" if p["doc"] else ""), "    "))
         for c in t["constraints"]:
-            print(f"    constraint: {c}")
+            why = t.get("constraint_reasons", {}).get(c)
+            print(wrap(f"constraint: {c}" + (f" ({why})" if why else ""), "    "))
+
+
+EXIT_STATUS = "exit status: 0 done; 2 bad input (one line on stderr, nothing written)"
+
+
+def _fail(msg, status=2):
+    print(f"python -m hdl.emit: error: {msg}", file=sys.stderr)
+    raise SystemExit(status)
+
+
+def _out_dir(path, option):
+    """A folder the command can write into: created if missing, checked by
+    writing a probe file (before any work)."""
+    import tempfile
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        _fail(f"{option} {path}: is a file, not a folder")
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=p, prefix=".emit_probe_"):
+            pass
+    except OSError as e:
+        _fail(f"{option} {path}: cannot write there ({e.strerror or e})")
+    return p
+
+
+def _is_folder(arg):
+    """The legacy form's lone argument: a folder (a path with a separator, or
+    an existing folder), never a word that could be a misspelt top."""
+    return "/" in arg or os.sep in arg or Path(arg).is_dir()
 
 
 def main(argv=None):
-    argv = sys.argv[1:] if argv is None else argv
-    # Legacy form (make verilog): no arguments, or one output directory.
+    argv = sys.argv[1:] if argv is None else list(argv)
+    try:
+        return _main(argv)
+    except SystemExit as e:
+        return e.code if isinstance(e.code, int) else 2
+    except (ValueError, TypeError) as e:
+        return _status(str(e).splitlines()[0] if str(e) else type(e).__name__)
+    except OSError as e:
+        name = f"{e.filename}: " if getattr(e, "filename", None) else ""
+        return _status(f"{name}{e.strerror or e}")
+    except MemoryError:
+        return _status("out of memory: these parameters need more than this machine has")
+    except KeyboardInterrupt:
+        print("python -m hdl.emit: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # noqa: BLE001 - one line, never a traceback
+        if os.environ.get("EMIT_DEBUG") == "1":
+            raise
+        return _status(f"internal error: {type(e).__name__}: {e} (EMIT_DEBUG=1 shows the traceback)", 70)
+
+
+def _status(msg, status=2):
+    try:
+        _fail(msg, status)
+    except SystemExit as e:
+        return e.code
+
+
+def _main(argv):
+    # Legacy form (make verilog): no arguments, or one output folder.
     if not argv or (len(argv) == 1 and not argv[0].startswith("-") and argv[0] not in TOPS
-                    and "=" not in argv[0]):
-        out_dir = argv[0] if argv else "build/verilog"
+                    and "=" not in argv[0] and _is_folder(argv[0])):
+        out_dir = _out_dir(argv[0] if argv else "build/verilog", "OUT_DIR")
         for name, params in DEFAULT_SETS:
             print(emit(name, params, out_dir))
         return 0
     ap = argparse.ArgumentParser(
         prog="python -m hdl.emit",
         description="Verilog and a JSON manifest of one top at one parameter set "
-                    "(no TOP: every top at its default sets into build/verilog).")
+                    "(no TOP: every top at its default sets into build/verilog; a lone folder path "
+                    "(with a '/') instead of TOP: into that folder).",
+        epilog=EXIT_STATUS)
     ap.add_argument("top", nargs="?", help="top name (see --list)")
     ap.add_argument("params", nargs="*", metavar="name=value", help="parameters")
-    ap.add_argument("-o", "--out", default=".", help="output directory (default: .)")
-    ap.add_argument("--list", action="store_true", help="list the tops and their parameters")
+    ap.add_argument("-o", "--out", default=".", help="output folder (default: .; created if missing)")
+    ap.add_argument("--list", action="store_true", help="list the tops and their parameters, with their bounds")
     ap.add_argument("--json", action="store_true", help="with --list: JSON")
     ap.add_argument("--no-manifest", action="store_true", help="Verilog only")
     ap.add_argument("--manifests", metavar="DIR",
                     help="only the manifests of every default set into DIR (docs/manifests)")
-    ap.error = lambda msg: _fail(msg)
+    ap.error = lambda msg: _fail(f"{msg} (see --help)")
     args = ap.parse_args(argv)
     if args.list:
         tops = listing()
@@ -349,31 +496,24 @@ def main(argv=None):
             _print_listing(tops)
         return 0
     if args.manifests:
-        for name, params in DEFAULT_SETS:
-            path = Path(args.manifests) / f"{top_name(name, params)}.json"
-            path.parent.mkdir(parents=True, exist_ok=True)
-            _write(path, manifest_text(name, params))
+        out = _out_dir(args.manifests, "--manifests")
+        texts = [(out / f"{top_name(name, params)}.json", manifest_text(name, params))
+                 for name, params in DEFAULT_SETS]
+        for path, text in texts:
+            _write(path, text)
             print(path)
         return 0
     if args.top is None:
         _fail("give a TOP (or --list)")
-    try:
-        if args.top not in TOPS:
-            raise ValueError(f"unknown top {args.top!r}; tops: {', '.join(TOPS)}")
-        params = parse(params_of(args.top)[0], args.params)
-        path = emit(args.top, params, args.out, with_manifest=not args.no_manifest)
-    except (ValueError, TypeError) as e:
-        _fail(str(e).splitlines()[0] if str(e) else type(e).__name__)
+    if args.top not in TOPS:
+        hint = (f" (a folder for every default set is a path: python -m hdl.emit ./{args.top})"
+                if not args.params and "=" not in args.top else "")
+        _fail(f"unknown top {args.top!r}; tops: {', '.join(TOPS)}{hint}")
+    params = parse(params_of(args.top)[0], args.params)
+    # the component's own checks first, then the output folder, then the work
+    path = emit(args.top, params, args.out, with_manifest=not args.no_manifest,
+                before_work=lambda: _out_dir(args.out, "-o"))
     print(path)
     if not args.no_manifest:
         print(path.with_suffix(".json"))
     return 0
-
-
-def _fail(msg):
-    print(f"python -m hdl.emit: error: {msg}", file=sys.stderr)
-    sys.exit(2)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -101,6 +101,7 @@ DEFAULT_FLL = Path(__file__).resolve().parent / "dflc_table1.fll"
 _CONJ = {"Minimum": "min", "AlgebraicProduct": "prod"}
 _DISJ = {"Maximum": "max", "AlgebraicSum": "probor"}
 _INF = 1 << 62
+FLL_MAX_BYTES = 16 << 20
 
 
 class FllError(ValueError):
@@ -401,9 +402,19 @@ def load_fll(path, *, ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div_type="lut", 
     if sel_op is not None and sel_op not in SEL_OPS:
         raise ValueError(f"sel_op = {sel_op!r}: expected one of {SEL_OPS}")
     try:
-        text = path.read_text()
+        data = path.read_bytes()
     except OSError as e:
         raise FllError(f"{path}: cannot read: {e.strerror or e}") from None
+    if len(data) > FLL_MAX_BYTES:
+        raise FllError(f"{path}: {len(data)} bytes; at most {FLL_MAX_BYTES >> 20} MiB (about 200,000 rule "
+                       "lines) are read: pyfuzzylite holds the whole engine in memory")
+    try:
+        text = data.decode("utf-8")
+        if "\0" in text:
+            raise UnicodeDecodeError("utf-8", data, text.index("\0"), text.index("\0") + 1, "NUL")
+    except UnicodeDecodeError as e:
+        line = data[:e.start].count(b"\n") + 1
+        raise FllError(f"{path}:{line}: byte 0x{data[e.start]:02x} is not UTF-8 text: not an FLL file") from None
     try:
         engine = fl.FllImporter().from_string(text)
     except Exception as e:  # noqa: BLE001 - pyfuzzylite raises many kinds

@@ -204,8 +204,10 @@ def edt_step(k, done, delta, dx, dy, di, nb):
             np.where(enable, k, di), enable)
 
 
-def edt(obstacle):
-    """EDT and NNT of a bool image (True = obstacle) by step 2 of Parallel_Path_Plan."""
+def edt(obstacle, progress=None):
+    """EDT and NNT of a bool image (True = obstacle) by step 2 of Parallel_Path_Plan.
+
+    ``progress(k)``: called after every iteration k (a command's progress line)."""
     obstacle = np.asarray(obstacle, dtype=bool)
     if obstacle.ndim != 2 or obstacle.size == 0:
         raise ValueError(f"obstacle must be a non-empty 2-D array, got shape {obstacle.shape}")
@@ -219,6 +221,8 @@ def edt(obstacle):
         nb = {i: (_shift(done, OFFSETS[i], False), _shift(delta, OFFSETS[i], 0),
                   _shift(dx, OFFSETS[i], 0), _shift(dy, OFFSETS[i], 0)) for i in range(1, 9)}
         done, delta, dx, dy, di, changed = edt_step(k, done, delta, dx, dy, di, nb)
+        if progress is not None:
+            progress(k)
         if not changed.any():
             break
     rows, cols = np.indices((h, w))
@@ -254,10 +258,10 @@ def bfs_step(cfr, visited, parent, nb_visited):
     return visited | enable, np.where(enable, first, parent), enable
 
 
-def bfs(cfr, goals):
+def bfs(cfr, goals, progress=None):
     """BFS forest over 8-connected cfr pixels from the goals inside the cfr.
 
-    Returns ``(visited, parent, iterations)``.
+    Returns ``(visited, parent, iterations)``; ``progress(k)`` after every iteration k.
     """
     cfr = np.asarray(cfr, dtype=bool)
     visited = np.zeros_like(cfr)
@@ -270,6 +274,8 @@ def bfs(cfr, goals):
         k += 1
         nb = {i: _shift(visited, OFFSETS[i], False) for i in range(1, 9)}
         visited, parent, changed = bfs_step(cfr, visited, parent, nb)
+        if progress is not None:
+            progress(k)
         if not changed.any():
             return visited, parent, k
 
@@ -303,19 +309,20 @@ def _check_cell(shape, cell, what):
     return int(r), int(c)
 
 
-def plan_path(obstacle, goals, start, dfar):
+def plan_path(obstacle, goals, start, dfar, progress=None):
     """Parallel_Path_Plan: EDT, cfr, BFS from ``goals`` and the path from ``start``.
 
     ``obstacle``: bool H x W (True = obstacle); ``goals``: list of (r, c);
     ``start``: (r, c) or None (no path read-out); ``dfar``: integer >= 0.
+    ``progress(stage, k)``: after every iteration k of stage "EDT" / "BFS".
     """
     obstacle = np.asarray(obstacle, dtype=bool)
     goals = [_check_cell(obstacle.shape, g, "goal") for g in goals]
     if start is not None:
         start = _check_cell(obstacle.shape, start, "start")
-    e = edt(obstacle)
+    e = edt(obstacle, progress and (lambda k: progress("EDT", k)))
     cfr = cfr_map(e.done, e.distance, int(dfar))
-    visited, parent, it_bfs = bfs(cfr, goals)
+    visited, parent, it_bfs = bfs(cfr, goals, progress and (lambda k: progress("BFS", k)))
     path = trace_path(visited, parent, start)
     h, w = obstacle.shape
     return EdtBfsResult(

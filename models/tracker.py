@@ -62,8 +62,49 @@ import numpy as np
 from .robot import KHEPERA_II, Robot, wheel_speeds
 from .swam import Swam
 
-__all__ = ["TrackerParams", "canonical_inputs", "ClosedLoop", "distance_to_chain", "fired_rules", "run_model",
-           "track_chains"]
+__all__ = ["TrackerParams", "RangeError", "check_range", "check_run", "MAX_PERIODS", "canonical_inputs",
+           "wrap_degrees", "ClosedLoop", "distance_to_chain", "fired_rules", "run_model",
+           "track_chains", "loop_job", "loop_from_job"]
+
+
+class RangeError(ValueError):
+    """A run parameter out of its range: ``name``, ``value`` and the reason."""
+
+    def __init__(self, name, value, why):
+        super().__init__(f"{name} {value:g}: {why}" if isinstance(value, (int, float)) else f"{name} {value}: {why}")
+        self.name, self.value, self.why = name, value, why
+
+
+# The ranges of a run, and why (one place: TrackerParams, ClosedLoop and the commands check with these).
+MIN_SPEED = 0.008        # m/s: the Khepera II's speed unit, one 0.08 mm encoder pulse per 10 ms
+MAX_SPEED = 1.0          # m/s: the Khepera II's top speed (KHEPERA_II.max_wheel_speed)
+MAX_LOOKAHEAD = 1.0      # m: ten times the robot's size; the strip map needs Δ well below the chain length
+MAX_SLIP = 0.5           # relative: at s = 0.5 a wheel's ground travel is off by half its own
+MAX_SEED = 2 ** 63 - 1   # numpy's generator seeds
+# A run logs every period (poses, codes, curvatures: about 1 KB a period in
+# Python objects): 2,000,000 periods (7 h of driving at 12.5 ms, 25 km at
+# 1 m/s) is about 2 GB, what this class of machine can spend.
+MAX_PERIODS = 2_000_000
+
+
+def check_range(name, value, lo, hi, why, lo_open=False):
+    """``value`` if ``lo <= value <= hi`` (``lo_open``: ``lo < value``) and finite, else RangeError."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        raise RangeError(name, value, "must be a finite number")
+    if (value <= lo if lo_open else value < lo) or value > hi:
+        raise RangeError(name, value, f"must be in {'(' if lo_open else '['}{lo:g}, {hi:g}] ({why})")
+    return value
+
+
+def check_run(speed, lookahead, slip=0.0, seed=0):
+    """The ranges of a closed-loop run (speed, look-ahead, slip, seed), with reasons."""
+    check_range("speed", speed, MIN_SPEED, MAX_SPEED, "m/s: the Khepera II moves in steps of 8 mm/s "
+                "(one encoder pulse per 10 ms) up to 1 m/s")
+    check_range("lookahead", lookahead, 0.0, MAX_LOOKAHEAD, "m: a look-ahead beyond 1 m is no tracking "
+                "of a path", lo_open=True)
+    check_range("slip", slip, 0.0, MAX_SLIP, "relative wheel slip: 0.5 is half of every wheel turn lost")
+    if not isinstance(seed, int) or isinstance(seed, bool) or not 0 <= seed <= MAX_SEED:
+        raise RangeError("seed", seed, f"must be an integer in 0..{MAX_SEED} (the slip noise generator's seeds)")
 
 
 @dataclass(frozen=True)
@@ -74,20 +115,21 @@ class TrackerParams:
     kappa_limit: float = 120.0   # 1/m, limit on the commanded physical curvature
 
     def __post_init__(self):
-        for name in ("speed", "lookahead", "kappa_fs", "kappa_limit"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"tracker parameter {name} must be > 0, got {getattr(self, name)}")
+        check_run(self.speed, self.lookahead)
+        for name in ("kappa_fs", "kappa_limit"):
+            check_range(name, getattr(self, name), 0.0, 1e6, "1/m", lo_open=True)
 
 
-def _wrap_deg(a):
+def wrap_degrees(a):
+    """An angle (degrees; scalar or array) wrapped by whole turns into [-180, 180)."""
     return (a + 180.0) % 360.0 - 180.0
 
 
 def canonical_inputs(qc, delta):
     """φ1, φ2 (degrees, [-180, 180)) of canonical state ``qc`` with canonical look-ahead ``delta``."""
     _, y, th = qc
-    phi1 = _wrap_deg(math.degrees(math.atan2(-y, delta) - th))
-    phi2 = _wrap_deg(math.degrees(-th))
+    phi1 = wrap_degrees(math.degrees(math.atan2(-y, delta) - th))
+    phi2 = wrap_degrees(math.degrees(-th))
     return phi1, phi2
 
 
@@ -134,8 +176,16 @@ class ClosedLoop:
             approach = 0.0 if (d0 < 0.005 and heading_err < 5) else 4 * d0 + 4 * params.lookahead
         self.approach = float(approach)
         self.progress0 = float(x0) * first.length
+        if len(self.chains) == 1 and float(x0) >= 1.0:
+            raise ValueError(f"the start ({start[0]:g}, {start[1]:g}) lies past the end of the path "
+                             f"(its projection is {float(x0) * first.length:.3f} m along a {first.length:.3f} m "
+                             "chain): nothing to track")
         self.max_steps = max_steps or int(3 * (total + 4 * d0 + 0.5)
                                           / (params.speed * self.robot.params.period)) + 400
+        if self.max_steps > MAX_PERIODS:
+            raise ValueError(f"the run may need {self.max_steps} control periods of 12.5 ms (a {total:.4g} m "
+                             f"path, the start {d0:.3g} m off it, at {params.speed:g} m/s); at most {MAX_PERIODS} "
+                             "are run (7 h of driving, about 2 GB of log)")
         self.steps = 0
         self.log = {k: [] for k in ("true", "odometry", "codes", "y_code", "zero", "kappa_p", "phi", "chain",
                                         "approach")}
@@ -223,6 +273,7 @@ class ClosedLoop:
             "reached_end": bool(self.done),
             "steps": self.steps,
             "approach_m": self.approach,
+            "approach_steps": int(sum(self.log["approach"])),
             "samples_after_approach": int(after.sum()),
             "max_cross_track": float(sel_t.max()) if len(sel_t) else None,
             "rms_cross_track": float(np.sqrt((sel_t ** 2).mean())) if len(sel_t) else None,
@@ -246,18 +297,21 @@ def fired_rules(dflc, input_codes):
     return {int(r) for r in np.unique(rule[w > 0])}
 
 
-def run_model(loop, memo=None):
+def run_model(loop, memo=None, progress=None):
     """Run ``loop`` to its end with the DFLC golden model (``dflc.infer``); returns ``loop.result()``.
 
     ``memo`` (a dict, shared between runs with the same DFLC if given) caches
     the model's answer per input-code pair: the DFLC is a pure function of its
-    input codes, so this only saves time.
+    input codes, so this only saves time.  ``progress(steps, max_steps)``:
+    called every 1000 periods.
     """
     memo = {} if memo is None else memo
     while True:
         codes = loop.inputs()
         if codes is None:
             return loop.result()
+        if progress is not None and loop.steps % 1000 == 0:
+            progress(loop.steps, loop.max_steps)
         key = tuple(int(c) for c in codes)
         if key not in memo:
             y, zero = loop.dflc.infer(np.array([key]))
@@ -268,3 +322,23 @@ def run_model(loop, memo=None):
 def track_chains(chains, dflc, **kw):
     """Build a :class:`ClosedLoop` over ``chains`` and run it with the golden model."""
     return run_model(ClosedLoop(chains, dflc, **kw))
+
+
+def loop_job(chains, params, start, slip, seed, approach=None):
+    """Everything that defines a closed-loop run, as JSON-able data (the job an
+    RTL run of the loop reads inside the simulator: sim/rtl/track_job.py)."""
+    return {
+        "chains": [{"vertices": c.vertices.tolist(), "theta_s": c.theta_s} for c in chains],
+        "params": {"speed": params.speed, "lookahead": params.lookahead,
+                   "kappa_fs": params.kappa_fs, "kappa_limit": params.kappa_limit},
+        "start": list(start) if start is not None else None,
+        "slip": slip, "seed": seed, "approach": approach,
+    }
+
+
+def loop_from_job(job, dflc):
+    """The :class:`ClosedLoop` a :func:`loop_job` describes (used on both sides of the RTL run)."""
+    chains = [Swam(c["vertices"], theta_s=c["theta_s"]) for c in job["chains"]]
+    return ClosedLoop(chains, dflc, params=TrackerParams(**job["params"]),
+                      start=tuple(job["start"]) if job["start"] is not None else None,
+                      slip=job["slip"], seed=job["seed"], approach=job["approach"])

@@ -4,13 +4,14 @@ Writes BENCHMARKS.md (tables, the papers' own figures beside ours) and
 build/bench/results.json (the same figures as data).  Everything is measured
 by this run on this machine; only the papers' column is copied.
 
-1. Hardware, per top: Debian's yosys ``synth_xilinx -nowidelut`` cell counts
+1. Hardware, per top: yosys ``synth_xilinx -nowidelut`` cell counts
    (xc2v for the harmonic and EDT/BFS cores, xc3s for the DFLC: the papers'
    families; FF = FD*, LUT4 = LUT1..4 + INV, MULT = MULT18X18*, BRAM =
    RAMB16*), and a clock from nextpnr-ice40 place and route of the same
-   Verilog in the registered harness of scripts/fmax.py, on an iCE40-HX8K:
-   not the papers' Virtex/Spartan.  A top whose xc2v LUT4 count exceeds the
-   HX8K's 7680 logic cells is not placed ("does not fit").  The EDT/BFS
+   Verilog in the registered harness of scripts/fmax.py (the median of 3
+   seeds, as ``make fit``), on an iCE40-HX8K: not the papers' Virtex/
+   Spartan.  A top whose xc2v LUT4 count exceeds the HX8K's 7680 logic
+   cells is not placed ("does not fit").  The EDT/BFS
    arrays are synthesized with their hierarchy kept (the cell module once,
    counted per instance), the other tops flattened.
 2. Cycles per job, from simulations: the cluster RTL's cycles per iteration
@@ -24,13 +25,14 @@ by this run on this machine; only the papers' column is copied.
    the same inputs: median of several repeats (the count is in the table).
 4. Simulation speed: simulated cycles per wall second, from the cocotb
    results of the runs above (sim_time / wall time of the test, build
-   excluded), and an idle-clock probe (tb/simspeed.py) for tops without a job.
+   excluded), and an idle-clock probe (sim/rtl/simspeed.py) for tops without a job.
 5. The regression's wall time (build/regression.json, written by make test).
 6. The harmonic schedule study (scripts/bench_harmonic.py) and, when present,
    the block-exponent comparison (scripts/bench_exponents.py).
 
-Synthesis and place-and-route results are cached under build/bench/cache by
-the hash of the Verilog (a re-run only redoes what changed).
+yosys and nextpnr come from PyPI (scripts/toolchain.py); their runs are
+cached under build/cache by the hash of the Verilog, the tool's version and
+the options (a re-run only redoes what changed).
 
     python scripts/bench.py [--md BENCHMARKS.md] [--json build/bench/results.json]
                             [--skip study,simspeed,...]
@@ -51,45 +53,28 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))       # tb/ (not installed): the cluster's iteration job, run in the simulator
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 import fmax as fmax_mod  # noqa: E402
 import software  # noqa: E402
 import synth  # noqa: E402
-from hdl.emit import emit, top_name  # noqa: E402
-from sim.mapfile import load_map, load_scenarios  # noqa: E402
+import toolchain  # noqa: E402
+from navcores.hdl import catalog  # noqa: E402
+from navcores.hdl.emit import emit, top_name  # noqa: E402
+from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 OUT = ROOT / "build" / "bench"
-CACHE = OUT / "cache"
 PERIOD_NS = 10                  # every cocotb bench here clocks at 10 ns
 HX8K_LCS = 7680
+CLOCK_PART = fmax_mod.part("iCE40-HX8K")     # the part of the clock column
 PY = sys.executable
 PARTS = ("hardware", "harmonic", "dflc", "edt", "simspeed", "study")
 
-# (key, core, emitted top, params, yosys family, hierarchical synth, paper's figures)
-TOPS = [
-    ("node", "harmonic", "harmonic_node", {}, "xc2v", False,
-     "11 FF, 22 LUT4, 361 MHz (XC2V6000-5, Table 1)"),
-    ("cluster", "harmonic", "harmonic_cluster", {"depth": 1024}, "xc2v", False,
-     "198 FF, 398 LUT4 + 1 BRAM, 300 MHz (Table 2)"),
-    ("block", "harmonic", "harmonic_block",
-     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024}, "xc2v", False,
-     "48x96 block: 50699 FF, 101396 LUT4, 150 MHz (Table 3)"),
-    ("planner", "harmonic", "harmonic_planner",
-     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}, "xc2v", False,
-     "Control 844 slices, Decision 3p+682 slices"),
-    ("planner_exp", "harmonic", "harmonic_planner",
-     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256, "block_exponents": 1}, "xc2v", False,
-     "(beyond the paper: the block-exponent option, issue 10)"),
-    ("dflc", "dflc", "dflc_core", {"fll": "table1"}, "xc3s", False,
-     "1303 LUT4, 8 MULT18X18, 12 ROM64X1 + 54 ROM256X1, 85 MHz (core alone)"),
-    ("dflc_par", "dflc", "dflc_core", {"fll": "table1", "par": 1}, "xc3s", False,
-     "(beyond the paper)"),
-    ("edt_cell", "edt_bfs", "edt_cell", {"height": 16, "width": 16}, "xc2v", False,
-     "1188 gates (Table II, 'BFS and NNT'), 232 MHz (Table I)"),
-    ("edt_8x8", "edt_bfs", "edt_array", {"height": 8, "width": 8}, "xc2v", True, "-"),
-    ("edt_16x16", "edt_bfs", "edt_array", {"height": 16, "width": 16}, "xc2v", True, "-"),
-]
+# (key, core, emitted top, params, yosys family, hierarchical synth, paper's figures):
+# the catalog's synthesized sets (hdl/catalog.py).
+TOPS = [(s.name, "edt_bfs" if s.top.startswith("edt") else s.top.split("_")[0], s.top, s.params, s.family,
+         s.hierarchical, s.paper_text()) for s in catalog.SYNTHESIZED]
 
 
 def log(msg):
@@ -98,56 +83,28 @@ def log(msg):
 
 # --- 1. hardware --------------------------------------------------------------
 
-def _cached(kind, text, compute):
-    key = hashlib.sha1((kind + "\0" + text).encode()).hexdigest()[:20]
-    path = CACHE / f"{kind}_{key}.json"
-    if path.exists():
-        return json.loads(path.read_text())
-    value = compute()
-    CACHE.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(value))
-    return value
-
-
-def _stat_cells(log_text, hierarchical):
-    """Cell counts of the final yosys ``stat``: the whole design (summed over
-    the hierarchy, per instance) when ``hierarchical``."""
-    stat = log_text.rsplit("Printing statistics.", 1)[1]
-    if hierarchical and "=== design hierarchy ===" in stat:
-        stat = stat.split("=== design hierarchy ===", 1)[1]
-    cells = stat.split("Number of cells:", 1)[1].split("\n\n", 1)[0]
-    return {k: int(n) for k, n in re.findall(r"^\s+(\w+)\s+(\d+)$", cells, re.M)}
-
-
 def synthesize(top):
     key, core, name, params, family, hier, _ = top
     work = OUT / "synth"
     work.mkdir(parents=True, exist_ok=True)
     v = emit(name, params, work)
     module = top_name(name, params)
-    script = (f"read_verilog {v}; synth_xilinx -family {family} -top {module} "
+    script = (f"read_verilog {{v}}; synth_xilinx -family {family} -top {module} "
               f"{'' if hier else '-flatten '}-noiopad -noclkbuf -nowidelut; stat")
 
-    def compute():
-        logf = work / f"{module}.{family}.log"
-        t0 = time.time()
-        res = subprocess.run([synth.YOSYS, "-q", "-l", str(logf), "-p", script],
-                             capture_output=True, text=True)
-        if res.returncode:
-            return {"error": "yosys failed: " + res.stderr.strip()[-300:]}
-        cells = _stat_cells(logf.read_text(), hier)
-        sums, _ = synth.group(cells)
-        mult = sum(n for c, n in cells.items() if c.startswith("MULT18X18"))
-        return {"ff": sums["FF"], "lut4": sums["LUT"], "mult": mult, "bram": sums["BRAM"],
-                "cells": cells, "seconds": round(time.time() - t0, 1)}
-
     log(f"synth {module} ({family}{', hierarchical' if hier else ''})")
-    return _cached("synth", script + "\n" + v.read_text(), compute)
+    t0 = time.time()
+    stats = synth.yosys_stat(v, script)
+    cells = stats[None] if hier else stats[module]      # hierarchical: every instance counted
+    sums, _ = synth.group(cells)
+    mult = sum(n for c, n in cells.items() if c.startswith("MULT18X18"))
+    return {"ff": sums["FF"], "lut4": sums["LUT"], "mult": mult, "bram": sums["BRAM"],
+            "cells": dict(cells), "seconds": round(time.time() - t0, 1)}
 
 
 # Place-and-route parameters where the synthesized ones do not fit the HX8K's
 # 32 block RAMs: the clock does not depend on the RAM depth beyond its address width.
-FMAX_PARAMS = {"block": {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}}
+FMAX_PARAMS = {"block": catalog.PLANNER}
 
 
 def place(top, lut4):
@@ -156,10 +113,17 @@ def place(top, lut4):
     module = top_name(name, params)
     if lut4 is not None and lut4 > HX8K_LCS:
         return {"fmax_mhz": None, "error": f"does not fit the HX8K ({lut4} LUT4 > {HX8K_LCS} logic cells)"}
-    text = emit(name, params, OUT / "synth").read_text()
-    log(f"place and route {module} (iCE40)")
-    return _cached("fmax", fmax_mod.PART_NAME + "\n" + text,
-                   lambda: fmax_mod.fmax(name, params, OUT / "fmax"))
+    log(f"place and route {module} ({CLOCK_PART.name})")
+    try:
+        r = fmax_mod.fit(name, params, CLOCK_PART, jobs=1)     # hardware() runs two tops at once
+    except fmax_mod.FlowError as e:
+        return {"top": module, "fmax_mhz": None, "error": str(e)}
+    util = {k: f"{u}/{a}" for k, (u, a) in r["utilisation"].items()}
+    if not r["fits"]:
+        return {"top": module, "fmax_mhz": None, "error": "does not fit the part", "utilization": util}
+    return {"top": module, "fmax_mhz": r["fmax_mhz"], "seeds": r["seeds"], "critical_path": r["critical_path"],
+            "part": f"{CLOCK_PART.name} ({CLOCK_PART.package}), {r['tools']['nextpnr']}, median of "
+                    f"{len(r['seeds'])} seeds", "utilization": util}
 
 
 def hardware(jobs=2):
@@ -173,9 +137,8 @@ def hardware(jobs=2):
 
 # Tops that do not fit the HX8K, and the placed top whose clock their jobs use.
 CLOCK_FROM = {
-    "planner": ("block", "the planner top does not fit the HX8K (its multipliers become LUTs: the iCE40 HX has "
-                         "no DSP), so its jobs use the 6x12 block's clock, the array every iteration runs on; "
-                         "Control and Decision are not timed"),
+    "planner": ("block", "the planner top does not fit the HX8K, so its jobs use the 6x12 block's clock, "
+                         "the array every iteration runs on; Control and Decision are not timed"),
     "planner_exp": ("block", "as the planner top: the 6x12 block's clock (the exponent option's Control "
                              "and border conversion are not timed)"),
     "edt_8x8": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
@@ -232,14 +195,10 @@ def _job_speed(speeds, speed, sim, name, params):
 
 
 def bundled(name):
-    """(obstacle, goal, start) of a bundled map: its longest scenario."""
+    """(obstacle, goal, start) of a bundled map: its job (models.maps.longest_scenario)."""
     path = ROOT / "maps" / name
     obstacle = load_map(path)
-    scen = sorted(path.parent.glob(path.stem + "-even-*.scen"))
-    if not scen:            # no scenario file: the first and the last free cell
-        start, goal = _free_corners(obstacle)
-        return obstacle, goal, start
-    s = max(load_scenarios(scen[0], obstacle), key=lambda s: s.optimal_length)
+    s = longest_scenario(path, obstacle)
     return obstacle, tuple(s.goal), tuple(s.start)
 
 
@@ -273,28 +232,29 @@ HARMONIC_BLOCK, HARMONIC_I = (6, 12), 6           # the synthesized planner's bl
 
 
 def harmonic_jobs(hw, speeds, problems):
-    from models.harmonic import plan
-    from tb.harmonic.planner_bench import planner_params
-    from tb.runner import run
+    from navcores.models.harmonic import plan
+    from navcores.sim.rtl.planner_driver import planner_params
+    from navcores.sim.rtl.runner import run
     rows = []
     # One iteration at the paper's p = 128, measured on the cluster RTL.
     start, res = time.time(), OUT / "iteration.json"
     log("cluster RTL: cycles per iteration at p = 128 (icarus)")
-    run("harmonic_cluster", {"depth": 1024}, "icarus", "tb.harmonic.iteration_job",
+    cluster = catalog.get("cluster").params
+    run("harmonic_cluster", cluster, "icarus", "tb.harmonic.iteration_job",
         env={"ITER_P": 128, "ITER_N": 4, "ITER_RESULT": res}, log_file=OUT / "iteration.log")
     done = json.loads(res.read_text())["done_cycles"]
     gaps = sorted(set(np.diff(done).tolist()))
     per_iter = gaps[0] if len(gaps) == 1 else None
     if per_iter != 130:
         problems.append(f"cluster iteration at p=128 took {gaps} cycles, not p+2 = 130")
-    _job_speed(speeds, sim_speed_from(start, "icarus", "harmonic_cluster_depth1024"), "icarus",
-               "harmonic_cluster", {"depth": 1024})
+    _job_speed(speeds, sim_speed_from(start, "icarus", top_name("harmonic_cluster", cluster)), "icarus",
+               "harmonic_cluster", cluster)
     rng = np.random.default_rng(36)
     block = rng.random((36, 66)) < 0.1
     sw = software.jacobi_iteration(block, [(35, 65)])
     rows.append(row(hw, "harmonic", "one iteration, 36x66 block, p = 128", "block", per_iter,
                     "cluster RTL (icarus), done-to-done", sw["software"] + " (10% random obstacles)",
-                    sw["sw_seconds"], "100 us/iteration on a 2 GHz Pentium 4; p+2 cycles at 150 MHz; 'up to 100x'",
+                    sw["sw_seconds"], catalog.PAPER_JOBS["harmonic_iteration"],
                     "clock: the 6x12 block top's (a 36x66 block is the same array, larger)"))
     # Whole maps: the model's cycles (cycle-exact), one confirmed on the RTL below.
     for name in HARMONIC_MAPS:
@@ -306,7 +266,7 @@ def harmonic_jobs(hw, speeds, problems):
                         "planner", r.cycles if r.converged else None,
                         f"model (cycle-exact), {HARMONIC_BLOCK[0]}x{HARMONIC_BLOCK[1]} blocks, I = {HARMONIC_I}, "
                         f"p 16:16:{r.p}, {r.block_iterations} block iterations", sw["software"], sw["sw_seconds"],
-                        "100x to 400x (270x: 9500-node maze, 4 blocks, p = 255)",
+                        catalog.PAPER_JOBS["harmonic_map"],
                         "resources: the synthesized planner top's (6x12 blocks, 2x2, depth 256); this map "
                         "needs more blocks and a deeper RAM"))
     # The model's cycle count confirmed on the planner RTL (3x6 blocks: it simulates in minutes).
@@ -329,9 +289,9 @@ def harmonic_jobs(hw, speeds, problems):
 # --- jobs: DFLC --------------------------------------------------------------------
 
 def dflc_jobs(hw, speeds, problems):
-    from hdl.dflc.top import stream_latency
-    from sim.dflc import rtl_params
-    from models.dflc import Dflc, load_fll
+    from navcores.hdl.dflc.top import stream_latency
+    from navcores.sim.dflc import rtl_params
+    from navcores.models.dflc import Dflc, load_fll
     fll = ROOT / "models" / "dflc_table1.fll"
     model = Dflc(load_fll(fll))
     rng = np.random.default_rng(3)
@@ -359,7 +319,7 @@ def dflc_jobs(hw, speeds, problems):
         what = "parallel option" if par else "Table 1 controller"
         src = (f"DFLC stream RTL (icarus, verilator): {cps} clocks/sample, latency {lat}"
                + ("" if all(g == (want_cps, want_lat) for g in got.values()) else " DIFFERENT"))
-        paper = "-" if par else "4 clocks/sample (78.3 ns at 51.1 MHz in the SoC), 9 pipeline stages"
+        paper = "-" if par else catalog.PAPER_JOBS["dflc_sample"]
         rows.append(row(hw, "dflc", f"one sample, {what}, single call", key, cps, src,
                         sw["software"] + " (one call per sample)", sw["sw_seconds"], paper))
         rows.append(row(hw, "dflc", f"one sample, {what}, vectorized", key, cps, src,
@@ -389,7 +349,7 @@ def _free_corners(grid):
 
 
 def edt_jobs(hw, speeds, problems):
-    from models.edt_bfs import plan_path
+    from navcores.models.edt_bfs import plan_path
     rows = []
     room = load_map(ROOT / "maps" / "room-32-32-4.map")
     # RTL jobs on crops of room-32-32-4 and on the whole map: equal to the model?
@@ -421,11 +381,11 @@ def edt_jobs(hw, speeds, problems):
         rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): whole job", "edt_16x16",
                         model.cycles, f"model (cycle-exact): EDT {model.iterations_edt} + cfr 1 + BFS "
                         f"{model.iterations_bfs} iterations, path {len(model.path)}, load and read-out",
-                        sw["software"], sw["sw_seconds"], "43.1 us at 232 MHz (Table I, BFS)",
+                        sw["software"], sw["sw_seconds"], catalog.PAPER_JOBS["edt_job"],
                         EDT_BIG_NOTE))
         rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): EDT + cfr + BFS only", "edt_16x16",
                         compute, "model (cycle-exact): the computing cycles, without load, path and read-out",
-                        sw["software"], sw["sw_seconds"], "43.1 us at 232 MHz (Table I, BFS)",
+                        sw["software"], sw["sw_seconds"], catalog.PAPER_JOBS["edt_job"],
                         EDT_BIG_NOTE))
     return rows
 
@@ -435,30 +395,31 @@ def edt_jobs(hw, speeds, problems):
 def probe_tops():
     """(name, params) of every simulated top: the hardware tops' simulation
     parameter sets and the jobs' tops."""
-    from sim.dflc import rtl_params
-    from models.dflc import load_fll
-    from tb.harmonic.planner_bench import planner_params
+    from navcores.sim.dflc import rtl_params
+    from navcores.models.dflc import load_fll
+    from navcores.sim.rtl.planner_driver import planner_params
     table1 = load_fll(ROOT / "models" / "dflc_table1.fll")
-    return [("harmonic_node", {}), ("harmonic_cluster", {"depth": 1024}), ("harmonic_block", TOPS[2][3]),
+    node, cluster, block, cell = (catalog.get(k) for k in ("node", "cluster", "block", "edt_cell"))
+    return [(node.top, node.params), (cluster.top, cluster.params), (block.top, block.params),
             ("harmonic_planner", planner_params((16, 16), (3, 6), HARMONIC_SCHEDULE[-1])),
             ("dflc_stream", rtl_params(ROOT / "models" / "dflc_table1.fll", table1, "lut", False)),
             ("dflc_stream", rtl_params(ROOT / "models" / "dflc_table1.fll", table1, "lut", True)),
-            ("edt_cell", {"height": 16, "width": 16}),
+            (cell.top, cell.params),
             *(("edt_bfs", {"height": s, "width": s}) for s in EDT_SIZES)]
 
 
 PROBE_CYCLES = {"icarus": 20_000, "verilator": 200_000}
 # Verilator builds too long for a benchmark run (the probe says why instead).
 VERILATOR_SKIP = {
-    "harmonic_block": "not run: the 6x12 block's Verilator build takes 10+ minutes (tb/harmonic/planner_bench.py)",
+    "harmonic_block": "not run: the 6x12 block's Verilator build takes 10+ minutes (sim/rtl/planner_driver.py)",
     "edt_bfs_height32_width32": "not run: a 32x32 array's Verilator build takes about 18 minutes (hdl/edt_bfs/README.md)",
 }
 
 
 def probes(speeds):
-    """Idle-clock probe (tb/simspeed.py) of every simulated top: the
+    """Idle-clock probe (sim/rtl/simspeed.py) of every simulated top: the
     simulator's own cost per cycle, no Python in the loop."""
-    from tb.runner import run
+    from navcores.sim.rtl.runner import run
     for name, params in probe_tops():
         module = top_name(name, params)
         entry = speeds.setdefault(module, {"name": name, "params": params})
@@ -470,7 +431,7 @@ def probes(speeds):
             res = OUT / f"probe_{module}_{sim}.json"
             log(f"idle-clock probe {module} on {sim}")
             try:
-                run(name, params, sim, "tb.simspeed",
+                run(name, params, sim, "navcores.sim.rtl.simspeed",
                     env={"SIMSPEED_CYCLES": PROBE_CYCLES[sim], "SIMSPEED_RESULT": res},
                     log_file=OUT / f"probe_{module}_{sim}.log")
             except Exception as e:  # noqa: BLE001 - the report says what happened
@@ -503,9 +464,10 @@ def markdown(data, hw, extra):
         "Every figure below was measured by that run except the papers' column. "
         "build/bench/results.json holds the same figures as data.", "",
         "## Hardware", "",
-        "Resources: Debian's yosys 0.23 `synth_xilinx -nowidelut` (xc2v = Virtex-II for the harmonic "
+        f"Resources: {toolchain.prepare('yosys')} `synth_xilinx -nowidelut` (xc2v = Virtex-II for the harmonic "
         "and EDT/BFS cores, xc3s = Spartan-3 for the DFLC: the papers' families). Clock: nextpnr-ice40 "
-        f"place and route on an **{fmax_mod.PART_NAME.split(',')[0]}** (Lattice iCE40, not the papers' Virtex/"
+        f"place and route ({toolchain.prepare('nextpnr-ice40')}, median of 3 seeds) on an "
+        f"**{CLOCK_PART.name} ({CLOCK_PART.package})** (Lattice iCE40, not the papers' Virtex/"
         "Spartan), the top between registered ports (scripts/fmax.py), so the figure is the core's "
         "register-to-register timing.", "",
         "| top | family | FF | LUT4 | MULT18X18 | BRAM | iCE40 clock (MHz) | iCE40 logic cells | paper |",
@@ -532,7 +494,7 @@ def markdown(data, hw, extra):
     if notes:
         lines += ["", "Notes: " + "; ".join(notes) + "."]
     lines += ["", "## Simulation speed", "",
-              "Simulated clock cycles per wall-clock second, build excluded. *Probe*: tb/simspeed.py, reset "
+              "Simulated clock cycles per wall-clock second, build excluded. *Probe*: sim/rtl/simspeed.py, reset "
               "and then the clock runs with the inputs at 0 for "
               f"{PROBE_CYCLES['icarus']:,} (Icarus) or {PROBE_CYCLES['verilator']:,} (Verilator) cycles, one "
               "wake-up of Python: the simulator's own cost. *Job*: the jobs above, sim time over the cocotb "

@@ -31,15 +31,13 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import software  # noqa: E402
-from models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, largest_map, plan_path_tiled,  # noqa: E402
+from navcores.models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, largest_map, plan_path_tiled,  # noqa: E402
                                   ram_blocks, state_bits)
-from sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 MAPS = ("maze512-1-0", "den312d", "room-64-64-8", "random-64-64-10")
 ARRAYS = ((8, 8), (16, 16))
@@ -47,15 +45,11 @@ DFAR = 0
 
 
 def job(name):
-    """(obstacle, goal, start) of maps/NAME.map: its longest scenario, else its last and first free cell."""
+    """(obstacle, goal, start) of maps/NAME.map: its job (models.maps.longest_scenario)."""
     path = ROOT / "maps" / f"{name}.map"
     obstacle = load_map(path)
-    scen = sorted(path.parent.glob(f"{name}-even-*.scen"))
-    if scen:
-        s = max(load_scenarios(scen[0], obstacle), key=lambda s: s.optimal_length)
-        return obstacle, tuple(s.goal), tuple(s.start)
-    free = np.argwhere(~obstacle)
-    return obstacle, tuple(int(v) for v in free[-1]), tuple(int(v) for v in free[0])
+    s = longest_scenario(path, obstacle)
+    return obstacle, tuple(s.goal), tuple(s.start)
 
 
 def measure(name, arrays=ARRAYS, repeats=3):

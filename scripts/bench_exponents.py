@@ -34,12 +34,10 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parent.parent
 
-from models.harmonic import plan  # noqa: E402
-from sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.harmonic import plan  # noqa: E402
+from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 BLOCK, ITERS = (6, 12), 6
 STEP = 16
@@ -49,20 +47,14 @@ RAM_DEPTH = 1024
 
 def bundled_maps(maps_dir=None, names=None):
     """[(name, obstacle, [goal])] for every maps/*.map (or those ``names``,
-    stems), the goal of its longest scenario (its ``-even-*.scen`` file, as
-    scripts/bench_harmonic.py picks it), else its last free cell."""
+    stems), the goal of the map's job (models.maps.longest_scenario, as
+    scripts/bench_harmonic.py picks it)."""
     out = []
     for path in sorted(Path(maps_dir or ROOT / "maps").glob("*.map")):
         if names and path.stem not in names:
             continue
         obstacle = load_map(path)
-        scens = sorted(path.parent.glob(path.stem + "-even-*.scen"))
-        scen = scens[0] if scens else None
-        if scen is not None:
-            goal = max(load_scenarios(scen, obstacle), key=lambda s: s.optimal_length).goal
-        else:
-            goal = tuple(int(x) for x in np.argwhere(~obstacle)[-1])
-        out.append((path.stem, obstacle, [tuple(goal)]))
+        out.append((path.stem, obstacle, [tuple(longest_scenario(path, obstacle).goal)]))
     return out
 
 

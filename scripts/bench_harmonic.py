@@ -19,7 +19,7 @@ one iteration per block).
    has no local maximum, p scanned one by one) against the longest distance L
    to the goal, on the bundled maps, corridors and spirals.
 3. The model's cycle count confirmed on the planner RTL for one small map
-   (tb/harmonic/planner_bench.py; --rtl none skips it).
+   (sim/rtl/planner_driver.py; --rtl none skips it).
 
     python scripts/bench_harmonic.py [--out build/bench/harmonic.md] [--rtl icarus|verilator|none]
 
@@ -28,31 +28,28 @@ make bench (scripts/bench.py) puts sections 1 and 2 into BENCHMARKS.md.
 
 import argparse
 import math
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))       # tb/ (not installed): the test maps
 
 from tb.harmonic.harmonic_small_maps import corridor, spiral  # noqa: E402
-from models.harmonic import plan, plan_explore, reachable  # noqa: E402
-from sim.mapfile import load_map, load_scenarios  # noqa: E402
+from navcores.models.harmonic import plan, plan_explore, reachable  # noqa: E402
+from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 CLOCK_HZ = 150e6
 RTL_BLOCK, RTL_ITERS = (6, 12), 6          # plan()'s defaults: a 2x2-cluster block
 
 
 def bundled(name):
-    """(obstacle, [goal]) with the goal of the map's longest scenario."""
+    """(obstacle, [goal]) with the goal of the map's job (models.maps.longest_scenario)."""
     path = ROOT / "maps" / name
     obstacle = load_map(path)
-    scen = path.with_name(path.stem + "-even-10.scen")
-    if scen.exists():
-        goal = max(load_scenarios(scen, obstacle), key=lambda s: s.optimal_length).goal
-    else:
-        goal = tuple(int(x) for x in np.argwhere(~obstacle)[-1])
-    return obstacle, [goal]
+    return obstacle, [tuple(longest_scenario(path, obstacle).goal)]
 
 
 def work(res, block):
@@ -249,10 +246,7 @@ def bits_section():
 def rtl_section(sim):
     """The model's counters and cycles against the planner RTL on one small map
     (the planner regression's parameter sets, so the build is shared)."""
-    try:
-        from tb.harmonic.planner_bench import run_planner_rtl
-    except ImportError:
-        return ["The planner RTL driver (tb/harmonic/planner_bench.py) is not in this checkout: not run.", ""]
+    from navcores.sim.rtl.planner_driver import run_planner_rtl
     rng = np.random.default_rng(5)
     shape, block, sched, iters = (8, 17), (3, 6), (8, 16), 3
     ob = rng.random(shape) < 0.2

@@ -19,7 +19,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parent.parent
 
-from models.dflc import DEFAULT_FLL, Dflc  # noqa: E402
+from navcores.models.dflc import DEFAULT_FLL, Dflc  # noqa: E402
 
 
 def main():

@@ -1,10 +1,7 @@
-"""Clock estimate of a top: Debian's yosys ``synth_ice40`` + ``nextpnr-ice40``.
+"""A top on a real part: resources, whether it fits, and its clock, from yosys + nextpnr (scripts/toolchain.py).
 
-The papers report Virtex-II / Spartan-3 / Virtex-4 clocks; the only open
-place-and-route flow here is for Lattice iCE40, so the figure is an iCE40
-HX8K (ct256 package) figure, not the paper's device.  To make it the core's
-timing and not the pins', the top is wrapped in a harness
-(:func:`harness`):
+To make the clock the core's timing and not the pins', the top is wrapped
+in a harness (:func:`harness`):
 
 * every input bit of the core (``rst`` included, ``clk`` excepted) is a stage
   of one shift register fed by a single pin ``si``: each input comes straight
@@ -14,39 +11,93 @@ timing and not the pins', the top is wrapped in a harness
   four, so the reduction is never longer than one LUT4 per stage.
 
 So the critical path is one of: register -> core input logic, the core's own
-register-to-register paths, core outputs -> capture register.  nextpnr's
-``Max frequency for clock`` line is reported (seed 1, timing-driven
-placement).  A design larger than the part is reported as not fitting.
+register-to-register paths, core outputs -> capture register.  Cells named
+``core.*`` are the core's, the others the harness's (``chain*``: input
+registers, ``s0*``: output capture registers).
 
-    .venv/bin/python scripts/fmax.py TOP [name=value ...]
+Flow (:func:`fit`): yosys ``synth_ecp5`` / ``synth_ice40`` of the core and
+the harness, the core kept as its own module (``keep_hierarchy``) so that its
+cell counts are its own (the LUT4 / FF / BRAM / DSP figures exclude the
+harness), then flattened for nextpnr; nextpnr places and routes it once per
+seed (timing-driven, ``--freq`` = the part's target: it steers the placer;
+the reached frequency is reported whether or not it meets the target).  A
+design larger than the part does not fit: nextpnr's utilisation says which
+resource overflowed, and no seed is run after the first.
+
+The command is scripts/fit.py (``make fit``); scripts/bench.py and
+scripts/synth.py call :func:`fit` and :func:`synthesize`.
 """
 
 import json
+import os
 import re
-import shutil
-import subprocess
-import sys
+import statistics
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
+import toolchain
 
-YOSYS = shutil.which("yosys") or "/usr/bin/yosys"
-NEXTPNR = shutil.which("nextpnr-ice40") or "/usr/bin/nextpnr-ice40"
-PART = ("--hx8k", "--package", "ct256")
-PART_NAME = "iCE40-HX8K (ct256), nextpnr-ice40 seed 1"
-# --timing-allow-fail: the 50 MHz target only steers the placer; the reached
-# maximum frequency is reported whether it meets the target or not.
-NEXTPNR_FLAGS = ("--pcf-allow-unconstrained", "--seed", "1", "--freq", "50", "--timing-allow-fail")
+os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
-_PORT = re.compile(r"^\s*(input|output)\s+(?:\[(\d+):(\d+)\]\s+)?(\w+)\s*;", re.M)
+# The project's code, imported here only (fit.py, synth.py and bench.py use these names).
+from navcores.hdl.emit import TOPS, emit, manifest, params_of, top_name, verilog_ports  # noqa: E402,F401
+from navcores.hdl.params import parse  # noqa: E402,F401
 
+ROOT = toolchain.ROOT
+
+__all__ = ["Part", "PARTS", "part", "ports", "harness", "RESOURCES", "resources", "synthesize", "FlowError",
+           "utilisation", "critical_path", "place", "fit",
+           # the project's code, for fit.py, synth.py and bench.py
+           "TOPS", "emit", "manifest", "params_of", "parse", "top_name"]
+
+
+@dataclass(frozen=True)
+class Part:
+    """An FPGA the fit flow targets, named as the vendor writes it."""
+
+    name: str
+    family: str                 # "ecp5" or "ice40"
+    package: str
+    speed_grade: str | None     # iCE40 parts have none
+    board: str
+    device_args: tuple          # nextpnr's device selection
+    synth: str                  # the yosys synthesis command
+    target_mhz: int             # nextpnr --freq
+
+    @property
+    def nextpnr(self):
+        return f"nextpnr-{self.family}"
+
+
+def _ecp5(size, board):
+    return Part(f"LFE5U-{size}F", "ecp5", "CABGA381", "6", board,
+                (f"--{size}k", "--package", "CABGA381", "--speed", "6"), "synth_ecp5", 300)
+
+
+PARTS = {p.name.lower(): p for p in (
+    _ecp5(12, "ULX3S-12F"), _ecp5(25, "ULX3S-25F"), _ecp5(45, "ULX3S-45F"), _ecp5(85, "ULX3S-85F"),
+    # UP5K: synthesis for its timing (-device u) and its SB_MAC16 DSPs; the HX has no DSP.
+    Part("iCE40-UP5K", "ice40", "SG48", None, "iCEBreaker", ("--up5k", "--package", "sg48"),
+         "synth_ice40 -device u -dsp", 150),
+    Part("iCE40-HX8K", "ice40", "CT256", None, "iCE40-HX8K breakout board", ("--hx8k", "--package", "ct256"),
+         "synth_ice40", 150),
+)}
+
+
+def part(name):
+    """The Part named ``name`` (case-insensitive), else ValueError listing the parts."""
+    try:
+        return PARTS[name.lower()]
+    except KeyError:
+        raise ValueError(f"unknown part {name!r}; parts: {', '.join(p.name for p in PARTS.values())}") from None
+
+
+# -- the harness
 
 def ports(verilog_text, module):
-    """``[(direction, name, width)]`` of ``module`` in Amaranth's Verilog."""
-    start = verilog_text.index(f"module {module}(")
-    end = verilog_text.index("endmodule", start)
-    head = verilog_text[start:end]
-    return [(d, name, int(hi) - int(lo) + 1 if hi else 1) for d, hi, lo, name in _PORT.findall(head)]
+    """``[(direction, name, width)]`` of ``module`` in Amaranth's Verilog (hdl.emit's port parser)."""
+    return [(d, name, w) for name, (d, w) in verilog_ports(verilog_text, module).items()]
 
 
 def harness(verilog_text, module, clock="clk"):
@@ -85,44 +136,183 @@ def harness(verilog_text, module, clock="clk"):
     return "\n".join(lines) + "\n"
 
 
-def fmax(name, params, work):
-    """Synthesize and place ``name`` at ``params``; returns a dict of the figures."""
-    from hdl.emit import emit, top_name
+# -- synthesis
+
+# Resources of a core from its mapped cells: (key, [(cell type, LUT4s or units per cell)]).
+# ECP5: a CCU2C carry cell is two LUT4s; a TRELLIS_DPR16X4 (16x4 LUT RAM) takes three slices, six
+# LUT4 places (two slices of RAM, one of its write port; nextpnr counts 13 TRELLIS_COMB for two).
+RESOURCES = {
+    "ecp5": (("lut4", (("LUT4", 1), ("CCU2C", 2), ("TRELLIS_DPR16X4", 6))),
+             ("ff", (("TRELLIS_FF", 1),)),
+             ("bram", (("DP16KD", 1), ("PDPW16KD", 1))),
+             ("dsp", (("MULT18X18D", 1), ("ALU54B", 1)))),
+    "ice40": (("lut4", (("SB_LUT4", 1),)),
+              ("ff", (("SB_DFF*", 1),)),
+              ("bram", (("SB_RAM40_4K", 1), ("SB_SPRAM256KA", 1))),
+              ("dsp", (("SB_MAC16", 1),))),
+}
+
+
+def resources(family, cells):
+    """{lut4, ff, bram, dsp} from a core's cell counts (``SB_DFF*`` matches every SB_DFF variant)."""
+    out = {}
+    for key, kinds in RESOURCES[family]:
+        out[key] = sum(n * k for cell, n in cells.items() for kind, k in kinds
+                       if cell == kind or kind.endswith("*") and cell.startswith(kind[:-1]))
+    return out
+
+
+class FlowError(RuntimeError):
+    """A tool failed for another reason than the design's size (exit 1: no result)."""
+
+
+def _error_line(text, tool):
+    errors = [line for line in text.splitlines() if line.startswith("ERROR") or "Error" in line[:40]]
+    if errors:
+        return errors[-1].strip()
+    tail = [line for line in text.splitlines() if line.strip()]
+    if any("call stack exhausted" in line for line in tail):
+        return f"{tool} ran out of WebAssembly stack (a very deep netlist)"
+    return tail[-1].strip() if tail else f"{tool} failed without a message"
+
+
+def synthesize(name, params, family_synth, work, progress=None, source=None):
+    """Emit ``name`` at ``params`` into ``work`` (unless ``source``, its
+    Verilog, is given), wrap it in the harness and synthesize it with
+    ``family_synth`` (e.g. ``synth_ecp5``).  Returns (module, toolchain.Run,
+    the core's cell counts)."""
     module = top_name(name, params)
-    work = Path(work) / module
+    work = Path(work)
     work.mkdir(parents=True, exist_ok=True)
-    source = emit(name, params, work)
+    source = source or emit(name, params, work, with_manifest=False)
     wrap = work / f"fmax_{module}.v"
-    wrap.write_text(harness(source.read_text(), module))
-    netlist = work / "ice40.json"
-    ys = subprocess.run([YOSYS, "-q", "-l", str(work / "synth_ice40.log"), "-p",
-                         f"read_verilog {source} {wrap}; synth_ice40 -top fmax_{module} -json {netlist}"],
-                        capture_output=True, text=True)
-    if ys.returncode:
-        return {"top": module, "fmax_mhz": None, "error": "yosys failed: " + ys.stderr.strip()[-300:]}
-    pnr = subprocess.run([NEXTPNR, *PART, "--json", str(netlist), *NEXTPNR_FLAGS, "--log", str(work / "nextpnr.log")],
-                         capture_output=True, text=True)
-    log = (work / "nextpnr.log").read_text() if (work / "nextpnr.log").exists() else pnr.stderr
-    util = dict(re.findall(r"Info:\s+(ICESTORM_LC|ICESTORM_RAM|SB_IO|SB_GB):\s+(\d+/\s*\d+)", log))
-    if pnr.returncode:
-        why = "does not fit the part" if re.search(r"Unable to place|too many|exceed", log, re.I) else "nextpnr failed"
-        return {"top": module, "fmax_mhz": None, "error": why, "utilization": util}
-    found = re.findall(r"Max frequency for clock\s+'[^']*':\s+([\d.]+) MHz", log)
-    return {"top": module, "fmax_mhz": float(found[-1]) if found else None, "part": PART_NAME,
-            "utilization": util}
+    text = harness(source.read_text(), module)
+    if not wrap.exists() or wrap.read_text() != text:
+        wrap.write_text(text)
+    script = (f"read_verilog {{core}} {{harness}}; setattr -mod -set keep_hierarchy 1 {module}; "
+              f"{family_synth} -top fmax_{module}; tee -q -o stat.json stat -json; "
+              f"setattr -mod -unset keep_hierarchy {module}; flatten; write_json netlist.json")
+    if progress:
+        progress(f"{module}: yosys {family_synth}")
+    run = toolchain.run("yosys", ["-q", "-l", "yosys.log", "-p", script],
+                        {"core": source, "harness": wrap}, progress)
+    if run.returncode or not (run.dir / "netlist.json").exists():
+        raise FlowError(f"yosys failed on {module}: "
+                        + _error_line(run.text("yosys.log") + run.text("stderr.txt"), "yosys")
+                        + f" (see {run.dir})")
+    stat = json.loads(run.text("stat.json"))
+    cells = stat["modules"]["\\" + module]["num_cells_by_type"]
+    return module, run, {k: v for k, v in cells.items() if not k.startswith("$")}
 
 
-def main(argv):
-    if not argv:
-        print(__doc__)
-        return 2
-    params = {}
-    for kv in argv[1:]:
-        k, v = kv.split("=", 1)
-        params[k] = int(v) if v.lstrip("-").isdigit() else v
-    print(json.dumps(fmax(argv[0], params, ROOT / "build" / "fmax"), indent=2))
-    return 0
+# -- place and route
+
+_UTIL = re.compile(r"^Info:\s+(\w+):\s+(\d+)/\s*(\d+)\s+\d+%", re.M)
 
 
-if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+def utilisation(log):
+    """{resource: (used, available)} of nextpnr's last 'Device utilisation' table."""
+    if "Device utilisation:" not in log:
+        return {}
+    table = log.rsplit("Device utilisation:", 1)[1]
+    return {k: (int(u), int(a)) for k, u, a in _UTIL.findall(table.split("\n\n", 1)[0])}
+
+
+def critical_path(report):
+    """The clock-to-clock critical path of a nextpnr report: its start and end cells."""
+    paths = [p for p in report.get("critical_paths", [])
+             if p["from"].startswith(("posedge", "negedge")) and p["to"].startswith(("posedge", "negedge"))]
+    if not paths:
+        return None
+    steps = max(paths, key=lambda p: sum(s["delay"] for s in p["path"]))["path"]
+    return {"from": {"cell": steps[0]["from"]["cell"], "port": steps[0]["from"]["port"]},
+            "to": {"cell": steps[-1]["to"]["cell"], "port": steps[-1]["to"]["port"]},
+            "delay_ns": round(sum(s["delay"] for s in steps), 3),
+            "logic_levels": sum(s["type"] == "logic" for s in steps),
+            "nets": [s["net"] for s in steps if s.get("net")]}
+
+
+def place(netlist, prt, seed, progress=None):
+    """One nextpnr run of ``netlist`` on ``prt`` with ``seed``: a dict with
+    seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow."""
+    pin_flag = "--lpf-allow-unconstrained" if prt.family == "ecp5" else "--pcf-allow-unconstrained"
+    args = [*prt.device_args, "--json", "{netlist}", pin_flag, "--seed", str(seed),
+            "--freq", str(prt.target_mhz), "--timing-allow-fail", "--report", "report.json",
+            "--log", "nextpnr.log", "-q"]
+    run = toolchain.run(prt.nextpnr, args, {"netlist": netlist}, progress)
+    log = run.text("nextpnr.log")
+    util = utilisation(log)
+    out = {"seed": seed, "seconds": run.seconds, "cached": run.cached, "version": run.version,
+           "utilisation": {k: list(v) for k, v in util.items() if v[0]}}
+    if run.returncode:
+        over = {k: v for k, v in util.items() if v[0] > v[1]}
+        if not over:
+            raise FlowError(f"{prt.nextpnr} failed: {_error_line(log + run.text('stderr.txt'), prt.nextpnr)}"
+                            f" (see {run.dir})")
+        out["overflow"] = [{"resource": k, "used": u, "available": a} for k, (u, a) in over.items()]
+        return out
+    report = json.loads(run.text("report.json"))
+    out["fmax_mhz"] = round(min(c["achieved"] for c in report["fmax"].values()), 2)
+    out["critical_path"] = critical_path(report)
+    return out
+
+
+def _took(run):
+    """' (cached)' or ' (12 s)' for a progress line (a Run or a place() dict)."""
+    cached, seconds = (run["cached"], run["seconds"]) if isinstance(run, dict) else (run.cached, run.seconds)
+    return " (cached)" if cached else f" ({seconds:.0f} s)"
+
+
+def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None):
+    """The fit of ``name`` at ``params`` on Part ``prt``: a JSON-ready dict
+    (see scripts/fit.py).  Raises FlowError when a tool fails otherwise than
+    by the design's size, toolchain.ToolError when a tool is missing."""
+    module = top_name(name, params)
+    work = ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
+    _, syn, cells = synthesize(name, params, prt.synth, work, progress)
+    res = resources(prt.family, cells)
+    if progress:
+        progress(f"{module}: {res['lut4']} LUT4, {res['ff']} FF, {res['bram']} BRAM, {res['dsp']} DSP"
+                 f"{_took(syn)}; "
+                 f"nextpnr on {prt.name}, seed{'s' * (len(seeds) > 1)} {', '.join(map(str, seeds))}")
+    netlist = syn.dir / "netlist.json"
+
+    def one(seed):
+        if progress:
+            progress(f"{module} on {prt.name}, seed {seed}: placing and routing")
+        r = place(netlist, prt, seed, progress)
+        if progress:
+            what = (f"{r['fmax_mhz']:.1f} MHz" if "fmax_mhz" in r else
+                    "does not fit: " + ", ".join(f"{o['resource']} {o['used']}/{o['available']}"
+                                                 for o in r["overflow"]))
+            progress(f"{module} on {prt.name}, seed {seed}: {what}{_took(r)}")
+        return r
+
+    first = one(seeds[0])               # a design that does not fit stops here
+    runs = [first]
+    if "overflow" not in first and len(seeds) > 1:
+        with ThreadPoolExecutor(max_workers=max(1, jobs)) as pool:
+            runs += list(pool.map(one, seeds[1:]))
+    fits = "overflow" not in first
+    fmax = statistics.median(r["fmax_mhz"] for r in runs) if fits else None
+    median_run = next((r for r in runs if r.get("fmax_mhz") == fmax), None)
+    return {
+        "module": module, "top": name, "params": params,
+        "part": prt.name, "family": prt.family, "package": prt.package, "speed_grade": prt.speed_grade,
+        "board": prt.board,
+        "fits": fits,
+        "overflow": first.get("overflow", []),
+        **res,
+        "fmax_mhz": fmax,
+        "target_mhz": prt.target_mhz,
+        "seeds": [{"seed": r["seed"], "fmax_mhz": r["fmax_mhz"]} for r in runs] if fits else [],
+        "critical_path": {"seed": median_run["seed"], **median_run["critical_path"]}
+        if median_run and median_run.get("critical_path") else None,
+        "cells": dict(sorted(cells.items())),
+        "utilisation": first["utilisation"],
+        "harness": "registered: inputs from a shift register, outputs into capture registers (scripts/fmax.py)",
+        "synthesis": prt.synth,
+        "tools": {"yosys": syn.version, "nextpnr": first["version"]},
+        "seconds": {"synthesis": syn.seconds, "place_and_route": [r["seconds"] for r in runs],
+                    "cached": syn.cached and all(r["cached"] for r in runs)},
+    }

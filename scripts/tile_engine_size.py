@@ -33,11 +33,11 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 from amaranth.back import verilog  # noqa: E402
 
-from hdl.edt_bfs.state_ram import StateRam  # noqa: E402
-from hdl.edt_bfs.tile_cell import TileCell  # noqa: E402
-from hdl.edt_bfs.tile_layouts import tile_widths  # noqa: E402
-from hdl.emit import emit, top_name  # noqa: E402
-from models.edt_bfs_tiled import state_bits  # noqa: E402
+from navcores.hdl.edt_bfs.state_ram import StateRam  # noqa: E402
+from navcores.hdl.edt_bfs.tile_cell import TileCell  # noqa: E402
+from navcores.hdl.edt_bfs.tile_layouts import tile_widths  # noqa: E402
+from navcores.hdl.emit import emit, top_name  # noqa: E402
+from navcores.models.edt_bfs_tiled import state_bits  # noqa: E402
 
 OUT = ROOT / "build" / "tile_engine_size"
 BIN = Path(sys.executable).parent

@@ -28,6 +28,14 @@ the true pose drifts away from the odometry the controller sees; over the
 map's 5 m it may touch a wall: reported, not counted.)
 """
 
+if __name__ == "__main__":
+    # `python -m sim.demo` in a source tree, or `python -m navcores.sim.demo`:
+    # run the module under its package name, so that every module is loaded
+    # once, as navcores.sim.* (not a second time as the top-level sim's).
+    import sys
+    from navcores.sim.demo import cli
+    sys.exit(cli())
+
 import argparse
 import json
 import os
@@ -39,43 +47,76 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from sim.cli import CliError  # noqa: E402
-from sim.mapfile import MapFormatError, load_map, load_scenarios  # noqa: E402
+from .cli import CliError  # noqa: E402
+from navcores.models.maps import load_scenarios, longest_scenario  # noqa: E402
+
+# The demo's planner settings (its summary's figures come from these): 6x12
+# blocks (two clusters), I = 6, the doubling schedule 16, 32, ... 256.
+DEMO_BLOCK, DEMO_ITERS, DEMO_SCHEDULE = "6x12", 6, "16,32,64,128,256"
 
 def _mm(v):
     return "   n/a" if v is None else f"{v * 1e3:6.1f}"
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--map", default=str(ROOT / "maps" / "room-32-32-4.map"))
-    ap.add_argument("--scen", help="scenario file (default: the map's *-even-10.scen)")
-    ap.add_argument("--index", type=int, default=-1, help="scenario line (default: the longest)")
-    ap.add_argument("--engine", default="model", choices=("model", "icarus", "verilator"),
+def parser():
+    from .cli import ENGINES, EXIT_STATUS, _Parser, integer, number
+    from navcores.models.tracker import MAX_SLIP, MAX_SPEED, MIN_SPEED
+    ap = _Parser(prog="python -m sim.demo", description=__doc__.split("\n\n")[0], epilog=EXIT_STATUS)
+    ap.add_argument("--map", default=str(ROOT / "maps" / "room-32-32-4.map"),
+                    help="map (default: maps/room-32-32-4.map)")
+    ap.add_argument("--scen", help="scenario file (default: the map's *-even-*.scen)")
+    ap.add_argument("--index", type=integer(-1), default=-1, help="scenario line, 0-based (default: the longest)")
+    ap.add_argument("--engine", default="model", choices=ENGINES,
                     help="DFLC engine: golden model, or the RTL in Icarus / Verilator")
-    ap.add_argument("--cell", type=float, default=0.1, help="cell size, metres")
-    ap.add_argument("--speed", type=float, default=0.1, help="robot speed, m/s")
-    ap.add_argument("--slip", type=float, default=0.005, help="wheel slip level of the navigation slip runs")
-    ap.add_argument("--track-slip", type=float, default=0.02, help="wheel slip level of the sine-path slip run")
-    ap.add_argument("--seed", type=int, default=1, help="slip seed")
-    ap.add_argument("--out", default=str(ROOT / "results" / "demo"))
-    args = ap.parse_args(argv)
+    ap.add_argument("--cell", type=number(0, 1000, lo_open=True, unit="m"), default=0.1,
+                    help="cell size, metres (default 0.1; a ROS map gives its own)")
+    ap.add_argument("--speed", type=number(MIN_SPEED, MAX_SPEED, unit="m/s"), default=0.1,
+                    help="robot speed of the navigation runs, m/s (default 0.1)")
+    ap.add_argument("--slip", type=number(0, MAX_SLIP), default=0.005,
+                    help="wheel slip level of the navigation slip runs (default 0.005)")
+    ap.add_argument("--track-slip", type=number(0, MAX_SLIP), default=0.02,
+                    help="wheel slip level of the sine-path slip run (default 0.02)")
+    ap.add_argument("--seed", type=integer(0, 2 ** 63 - 1), default=1, help="slip seed (default 1)")
+    ap.add_argument("--out", default=str(ROOT / "results" / "demo"), help="output folder (default results/demo)")
+    return ap
 
-    from models.swam import Swam
-    from models.tracker import TrackerParams, fired_rules
-    from sim.navigate import DEFAULT_SCHEDULE, navigate, plot_navigation, summary_line
-    from sim.tracking import load_dflc, plot_track, read_path_csv, run_loop
+
+def main(argv=None):
+    try:
+        args = parser().parse_args(argv)
+    except SystemExit as e:
+        return e.code if isinstance(e.code, int) else 2
+
+    from navcores.models.maps import load
+    from navcores.models.swam import Swam
+    from navcores.models.tracker import TrackerParams, fired_rules
+    from .cli import check_outputs, write_text
+    from .navigate import navigate, plot_navigation, summary_line
+    from .tracking import load_dflc, plot_track, read_path_csv, run_loop
 
     t_start = time.time()
-    obstacle = load_map(args.map)
-    scen_path = Path(args.scen) if args.scen else Path(args.map).with_name(Path(args.map).stem + "-even-10.scen")
-    scenarios = load_scenarios(scen_path, obstacle)
-    if not scenarios:
-        raise CliError(f"{scen_path}: no scenario")
-    scen = max(scenarios, key=lambda s: s.optimal_length) if args.index < 0 else scenarios[args.index]
-    start, goal = scen.start, scen.goal
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    if out.exists() and not out.is_dir():
+        raise CliError(f"--out {out}: is a file, expected a folder")
+    # every file the demo writes, checked before any work (folder created, writable)
+    check_outputs(argparse.Namespace(json=str(out / "summary.json"), plot=str(out / "track_sine.png")))
+    gm = load(args.map)
+    obstacle, frame = gm.obstacle, gm.frame_or(args.cell)
+    if args.scen or args.index >= 0:
+        scen_path = Path(args.scen) if args.scen else sorted(Path(args.map).parent.glob(
+            Path(args.map).stem + "-even-*.scen"))[:1]
+        if not scen_path:
+            raise CliError(f"{args.map}: no scenario file beside it; give --scen")
+        scen_path = scen_path if isinstance(scen_path, Path) else scen_path[0]
+        scenarios = load_scenarios(scen_path, obstacle)
+        if not scenarios:
+            raise CliError(f"{scen_path}: no scenario")
+        if args.index >= len(scenarios):
+            raise CliError(f"--index {args.index}: {scen_path.name} has {len(scenarios)} scenarios (0..{len(scenarios) - 1})")
+        scen = max(scenarios, key=lambda s: s.optimal_length) if args.index < 0 else scenarios[args.index]
+    else:
+        scen = longest_scenario(args.map, obstacle)
+    start, goal = scen.start, scen.goal
 
     def rtl_check(result, rerun):
         # with an RTL engine, the same run with the golden model must command the same codes
@@ -90,18 +131,18 @@ def main(argv=None):
             # so with an RTL engine only the runs without slip go through the simulator
             engine = args.engine if not slip else "model"
             nav = argparse.Namespace(planner=planner, engine=engine, cell=args.cell, speed=args.speed,
-                                     lookahead=TrackerParams.lookahead, slip=slip, seed=args.seed, schedule=DEFAULT_SCHEDULE,
-                                     block="6,12", iters=6, dfar=0)
+                                     lookahead=TrackerParams.lookahead, slip=slip, seed=args.seed,
+                                     schedule=DEMO_SCHEDULE, block=DEMO_BLOCK, iters=DEMO_ITERS, dfar=0)
             t0 = time.time()
-            result, field, label, cells, poly = navigate(obstacle, start, goal, nav)
+            result, field, label, cells, poly = navigate(obstacle, start, goal, nav, frame)
             result["seconds"] = round(time.time() - t0, 1)
             if engine != "model":
                 rtl_check(result, lambda: navigate(obstacle, start, goal,
-                                                   argparse.Namespace(**{**vars(nav), "engine": "model"}))[0])
+                                                   argparse.Namespace(**{**vars(nav), "engine": "model"}), frame)[0])
             name = f"navigate_{planner}" + ("_slip" if slip else "") + ".png"
             title = f"{Path(args.map).name}, slip {slip}, DFLC {engine}: {summary_line(result)}"
             plot_navigation(out / name, obstacle, field, label, cells, poly, result,
-                            textwrap.fill(title, 115))
+                            textwrap.fill(title, 115), frame)
             result["plot"] = name
             runs.append((planner, slip, result))
 
@@ -121,8 +162,9 @@ def main(argv=None):
         result["plot"] = name
         tracks.append((slip, result))
 
-    lines = [f"map {Path(args.map).name}  start {start}  goal {goal}  cell {args.cell} m  "
-             f"(scenario optimal length {scen.optimal_length:.1f} cells)"]
+    length = (f"(scenario optimal length {scen.optimal_length:.1f} cells)" if scen.optimal_length == scen.optimal_length
+              else "(no scenario: the first and last free cells)")
+    lines = [f"map {Path(args.map).name}  start {start}  goal {goal}  cell {frame.resolution:g} m  {length}"]
     for planner, slip, r in runs:
         if slip:
             continue
@@ -172,22 +214,20 @@ def main(argv=None):
     plots = [r["plot"] for *_, r in runs] + [r["plot"] for _, r in tracks]
     lines.append(f"wrote {', '.join(plots)}, summary.txt, summary.json in {out} ({time.time() - t_start:.0f} s)")
     text = "\n".join(lines)
-    (out / "summary.txt").write_text(text + "\n")
+    write_text(out / "summary.txt", text + "\n")
     drop = ("pose", "odometry", "curvature", "curvature_codes", "input_codes")
     slim = [{k: v for k, v in r.items() if k not in drop} | {"planner": planner, "slip": slip}
             for planner, slip, r in runs]
     slim_t = [{k: v for k, v in r.items() if k not in drop} | {"path": "paths/sine.csv", "slip": slip}
               for slip, r in tracks]
-    (out / "summary.json").write_text(json.dumps({"map": Path(args.map).name, "start": start, "goal": goal,
+    write_text(out / "summary.json", json.dumps({"map": Path(args.map).name, "start": start, "goal": goal,
                                                   "navigate": slim, "track": slim_t}, indent=1, default=str))
     print(text)
     return 0 if ok else 1
 
 
-if __name__ == "__main__":
+def cli(argv=None):
+    """``python -m sim.demo``: main() with bad input as one line and exit status 2."""
     os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
-    try:
-        sys.exit(main())
-    except (CliError, MapFormatError) as e:
-        print(f"sim.demo: error: {e}", file=sys.stderr)
-        sys.exit(2)
+    from .cli import guarded
+    return guarded("sim.demo", lambda: main(argv))

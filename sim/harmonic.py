@@ -1,27 +1,35 @@
 """Plan on a map with the harmonic planner (model or RTL) and follow the gradient.
 
-    python -m sim harmonic MAP --goal R,C [--goal R,C ...] [--start R,C ...]
+    python -m sim harmonic MAP (--goal R,C | --goal-xy X,Y) [...] [--start R,C | --start-xy X,Y ...]
         [--block NxM] [--iters I] [--schedule P1,P2,... | P1:STEP:PMAX]
         [--engine model|icarus|verilator] [--block-exponents]
-        [--json OUT] [--plot OUT.png]
+        [--cell METRES] [--unknown obstacle|free] [--json OUT] [--csv OUT] [--plot OUT.png]
 
-MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free) or
-an image (.pgm/.png: dark = obstacle).  Cells are ROW,COL from the top left,
-0-based.  The map is cut into blocks of NxM nodes (default 3x6, one cluster,
-and I = 6, plan()'s default; the RTL engines need multiples of 3x6); a size
-that is not a multiple of the block is padded with obstacles on the bottom
-and right, which changes nothing in the solution (outside the map already
-reads as an obstacle).
+MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free),
+an image (.pgm/.png: dark = obstacle) or a ROS map_server map (.yaml beside
+its image, read with nav2's thresholds; unknown cells are obstacles unless
+--unknown free).  Cells are ROW,COL from the top left as the map is drawn,
+0-based; --goal-xy / --start-xy give points in metres in the map frame (a
+ROS map's own; else x right, y down from the top-left corner, --cell metres
+a cell).  Goals and starts are repeatable.  The map is cut into blocks of
+NxM nodes (default 3x6, one cluster; the RTL engines need multiples of 3x6)
+and I iterations per block visit at most (default 6; 1..255, the planner's
+START command carries I in 8 bits); a size that is not a multiple of the
+block is padded with obstacles on the bottom and right, which changes
+nothing in the solution (outside the map already reads as an obstacle).
 
 The planner runs the paper's block-synchronous algorithm (section 4
 pseudo-code): up to I iterations per block while the block changes, sweeps
 over all blocks until none changes, then the next precision of the schedule
 while local maxima remain.  Schedule default 16:16:256 (p = 16, 32, ... 256);
 the RTL engines run arithmetic schedules only (P1:STEP:PMAX), build one
-design per map size and p_max, and simulate slowly (hundreds to thousands of
-cycles per second): use them on small maps.  Free cells no goal can reach
-cannot get a gradient; they are reported ("unreachable") and left out of
-the convergence criterion.
+design per map size and p_max, and simulate slowly (thousands of cycles per
+second): use them on small maps.  Free cells no goal can reach cannot get a
+gradient; they are reported ("unreachable") and left out of the convergence
+criterion.  The work grows with the free cells times the square of the
+longest distance to a goal: a run estimated at more than 10 minutes says so
+before it starts, and on a terminal a progress line shows the precision and
+the sweeps.
 
 --block-exponents (beyond the paper, issue 10; every engine): every block
 keeps an exponent e_b, a mantissa v of block b stands for v / 2**(p+e_b), so
@@ -35,14 +43,17 @@ word's p; the JSON gains "exponents" (the final e_b per block, BR x BC) and
 "frac_bits" (p + max e_b: the potential's resolution); "maxima" counts the
 exact local maxima of the final field.
 
-Trajectories: steepest 4-neighbour ascent from each --start (ties to the
+Trajectories: steepest 4-neighbour ascent from each start (ties to the
 first of N, E, W, S) until a goal, on the final field.
 
 Output: a summary on stdout; --json writes height, width (of MAP, before
 padding), engine, precision, converged, sweeps, block_iterations,
 node_updates, cycles, potential (HxW floats, obstacles 0, goals 1),
-unreachable ([r, c] list), trajectories ([{start, path, reached_goal}]);
---plot writes the map, the log-scale potential and the trajectories.
+unreachable ([r, c] list), trajectories ([{start, path, path_xy,
+reached_goal, reachable}], path_xy in metres in the map frame), frame (its
+resolution, origin, y_up); --csv writes every trajectory as rows
+start,row,col,x,y; --plot the map, the log-scale potential (cells without a
+value, potential 0, in their own colour) and the trajectories.
 
 Exit status: 0 planned, converged, every start reached a goal; 1 planned but
 not converged or a start did not reach a goal (e.g. no goal can reach it);
@@ -50,117 +61,86 @@ not converged or a start did not reach a goal (e.g. no goal can reach it);
 """
 
 import json
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .cli import CliError, check_cell, parse_cell
+from .cli import (CliError, add_block, add_engine, add_map, add_outputs, add_place, add_schedule, integer,
+                  load_map_arg, parse_block, parse_schedule, path_csv, path_xy, places, save_figure,
+                  write_text)
+from .progress import Progress, Ticker, announce
 
-ENGINES = ("model", "icarus", "verilator")
 DEFAULT_SCHEDULE = "16:16:256"
-DEFAULT_BLOCK = (3, 6)  # one cluster (hdl/harmonic/cluster.py ROWS x COLS)
-MAX_BLOCK_SIDE = 4096   # the map is padded to whole blocks: keep that bounded
-P_LIMIT = 1022          # the deepest word (p+2 bits) a 1024-deep node RAM holds
+DEFAULT_BLOCK = (3, 6)  # one cluster (hdl/harmonic/cluster.py ROWS x COLS): the RTL builds in seconds
+DEFAULT_ITERS = 6       # plan()'s I
+MAX_ITERS = 255         # the Planner's START command carries I in 8 bits
+
+# The run-time estimate (measured on the bundled maps with 3x6 blocks, I = 6,
+# 16:16:256): node updates ~ K * free cells * L**2, L the longest
+# Manhattan distance from a free cell to its nearest goal (K was 0.1 .. 0.45);
+# the model updates about 400,000 nodes a second on this 2-core machine, an
+# RTL planner takes about 5 cycles a node update and simulates about 4,000
+# (Icarus) / 24,000 (Verilator) cycles a second (BENCHMARKS.md).
+WORK_K = 0.25
+MODEL_RATE = 4.0e5
+RTL_CYCLES_PER_UPDATE = 5.0
+RTL_RATE = {"icarus": 4.0e3, "verilator": 2.4e4}
 
 
 def add_arguments(parser):
-    parser.add_argument("map", metavar="MAP", help="map file: .map, .txt, .pgm or .png")
-    parser.add_argument("--goal", action="append", default=[], metavar="R,C",
-                        help="goal cell (repeat for several goals; at least one)")
-    parser.add_argument("--start", action="append", default=[], metavar="R,C",
-                        help="start cell of a trajectory (repeatable)")
-    parser.add_argument("--block", metavar="NxM",
-                        help="block size in nodes (default 3x6: one cluster; the RTL needs multiples of 3x6)")
-    parser.add_argument("--iters", default=None, metavar="I",
-                        help="iterations per block visit at most (default: plan's default)")
-    parser.add_argument("--schedule", default=None, metavar="P1,P2,...|P1:STEP:PMAX",
-                        help=f"precisions, increasing (default {DEFAULT_SCHEDULE})")
-    parser.add_argument("--engine", choices=ENGINES, default="model",
-                        help="model (default), or the planner RTL on icarus / verilator")
+    add_map(parser)
+    add_place(parser, "goal", many=True, required=True, help="goal")
+    add_place(parser, "start", many=True, help="start of a trajectory")
+    add_block(parser, DEFAULT_BLOCK)
+    parser.add_argument("--iters", type=integer(1, MAX_ITERS, "the planner's START command carries I in 8 bits"),
+                        default=DEFAULT_ITERS, metavar="I",
+                        help="iterations per block visit at most (default %(default)s)")
+    add_schedule(parser, DEFAULT_SCHEDULE)
+    add_engine(parser, "the planner RTL in that simulator (arithmetic schedules, blocks of whole 3x6 clusters)")
     parser.add_argument("--block-exponents", action="store_true",
                         help="one exponent per block (issue 10, beyond the paper; every engine): "
                              "the word length follows the block, not the map")
-    parser.add_argument("--json", metavar="OUT", help="write the result as JSON")
-    parser.add_argument("--plot", metavar="OUT.png", help="plot map, potential (log scale) and trajectories")
+    add_outputs(parser, csv=True, plot_help="plot map, potential (log scale) and trajectories")
 
 
-# --- argument parsing -------------------------------------------------------
+def estimate(grid, goals, engine):
+    """(seconds, basis) of a plan on ``grid``: see WORK_K."""
+    rows, cols = np.nonzero(~grid)
+    if not len(rows):
+        return 0.0, "no free cell"
+    # the longest Manhattan distance to the nearest goal, in chunks (bounded memory)
+    far = 0
+    g = np.array(goals)
+    for k in range(0, len(rows), 1 << 20):
+        r, c = rows[k:k + (1 << 20), None], cols[k:k + (1 << 20), None]
+        far = max(far, int((np.abs(r - g[None, :, 0]) + np.abs(c - g[None, :, 1])).min(axis=1).max()))
+    updates = WORK_K * len(rows) * float(far) ** 2
+    if engine == "model":
+        return updates / MODEL_RATE, (f"about {updates:.2g} node updates: {len(rows)} free cells, "
+                                      f"{far} cells to the farthest, at {MODEL_RATE:.0f} a second")
+    cycles = updates * RTL_CYCLES_PER_UPDATE
+    return cycles / RTL_RATE[engine], (f"about {cycles:.2g} clock cycles at {RTL_RATE[engine]:.0f} "
+                                       f"simulated a second on {engine}")
 
-def parse_schedule(text, limit=P_LIMIT):
-    """``"P1,P2,..."`` or ``"P1:STEP:PMAX"`` -> strictly increasing list of precisions."""
-    text = text.strip()
+
+def check_rtl(engine, shape, block, schedule, block_exponents):
+    """Refuse, before anything runs, what the planner RTL cannot run: a
+    schedule that is not arithmetic, blocks that are not whole clusters, a
+    map larger than a Planner's declared bounds (hdl/harmonic/planner.py)."""
+    from navcores.hdl.harmonic.planner import Planner
+    from navcores.hdl.params import check
+    from .rtl.planner_driver import arithmetic, exponent_params, planner_params
     try:
-        if ":" in text:
-            parts = [int(x) for x in text.split(":")]
-            if len(parts) != 3:
-                raise ValueError
-            first, step, last = parts
-            if step < 1:
-                raise CliError(f"--schedule {text!r}: STEP must be >= 1")
-            if last < first:
-                raise CliError(f"--schedule {text!r}: PMAX {last} is below P1 {first}")
-            if first < 2 or last > limit:
-                raise CliError(f"--schedule {text!r}: precisions must lie in 2..{limit}")
-            ps = list(range(first, last + 1, step))
-        else:
-            ps = [int(x) for x in text.split(",")]
-    except ValueError:
-        raise CliError(f"--schedule {text!r}: expected P1,P2,... or P1:STEP:PMAX (integers)") from None
-    if not ps:
-        raise CliError(f"--schedule {text!r}: no precision")
-    if any(b <= a for a, b in zip(ps, ps[1:])):
-        raise CliError(f"--schedule {text!r}: precisions must increase")
-    if ps[0] < 2 or ps[-1] > limit:
-        raise CliError(f"--schedule {text!r}: precisions must lie in 2..{limit}")
-    return ps
+        params = planner_params(shape, block, p_max=arithmetic(schedule)[2])
+        if block_exponents:
+            params = exponent_params(params)
+        check(Planner.PARAMS, Planner.CONSTRAINTS, **{**{p.name: p.default for p in Planner.PARAMS}, **params})
+    except ValueError as e:
+        raise CliError(f"--engine {engine}: {e}") from None
 
 
-def parse_block(text, default):
-    if text is None:
-        return tuple(default)
-    parts = text.lower().split("x")
-    try:
-        if len(parts) != 2:
-            raise ValueError
-        n, m = int(parts[0]), int(parts[1])
-    except ValueError:
-        raise CliError(f"--block {text!r}: expected NxM (two positive integers, e.g. 16x16)") from None
-    if n < 1 or m < 1:
-        raise CliError(f"--block {text!r}: both sides must be >= 1")
-    if n > MAX_BLOCK_SIDE or m > MAX_BLOCK_SIDE:
-        raise CliError(f"--block {text!r}: sides above {MAX_BLOCK_SIDE} are not supported")
-    return n, m
-
-
-def parse_iters(text):
-    try:
-        iters = int(text)
-    except ValueError:
-        raise CliError(f"--iters {text!r}: expected a positive integer") from None
-    if iters < 1:
-        raise CliError(f"--iters {iters}: must be >= 1")
-    return iters
-
-
-# --- running ----------------------------------------------------------------
-
-def _progress(message):
-    print(f"\r{message}", end="", file=sys.stderr, flush=True)
-
-
-def _plan_defaults():
-    """The block and I used when the command line gives none: one 3x6 cluster
-    (the block the planner RTL regression runs, so that --engine icarus /
-    verilator builds in seconds; the same default for the model, so every
-    engine gives the same JSON), and plan()'s own I."""
-    import inspect
-    from models.harmonic import plan
-    return DEFAULT_BLOCK, int(inspect.signature(plan).parameters["iters"].default)
-
-
-def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=False):
+def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=False, progress=None):
     """Plan with the model or the RTL; returns a dict with the PlanResult
     fields (h and unreachable on the unpadded map).  With block exponents
     also ``exponents`` (BR x BC) and ``frac_bits`` (h is then on
@@ -168,13 +148,14 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
     keys = ("h", "p", "converged", "maxima", "unreachable", "sweeps", "block_iterations",
             "check_iterations", "node_updates", "cycles", "levels")
     if engine == "model":
-        from models.harmonic import plan
+        from navcores.models.harmonic import plan
         try:
             # With block exponents every engine runs the planner RTL's variant
             # (rtl=True: converted Maximum, scan and shift-visit cycles), so
             # the model and the RTL engines give the same JSON.
             opts = {"block_exponents": True, "rtl": True} if block_exponents else {}
-            r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule), **opts)
+            r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule), progress=progress,
+                     **opts)
         except ValueError as e:
             raise CliError(str(e)) from None
         out = {k: getattr(r, k) for k in keys}
@@ -183,19 +164,14 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
             # exact local maxima of the final field (the RTL engines count the same)
             out["maxima"] = _maxima(obstacle, goals, block, r.padded_h)
         return out
-    try:
-        from tb.harmonic.planner_bench import run_planner_rtl
-    except ImportError:
-        raise CliError(f"--engine {engine}: not available (the planner RTL driver "
-                       "tb/harmonic/planner_bench.py is not in this checkout); use --engine model") from None
-    ticker = _Ticker(f"planner RTL on {engine}")
-    try:
-        out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine,
-                              progress=ticker.status, block_exponents=block_exponents)
-    except ValueError as e:
-        raise CliError(f"--engine {engine}: {e}") from None
-    finally:
-        ticker.stop()
+    from .rtl.planner_driver import run_planner_rtl
+    with Ticker(f"planner RTL on {engine}") as ticker:
+        try:
+            out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine, block_exponents=block_exponents,
+                                  progress=lambda st: ticker.status(f"p = {st.get('p')}, {st.get('sweeps')} sweeps, "
+                                                                    f"{st.get('cycles')} cycles"))
+        except ValueError as e:
+            raise CliError(f"--engine {engine}: {e}") from None
     res = {k: out.get(k) for k in keys}
     # The RTL reports no per-level record and no maxima count (only
     # converged): the maxima are counted on the field it read back.
@@ -218,7 +194,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
 
 
 def _maxima(obstacle, goals, block, padded_h):
-    from models.harmonic import local_max, neighbours, pad_to_blocks, reachable
+    from navcores.models.harmonic import local_max, neighbours, pad_to_blocks, reachable
     padded = pad_to_blocks(obstacle, block)
     const = padded | ~reachable(padded, goals)
     for g in goals:
@@ -227,40 +203,17 @@ def _maxima(obstacle, goals, block, padded_h):
     return int(local_max(h, const, neighbours(h)).sum())
 
 
-class _Ticker:
-    """A progress line on stderr while the simulator runs (it runs in a
-    subprocess: the line shows the elapsed time, then the final status)."""
-
-    def __init__(self, what):
-        import threading
-        self.what, self.t0, self.done = what, time.time(), threading.Event()
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
-
-    def _run(self):
-        while not self.done.wait(1.0):
-            _progress(f"{self.what}: building / simulating, {time.time() - self.t0:.0f} s")
-
-    def status(self, st):
-        _progress(f"{self.what}: p = {st.get('p')}, {st.get('sweeps')} sweeps, "
-                  f"{st.get('cycles')} cycles, {time.time() - self.t0:.0f} s")
-
-    def stop(self):
-        self.done.set()
-        self.thread.join()
-        print(file=sys.stderr, flush=True)
-
-
-def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_exponents=False):
+def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_exponents=False, frame=None,
+             progress=None):
     """The whole command without I/O: returns the JSON-ready dict and the
     field (h at precision p, unpadded map; with block exponents h is on the
     common scale 2**-frac_bits and p is that scale)."""
-    from models.harmonic import ascent_next, pad_to_blocks, reachable, trajectory
+    from navcores.models.harmonic import ascent_next, pad_to_blocks, reachable, trajectory
 
     height, width = grid.shape
     padded = pad_to_blocks(grid, block)
     reach = reachable(grid, goals)
-    res = run_engine(engine, grid, goals, block, iters, schedule, block_exponents)
+    res = run_engine(engine, grid, goals, block, iters, schedule, block_exponents, progress)
     h, p = np.asarray(res["h"], dtype=object)[:height, :width], int(res["p"])
     scale = int(res["frac_bits"]) if block_exponents else p
     goal_mask = np.zeros(grid.shape, dtype=bool)
@@ -271,6 +224,8 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
     for s in starts:
         tr = trajectory(h, goal_mask, s, nxt=nxt).as_dict()
         tr["reachable"] = bool(reach[s])
+        if frame is not None:
+            tr["path_xy"] = path_xy(frame, tr["path"])
         trajectories.append(tr)
     unreachable = [[int(r), int(c)] for r, c in np.argwhere(~grid & ~reach)]
     unit = 1 << scale              # int / int is correctly rounded at any p
@@ -285,6 +240,8 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
         "padded": list(padded.shape), "levels": _levels_json(res.get("levels") or []),
         "potential": potential, "unreachable": unreachable, "trajectories": trajectories,
     }
+    if frame is not None:
+        out["frame"] = frame.as_dict()
     if block_exponents:
         out["exponents"] = [[int(e) for e in row] for row in res["exponents"]]
         out["frac_bits"] = scale
@@ -301,20 +258,31 @@ def _levels_json(levels):
 
 
 def plot(path, grid, result, title):
+    """Map and log-scale potential; free cells without a value (potential 0:
+    no goal reaches them, or below 2**-p) in their own colour, never the
+    colour bar's minimum."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.colors import ListedColormap
+    from matplotlib.patches import Patch
 
     pot = np.array(result["potential"], dtype=float)
-    floor = 2.0 ** -result.get("frac_bits", result["precision"])
-    field = np.where(grid, np.nan, np.log10(np.maximum(pot, max(floor, 1e-300))))
+    novalue = ~grid & (pot <= 0)
+    with np.errstate(divide="ignore"):
+        field = np.where(grid | novalue, np.nan, np.log10(np.where(pot > 0, pot, 1.0)))
     fig, axes = plt.subplots(1, 2, figsize=(12, 5.6))
     axes[0].imshow(grid, cmap="gray_r", interpolation="nearest")
     axes[0].set_title("map (black: obstacle)")
-    axes[1].set_facecolor("black")
     im = axes[1].imshow(field, cmap="viridis", interpolation="nearest")
     fig.colorbar(im, ax=axes[1], label="log10 potential (goal = 1)")
+    # obstacles black, cells without a value light pink: both outside the colour map
+    axes[1].imshow(np.where(grid, 1.0, np.nan), cmap=ListedColormap(["black"]), interpolation="nearest")
+    axes[1].imshow(np.where(novalue, 1.0, np.nan), cmap=ListedColormap(["#f4c2d7"]), interpolation="nearest")
     axes[1].set_title(f"potential, p = {result['precision']}")
+    axes[1].legend(handles=[Patch(color="black", label="obstacle"),
+                            Patch(color="#f4c2d7", label=f"no value ({int(novalue.sum())} cells: potential 0)")],
+                   loc="upper center", bbox_to_anchor=(0.5, -0.05), ncol=2, fontsize=8, frameon=False)
     for ax in axes:
         goals = result["_goals"]
         ax.plot([c for _, c in goals], [r for r, _ in goals], "*", color="red", ms=12)
@@ -324,34 +292,36 @@ def plot(path, grid, result, title):
             ax.plot(pc[0], pr[0], "o", color="tab:orange" if tr["reached_goal"] else "tab:red")
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    save_figure(fig, path, dpi=110)
     plt.close(fig)
 
 
 def run(args):
-    from .mapfile import load_grid
+    gm, frame = load_map_arg(args)
+    grid = gm.obstacle
+    goals = places(args, "goal", grid, frame)
+    if not goals:
+        raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
+    starts = places(args, "start", grid, frame)
+    block = parse_block(args.block)
+    schedule = parse_schedule(args.schedule)
+    bexp = bool(args.block_exponents)
+    if args.engine != "model":
+        check_rtl(args.engine, grid.shape, block, schedule, bexp)
 
-    path = Path(args.map)
-    if not path.is_file():
-        raise CliError(f"{path}: no such map file")
-    grid = load_grid(path)
-    if not args.goal:
-        raise CliError("no goal: give at least one --goal R,C")
-    goals = [check_cell(grid, parse_cell(g, "--goal"), "goal") for g in args.goal]
-    starts = [check_cell(grid, parse_cell(s, "--start"), "start") for s in args.start]
-    default_block, default_iters = _plan_defaults()
-    block = parse_block(args.block, default_block)
-    iters = parse_iters(args.iters) if args.iters is not None else default_iters
-    schedule = parse_schedule(args.schedule or DEFAULT_SCHEDULE)
-
+    seconds, basis = estimate(grid, goals, args.engine)
+    announce("sim harmonic", seconds, f"planning {grid.shape[0]}x{grid.shape[1]} on the {args.engine}", basis)
     t0 = time.time()
-    bexp = bool(getattr(args, "block_exponents", False))
-    result, _ = plan_map(grid, goals, starts, block, iters, schedule, args.engine, bexp)
+    with Progress(f"harmonic {args.engine}") as bar:
+        result, _ = plan_map(grid, goals, starts, block, args.iters, schedule, args.engine, bexp, frame,
+                             progress=lambda res, p, cycles: bar.update(
+                                 note=f"p = {p}, {res.sweeps} sweeps, {res.block_iterations} block iterations"))
     seconds = time.time() - t0
 
+    name = Path(args.map).name
     lines = [
-        f"{path.name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), block "
-        f"{block[0]}x{block[1]} (padded to {result['padded'][0]}x{result['padded'][1]}), I = {iters}, "
+        f"{name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), block "
+        f"{block[0]}x{block[1]} (padded to {result['padded'][0]}x{result['padded'][1]}), I = {args.iters}, "
         f"engine {args.engine}" + (", block exponents" if bexp else ""),
         f"precision {result['precision']} ("
         + ("converged: no local maximum" if result["converged"]
@@ -377,12 +347,16 @@ def run(args):
             lines.append(f"start {s}: STUCK at {tuple(tr['path'][-1])} after {len(tr['path']) - 1} steps "
                          "(local maximum: more precision needed)")
     if args.json:
-        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.json).write_text(json.dumps(result))
+        write_text(args.json, json.dumps(result))
         lines.append(f"wrote {args.json}")
+    if args.csv:
+        rows = ["start,row,col,x,y"]
+        for k, tr in enumerate(result["trajectories"]):
+            rows += path_csv(frame, tr["path"], prefix=(k,))
+        write_text(args.csv, "\n".join(rows) + "\n")
+        lines.append(f"wrote {args.csv}")
     if args.plot:
-        Path(args.plot).parent.mkdir(parents=True, exist_ok=True)
-        title = f"{path.name}: harmonic potential, p = {result['precision']}, engine {args.engine}"
+        title = f"{name}: harmonic potential, p = {result['precision']}, engine {args.engine}"
         plot(args.plot, grid, dict(result, _goals=goals), title)
         lines.append(f"wrote {args.plot}")
     print("\n".join(lines))

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from hdl.dflc.top import config_for, split_params
-from models.dflc import Dflc
+from navcores.hdl.dflc.top import config_for, split_params
+from navcores.models.dflc import Dflc
 
 HERE = Path(__file__).resolve().parent
 N = 24

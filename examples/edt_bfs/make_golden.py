@@ -17,10 +17,10 @@ from pathlib import Path
 
 import yaml
 
-from hdl.edt_bfs.cell import cell_widths
-from hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
-from models.edt_bfs import plan_path
-from sim.mapfile import load_grid
+from navcores.hdl.edt_bfs.cell import cell_widths
+from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
+from navcores.models.edt_bfs import plan_path
+from navcores.models.maps import load_grid
 
 HERE = Path(__file__).resolve().parent
 MAX_BEATS = 128         # tb_edt_bfs.v's memory

@@ -1,10 +1,10 @@
 """The DFLC core (paper 003 Fig. 8 U_fpga_fc): MF degrees, active rules, defuzzification."""
 
 from amaranth.hdl import Module, Mux, Signal
-from amaranth.lib import data, wiring
+from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param, check
+from ..params import Param, checked_init
 from .addr_gen import AddrGen
 from .cons_map import ConsMap
 from .divider import Divider
@@ -14,12 +14,24 @@ from .pipe import PIPE_DEFAULTS, PIPE_KEYS, PIPE_RANGE, PIPE_TABLE2, check_pipe,
 from .rule_sel import RuleSel
 from .tnorm import Tnorm
 
-__all__ = ["DflcCore", "latency", "PIPE_KEYS", "PIPE_DEFAULTS", "PIPE_TABLE2"]
+__all__ = ["DflcCore", "latency", "sample_layout", "result_layout",
+           "PIPE_KEYS", "PIPE_DEFAULTS", "PIPE_TABLE2"]
+
+
+def sample_layout(config):
+    """One input sample: the n input codes, input j at bits [j*ip_sz, (j+1)*ip_sz)."""
+    return data.ArrayLayout(config.ip_sz, config.n)
+
+
+def result_layout(config):
+    """One output: the code ``y`` (low bits) and ``zero`` (total firing strength 0) above it."""
+    return data.StructLayout({"y": config.op_sz, "zero": 1})
 
 
 def latency(config, parallel=False, **pipe):
-    """Cycles from the input handshake to ``o_valid`` (the timing table of
-    :class:`DflcCore`); 2^n + 8 (9 parallel) at the default generics."""
+    """Cycles from the ``i_stream`` handshake to ``o_stream.valid`` (the
+    timing table of :class:`DflcCore`); 2^n + 8 (9 parallel) at the default
+    generics."""
     g = check_pipe(pipe, op_sz=config.op_sz)
     p = 1 if parallel else 1 << config.n
     return (p + g["psr1_no"] + g["cpr3_no"] + g["psr3_no"] + g["cpr1_no"] + g["cpr4_no"]
@@ -94,7 +106,7 @@ class DflcCore(wiring.Component):
     =============  ========================================================
     cycle          stage
     =============  ========================================================
-    t              ``i_valid & i_ready``: codes into the MF generators
+    t              ``i_stream`` handshake: codes into the MF generators
     t+1            segment of each input (MfGen stage 1, psr1 / trap_gen_p)
     t+2+k          degrees held (cpr3); combination k: rule selector,
                    t-norm, rule index to the consequent ROM (addr_gen_p,
@@ -103,7 +115,7 @@ class DflcCore(wiring.Component):
     t+4+k          w registered (cpr5); singleton code read (s_rom)
     t+5+k          w*c (cpr6) and w (psr4) registered, "no rule" zeroes both
     t+6+P-1        sums final (int_uns / int_sig), divider starts
-    t+P+8          ``o_valid`` with ``o_y`` and ``o_zero`` (div_array)
+    t+P+8          ``o_stream.valid`` with ``y`` and ``zero`` (div_array)
     =============  ========================================================
 
     In general, latency (:func:`latency`) = P + psr1 + cpr3 + psr3 + cpr1 +
@@ -115,12 +127,20 @@ class DflcCore(wiring.Component):
 
     Ports
     -----
-    i_valid : In(1), i_codes : In(ArrayLayout(ip_sz, n)), i_ready : Out(1)
-        Input sample; accepted when both valid and ready (one every 2^n
-        cycles; always ready in the parallel option).
-    o_valid : Out(1), o_y : Out(op_sz), o_zero : Out(1)
-        One cycle per sample, in order; ``o_zero``: total firing strength 0,
-        ``o_y`` is then the configuration's ``zero_code``.
+    i_stream : In(stream.Signature(:func:`sample_layout`))
+        Input samples (the n codes); one is taken when ``valid`` and
+        ``ready`` are both high, at most one every 2^n cycles: ``ready`` is
+        low for the 2^n - 1 cycles after a handshake (always high in the
+        parallel option) and does not depend on ``valid``.
+    o_stream : Out(stream.Signature(:func:`result_layout`, always_ready=True))
+        One beat per sample, in order, ``latency`` cycles after its input
+        handshake: ``payload.y`` and ``payload.zero`` (total firing strength
+        0: ``y`` is then the configuration's ``zero_code``).  The pipeline
+        is fixed and never stalls, so the stream has no back-pressure
+        (``always_ready``: no ``ready`` port): the consumer takes every
+        beat.  ``valid`` depends only on the pipeline.  To stall the
+        output, meter the input: :class:`~hdl.dflc.top.DflcStream` admits a
+        sample only when its output FIFO will have room.
     """
 
     # The pipeline generics (hdl.emit's dflc_* tops list them; the rest is the
@@ -130,6 +150,7 @@ class DflcCore(wiring.Component):
                          doc=f"pipeline registers, Table 2 {k[:-3].upper()}")
                    for k in PIPE_KEYS)
 
+    @checked_init
     def __init__(self, config, parallel=False, **pipe):
         c = config
         self.pipe = check_pipe(pipe, op_sz=c.op_sz)
@@ -145,35 +166,28 @@ class DflcCore(wiring.Component):
         self.sw_w = bits_for(c.s_max)
         self.swc_w = bits_for(c.s_max * ((1 << c.mf_op_sz) - 1))
         super().__init__({
-            "i_valid": In(1), "i_codes": In(data.ArrayLayout(c.ip_sz, c.n)), "i_ready": Out(1),
-            "o_valid": Out(1), "o_y": Out(c.op_sz), "o_zero": Out(1),
+            "i_stream": In(stream.Signature(sample_layout(c))),
+            "o_stream": Out(stream.Signature(result_layout(c), always_ready=True)),
         })
-
-    @classmethod
-    def from_params(cls, **params):
-        """The core of an emitted parameter set (``hdl.emit`` ``dflc_core``:
-        fll, widths, div, op, par and the pipeline generics, as DflcStream)."""
-        from .top import core_from_params    # top imports this module
-        return core_from_params(**params)
 
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest."""
         return {"initiation_interval_cycles": 1 if self.parallel else 1 << self.config.n,
                 "latency_cycles": latency(self.config, self.parallel, **self.pipe),
-                "latency": "i_valid & i_ready to o_valid"}
+                "latency": "i_stream handshake to o_stream.valid (o_stream: no back-pressure)"}
 
     def elaborate(self, platform):
         m = Module()
         c, g = self.config, self.pipe
         n, K = c.n, 1 << c.n
         accept = Signal()
-        m.d.comb += accept.eq(self.i_valid & self.i_ready)
+        m.d.comb += accept.eq(self.i_stream.valid & self.i_stream.ready)
 
         gens = []
         for j, spec in enumerate(c.inputs):
             gen = MfGen(spec, c.ip_sz, c.dy_ip, psr=g["psr1_no"], cpr=g["cpr3_no"])
             m.submodules[f"mf_gen{j}"] = gen
-            m.d.comb += [gen.x.eq(self.i_codes[j]), gen.v_in.eq(accept)]
+            m.d.comb += [gen.x.eq(self.i_stream.payload[j]), gen.v_in.eq(accept)]
             gens.append(gen)
         # psr3 (route into rul_sel_p) delays the degrees and the start alike;
         # cpr1 (addr_gen_p's outputs) delays the degrees alongside.
@@ -182,12 +196,12 @@ class DflcCore(wiring.Component):
                 for gen in gens]
 
         if self.parallel:
-            m.d.comb += self.i_ready.eq(1)
+            m.d.comb += self.i_stream.ready.eq(1)
             v_sel, = delay(m, [v2], g["cpr1_no"], "cpr1_")
             combos = [(k, 1, 1, 1) for k in range(K)]   # (k, active, first, last)
         else:
             m.submodules.addr_gen = ag = AddrGen(n)
-            m.d.comb += [ag.start.eq(v2), ag.accept.eq(accept), self.i_ready.eq(ag.ready)]
+            m.d.comb += [ag.start.eq(v2), ag.accept.eq(accept), self.i_stream.ready.eq(ag.ready)]
             k_d, v_sel, first_d, last_d = delay(m, [ag.k, ag.active, ag.first, ag.last],
                                                 g["cpr1_no"], "cpr1_")
             combos = [(k_d, v_sel, first_d, last_d)]
@@ -207,13 +221,11 @@ class DflcCore(wiring.Component):
             m.submodules[f"cons_map{q}"] = cm
             m.d.comb += sel.k.eq(k)
             for j, (base, mu0, mu1) in enumerate(degs):
-                m.d.comb += [getattr(sel, f"base_{j}").eq(base), getattr(sel, f"mu0_{j}").eq(mu0),
-                             getattr(sel, f"mu1_{j}").eq(mu1)]
+                m.d.comb += [sel.base[j].eq(base), sel.mu0[j].eq(mu0), sel.mu1[j].eq(mu1)]
             # cpr4 (rule_sel_p): the rule index and the selected degrees.
-            sel_out = delay(m, [sel.rule] + [getattr(sel, f"deg_{j}") for j in range(n)],
-                            g["cpr4_no"], f"cpr4_{q}_")
+            sel_out = delay(m, [sel.rule, *sel.deg], g["cpr4_no"], f"cpr4_{q}_")
             m.d.comb += cm.rule.eq(sel_out[0])
-            m.d.comb += [getattr(tn, f"deg_{j}").eq(sel_out[1 + j]) for j in range(n)]
+            m.d.comb += [tn.deg[j].eq(sel_out[1 + j]) for j in range(n)]
             # cpr5 (minmax_p) on w, then the synchronization to the c route.
             if (g["cpr5_no"], d_wc) == (2, 2):   # the default: stages R and C of the table
                 w_r, w_c = Signal(c.dy_ip, name=f"w_r{q}"), Signal(c.dy_ip, name=f"w_c{q}")
@@ -262,5 +274,6 @@ class DflcCore(wiring.Component):
 
         m.submodules.divider = div = Divider(c, self.sw_w, self.swc_w, cpr=g["cpr9_no"])
         m.d.comb += [div.sw.eq(integ.sw), div.swc.eq(integ.swc), div.v_in.eq(integ.done),
-                     self.o_valid.eq(div.v_out), self.o_y.eq(div.y), self.o_zero.eq(div.zero)]
+                     self.o_stream.valid.eq(div.v_out),
+                     self.o_stream.payload.y.eq(div.y), self.o_stream.payload.zero.eq(div.zero)]
         return m

@@ -1,6 +1,6 @@
 """Rule selector of the DFLC (paper 003 Fig. 8 rule_sel_p)."""
 
-from amaranth.hdl import Module, Mux, Signal
+from amaranth.hdl import Module, Mux
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -17,24 +17,25 @@ class RuleSel(wiring.Component):
     ``sum m_j * stride_j`` (input 0 most significant, the FLL rule table's
     row-major order, ``DflcConfig.strides``).
 
-    Ports
+    Ports (arrays over the inputs j = 0 .. n-1)
     -----
     k : In(n)                         combination (the address generator's count)
-    base_j, mu0_j, mu1_j : In(...)    per input j, from the MF degree generators
+    base[j], mu0[j], mu1[j] : In      input j's slots, from its MF degree generator
+                                      (``base`` as wide as the input with the most MFs)
     rule : Out(bits(rules - 1))       rule index for the consequent map
-    deg_j : Out(dy_ip)                the selected degree of input j
+    deg[j] : Out(dy_ip)               the selected degree of input j
     """
 
     def __init__(self, config):
         self.config = config
-        n = config.n
-        members = {"k": In(n), "rule": Out(bits_for(len(config.rules) - 1))}
-        for j, cnt in enumerate(config.mf_ip_no):
-            members[f"base_{j}"] = In(bits_for(cnt - 2))
-            members[f"mu0_{j}"] = In(config.dy_ip)
-            members[f"mu1_{j}"] = In(config.dy_ip)
-            members[f"deg_{j}"] = Out(config.dy_ip)
-        super().__init__(members)
+        n, dy = config.n, config.dy_ip
+        super().__init__({
+            "k": In(n),
+            "base": In(bits_for(max(config.mf_ip_no) - 2)).array(n),
+            "mu0": In(dy).array(n), "mu1": In(dy).array(n),
+            "rule": Out(bits_for(len(config.rules) - 1)),
+            "deg": Out(dy).array(n),
+        })
 
     def elaborate(self, platform):
         m = Module()
@@ -42,9 +43,8 @@ class RuleSel(wiring.Component):
         terms = []
         for j, stride in enumerate(c.strides):
             bit = self.k[j]
-            mj = getattr(self, f"base_{j}") + bit
+            mj = self.base[j] + bit
             terms.append(mj * stride)
-            m.d.comb += getattr(self, f"deg_{j}").eq(
-                Mux(bit, getattr(self, f"mu1_{j}"), getattr(self, f"mu0_{j}")))
+            m.d.comb += self.deg[j].eq(Mux(bit, self.mu1[j], self.mu0[j]))
         m.d.comb += self.rule.eq(sum(terms))
         return m

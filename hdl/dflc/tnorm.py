@@ -4,6 +4,8 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
+
 __all__ = ["Tnorm", "SEL_OPS"]
 
 SEL_OPS = ("min", "prod", "max", "probor")
@@ -19,19 +21,18 @@ class Tnorm(wiring.Component):
 
     Ports
     -----
-    deg_j : In(dy_ip)   the degrees, j = 0 .. n-1
-    w : Out(dy_ip)      firing strength
+    deg : In(dy_ip).array(n)   the degrees, deg[j] of input j = 0 .. n-1
+    w : Out(dy_ip)             firing strength
     """
 
+    @checked_init
     def __init__(self, n, dy_ip, sel_op):
         if sel_op not in SEL_OPS:
             raise ValueError(f"sel_op = {sel_op!r}: expected one of {SEL_OPS}")
         if not 1 <= n <= 4:
             raise ValueError(f"ip_no = {n}: must be 1 to 4")
         self.n, self.dy, self.sel_op = n, dy_ip, sel_op
-        members = {f"deg_{j}": In(dy_ip) for j in range(n)}
-        members["w"] = Out(dy_ip)
-        super().__init__(members)
+        super().__init__({"deg": In(dy_ip).array(n), "w": Out(dy_ip)})
 
     def _prod(self, m, a, b, j):
         dy = self.dy
@@ -43,9 +44,9 @@ class Tnorm(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        acc = self.deg_0
+        acc = self.deg[0]
         for j in range(1, self.n):
-            d = getattr(self, f"deg_{j}")
+            d = self.deg[j]
             nxt = Signal(self.dy, name=f"w{j}")
             if self.sel_op == "min":
                 m.d.comb += nxt.eq(Mux(d < acc, d, acc))

@@ -1,42 +1,41 @@
 """DFLC stream top (paper 003 Fig. 8 flc_ip wrapper; FSL = a FIFO stream)."""
 
-import re
 from pathlib import Path
 
-from amaranth.hdl import Module, Signal
-from amaranth.lib import data, stream, wiring
+from amaranth.hdl import Module, Shape, Signal
+from amaranth.lib import stream, wiring
 from amaranth.lib.fifo import SyncFIFO
 from amaranth.lib.wiring import In, Out
 
-from models.dflc import DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
+from navcores.models.dflc import DEFAULT_FLL, DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 
-from .core import DflcCore, latency
+from .core import DflcCore, latency, result_layout, sample_layout
 from .pipe import PIPE_KEYS, check_pipe
-from .mf_gen import bits_for
 
 __all__ = ["DflcStream", "config_for", "resolve_fll", "stream_latency", "fifo_depth", "split_params",
            "core_from_params"]
 
-ROOT = Path(__file__).resolve().parents[2]
-# models/: the shipped controllers; tb/dflc/fll/: test fixtures;
-# build/dflc_fll/: .fll files `python -m sim dflc` copied under a content tag.
-FLL_DIRS = (ROOT / "models", ROOT / "tb" / "dflc" / "fll", ROOT / "build" / "dflc_fll")
+# Where a stem is looked up: the controllers shipped in models/ (any other
+# .fll, a test fixture or a user's, is given by its path).
+FLL_DIRS = (DEFAULT_FLL.parent,)
 
 
 def resolve_fll(fll):
-    """A .fll path, or a stem: ``table1`` -> models/dflc_table1.fll,
-    ``n3_prod`` -> tb/dflc/fll/n3_prod.fll (the test fixtures)."""
+    """A .fll path, or the stem of a shipped controller: ``table1`` ->
+    models/dflc_table1.fll."""
     p = Path(str(fll))
-    if p.suffix == ".fll" and p.exists():
-        return p
+    if p.suffix == ".fll" or "/" in str(fll):     # a path: the file itself, never a stem + ".fll"
+        if p.is_file():
+            return p
+        raise ValueError(f"fll = {fll!r}: no such file" if not p.exists() else f"fll = {fll!r}: not a file")
     for d in FLL_DIRS:
         for cand in (d / f"dflc_{fll}.fll", d / f"{fll}.fll"):
             if cand.exists():
                 return cand
     raise ValueError(f"fll = {fll!r}: no such .fll (looked for a path, and dflc_{fll}.fll / "
-                     f"{fll}.fll in models/ and tb/dflc/fll/)")
+                     f"{fll}.fll in models/)")
 
 
 def config_for(fll="table1", ip_sz=12, dy_ip=8, mf_op_sz=12, op_sz=12, div="lut", op=None):
@@ -77,12 +76,14 @@ class DflcStream(wiring.Component):
 
     ``i_stream.payload`` is an ArrayLayout of n input codes (input j at bits
     [j*ip_sz, (j+1)*ip_sz)); ``o_stream.payload`` is ``{y: op_sz, zero: 1}``
-    (y in the low bits, the zero-strength flag above it).
+    (y in the low bits, the zero-strength flag above it): the core's
+    :func:`~hdl.dflc.core.sample_layout` and :func:`~hdl.dflc.core.result_layout`.
 
-    The core's pipeline never stalls; instead the top admits a sample only
-    when the output FIFO will have room for it: ``samples in flight + FIFO
-    level < depth`` with depth = ceil(L / P) + 2, enough that a consumer that
-    is always ready never throttles the input.  So at full throughput a sample
+    The core's pipeline never stalls (its ``o_stream`` is ``always_ready``);
+    instead the top admits a sample only when the output FIFO will have room
+    for it: ``samples in flight + FIFO level < depth`` with depth =
+    ceil(L / P) + 2, enough that a consumer that is always ready never
+    throttles the input.  So at full throughput a sample
     enters every P = 2^n cycles (every cycle in the parallel option) and leaves
     ``stream_latency = L + 1`` cycles later (L = :func:`core.latency`; the
     FIFO adds one).  ``o_stream.valid`` depends on nothing but the FIFO.
@@ -118,6 +119,7 @@ class DflcStream(wiring.Component):
                    "op_sz = {op_sz} < MF_op_sz = {mf_op_sz}: the output must hold a singleton code"),
     )
 
+    @checked_init
     def __init__(self, config=None, parallel=False, pipe=None, **kw):
         if config is None:
             check(self.PARAMS, self.CONSTRAINTS, **{**{p.name: p.default for p in self.PARAMS}, **kw})
@@ -130,10 +132,9 @@ class DflcStream(wiring.Component):
         check_pipe(pipe, op_sz=config.op_sz)
         self.config, self.parallel, self.pipe = config, bool(parallel), dict(pipe or {})
         self.depth = fifo_depth(config, self.parallel, **self.pipe)
-        c = config
         super().__init__({
-            "i_stream": In(stream.Signature(data.ArrayLayout(c.ip_sz, c.n))),
-            "o_stream": Out(stream.Signature(data.StructLayout({"y": c.op_sz, "zero": 1}))),
+            "i_stream": In(stream.Signature(sample_layout(config))),
+            "o_stream": Out(stream.Signature(result_layout(config))),
         })
 
     def timing(self):
@@ -147,25 +148,24 @@ class DflcStream(wiring.Component):
         m = Module()
         c = self.config
         m.submodules.core = core = DflcCore(c, self.parallel, **self.pipe)
-        m.submodules.fifo = fifo = SyncFIFO(width=c.op_sz + 1, depth=self.depth)
+        m.submodules.fifo = fifo = SyncFIFO(width=Shape.cast(result_layout(c)).width, depth=self.depth)
         inflight = Signal(range(self.depth + 1))
         room = Signal()
         m.d.comb += room.eq(inflight + fifo.level < self.depth)
+        # Input: the core's stream behind a valve that closes while the FIFO
+        # could not take one more result (valid and ready gated alike).
         accept = Signal()
         m.d.comb += [
-            core.i_valid.eq(self.i_stream.valid & room),
-            core.i_codes.eq(self.i_stream.payload),
-            self.i_stream.ready.eq(core.i_ready & room),
+            core.i_stream.payload.eq(self.i_stream.payload),
+            core.i_stream.valid.eq(self.i_stream.valid & room),
+            self.i_stream.ready.eq(core.i_stream.ready & room),
             accept.eq(self.i_stream.valid & self.i_stream.ready),
-            fifo.w_en.eq(core.o_valid),
-            fifo.w_data.eq(core.o_y | (core.o_zero << c.op_sz)),
-            self.o_stream.valid.eq(fifo.r_rdy),
-            self.o_stream.payload.eq(fifo.r_data),
-            fifo.r_en.eq(self.o_stream.ready),
         ]
-        m.d.sync += inflight.eq(inflight + accept - core.o_valid)
+        # Core -> FIFO: the core's output is always_ready (no back-pressure),
+        # the FIFO's write port is not, so no wiring.connect here: the credit
+        # count above guarantees that w_rdy is high whenever a result comes.
+        m.d.comb += [fifo.w_en.eq(core.o_stream.valid), fifo.w_data.eq(core.o_stream.payload)]
+        # FIFO -> output: valid is the FIFO's r_rdy alone.
+        wiring.connect(m, fifo.r_stream, wiring.flipped(self.o_stream))
+        m.d.sync += inflight.eq(inflight + accept - core.o_stream.valid)
         return m
-
-
-def module_name_ok(name):
-    return re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name) is not None

@@ -6,12 +6,12 @@ from amaranth.hdl import Cat, ClockSignal, Const, Instance, Module, Mux, ResetSi
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs import OFFSETS
 
-from ..params import check
-from .cell import MAX_SIDE, EdtCell, cell_widths, result_layout, state_layout
+from ..params import check, checked_init
+from .cell import EdtCell, cell_widths, result_layout, state_layout
 
-__all__ = ["EdtArray"]
+__all__ = ["EdtArray", "default_cell_module"]
 
 
 def _mux_tree(items, sel):
@@ -25,10 +25,9 @@ def _mux_tree(items, sel):
     return level[0]
 
 
-def default_path(top, height, width):
-    """The Verilog module name hdl.emit gives ``top`` at this size."""
-    from hdl.emit import top_name
-    return top_name(top, {"height": height, "width": width})
+def default_cell_module(height, width):
+    """The cell module's name when the caller gives none: fixed by the size."""
+    return f"edt_cell_{height}x{width}"
 
 
 class EdtArray(wiring.Component):
@@ -39,11 +38,12 @@ class EdtArray(wiring.Component):
     ends in column ``width - 1`` after ``width`` shifts.  Cells outside the
     array read as not done / not visited.
 
-    ``path`` is the hierarchical name of this array in the emitted design
-    (its Verilog module name when it is the top; default: hdl.emit's name for
-    ``edt_array`` at this size): the cells other than (1, 1) instantiate
-    the module emitted for cell (1, 1) by name (see ``elaborate``).  Both
-    sides must be >= 3.
+    Every cell is a Verilog instance of the module ``cell_module`` (default
+    :func:`default_cell_module`; hdl.emit names it ``<top module>_cell``):
+    :class:`EdtCell` at this size, converted once under that name.  A design
+    holding the array must define that module beside its own:
+    :meth:`instance_modules` names it, and hdl.emit appends it to the top's
+    Verilog (see ``elaborate``).  Both sides must be >= 3.
 
     Ports
     -----
@@ -60,15 +60,16 @@ class EdtArray(wiring.Component):
         outside the array reads 0.
     """
 
-    # Both sides >= 3: an interior cell is the prototype.
-    PARAMS = tuple(replace(p, lo=3, message="array {name} {value!r}: must be an integer in {lo}..{hi} "
-                                            "(an interior cell is the prototype)")
+    # Both sides >= 3: the smallest array built and verified (every cell kind:
+    # corners, edges, interior).
+    PARAMS = tuple(replace(p, lo=3, message="array {name} {value!r}: must be an integer in {lo}..{hi}")
                    for p in EdtCell.PARAMS)
 
-    def __init__(self, height, width, path=None):
+    @checked_init
+    def __init__(self, height, width, cell_module=None):
         self.height, self.width = height, width
-        self.path = path or default_path("edt_array", height, width)
         check(self.PARAMS, height=height, width=width)
+        self.cell_module = cell_module or default_cell_module(height, width)
         w = self.w = cell_widths(height, width)
         super().__init__({
             "shift": In(1), "step_edt": In(1), "step_cfr": In(1), "step_bfs": In(1),
@@ -85,21 +86,20 @@ class EdtArray(wiring.Component):
         """The cycle figures hdl.emit puts in the manifest."""
         return {"load_cycles": self.width, "step_cycles": 1, "readout_latency_cycles": 0}
 
+    def instance_modules(self):
+        """{Verilog module name: component} of the modules this design
+        instantiates by name: the cell, which the emitter converts under
+        ``cell_module`` into the same file."""
+        return {self.cell_module: EdtCell(self.height, self.width)}
+
     def elaborate(self, platform):
         m = Module()
         h, wd = self.height, self.width
-        # One cell is elaborated by Amaranth (``proto``, cell (0, 0)); every
-        # other cell is an Instance of the module Amaranth emits for it, by its
-        # hierarchical name.  Amaranth 0.5 elaborates every submodule anew and
-        # emits no shared module definitions: 1024 elaborated cells take minutes
-        # and a million Verilog lines; one definition and 1023 instances take
-        # seconds.  So the Verilog module of this array must be named
-        # ``self.path`` (hdl.emit names its tops that way).
-        cell_type = f"{self.path}.proto"
-        # An interior cell: Amaranth drops submodule ports driven by constants,
-        # and the instances need them all.
-        proto_at = (1, 1)
-        proto = EdtCell(h, wd)
+        # Every cell is an Instance of one module, ``self.cell_module`` (the
+        # EdtCell converted on its own, with all its ports: instance_modules).
+        # Amaranth 0.5 elaborates every submodule anew and emits no shared
+        # module definitions: 1024 elaborated cells take minutes and a million
+        # Verilog lines; one definition and 1024 instances take seconds.
         w = self.w
         cells = [[{"state": Signal(state_layout(w), name=f"c{r}_{c}_state"),
                    "result": Signal(result_layout(w), name=f"c{r}_{c}_result"),
@@ -124,15 +124,10 @@ class EdtArray(wiring.Component):
                     m.d.comb += [west.done.eq(self.in_obst[r] & self.shift),
                                  west.visited.eq(self.in_goal[r] & self.shift)]
                     ins["n3"] = west.as_value()
-                if (r, c) == proto_at:
-                    m.submodules.proto = proto
-                    m.d.comb += [getattr(proto, n).eq(v) for n, v in ins.items()]
-                    m.d.comb += [me[f].eq(getattr(proto, f)) for f in me]
-                else:
-                    ports = {f"i_{n}": v for n, v in ins.items()}
-                    ports.update({f"o_{f}": (v.as_value() if f != "changed" else v) for f, v in me.items()})
-                    m.submodules[f"cell_{r}_{c}"] = Instance(
-                        cell_type, i_clk=ClockSignal(), i_rst=ResetSignal(), **ports)
+                ports = {f"i_{n}": v for n, v in ins.items()}
+                ports.update({f"o_{f}": (v.as_value() if f != "changed" else v) for f, v in me.items()})
+                m.submodules[f"cell_{r}_{c}"] = Instance(
+                    self.cell_module, i_clk=ClockSignal(), i_rst=ResetSignal(), **ports)
         m.d.comb += self.changed.eq(Cat(*[cell["changed"] for row in cells for cell in row]).any())
 
         # Read-out multiplexer: one word per cell; a binary tree of 2:1

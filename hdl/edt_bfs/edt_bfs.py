@@ -4,11 +4,11 @@ from amaranth.hdl import Module, Mux, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs import OFFSETS
 
-from ..params import check
-from .array import EdtArray, default_path
-from .cell import cell_widths
+from ..params import check, checked_init
+from .array import EdtArray, default_cell_module
+from .cell import EdtCell, cell_widths
 
 STATES = ("IDLE", "LOAD", "EDT", "CFR", "BFS", "PATH", "DUMP")
 
@@ -81,17 +81,19 @@ class EdtBfs(wiring.Component):
     which changes nothing.  A synchronous reset at any point returns to idle;
     the next load clears every cell.
 
-    ``path`` is this design's Verilog module name (hdl.emit's name by
-    default); see :class:`EdtArray`.
+    ``cell_module`` names the Verilog module of the array's cells (see
+    :class:`EdtArray`): a design holding this core defines it beside its own
+    (:meth:`instance_modules`; hdl.emit does).
     """
 
     PARAMS = EdtArray.PARAMS        # the array's (it is elaborated inside)
 
-    def __init__(self, height, width, path=None):
+    @checked_init
+    def __init__(self, height, width, cell_module=None):
         self.height, self.width = height, width
         check(self.PARAMS, height=height, width=width)
         w = self.w = cell_widths(height, width)
-        self.path = path or default_path("edt_bfs", height, width)
+        self.cell_module = cell_module or default_cell_module(height, width)
         self._bfs_bits = max(1, w["bfs_max"].bit_length())
         super().__init__({
             "c_stream": In(stream.Signature(command_layout(w))),
@@ -111,10 +113,14 @@ class EdtBfs(wiring.Component):
                 "load_cycles": w, "iteration_cycles": 1, "readout_cycles": h * w,
                 "note": "source always valid, sink always ready; back-pressure adds cycles"}
 
+    def instance_modules(self):
+        """The modules the array instantiates by name (:meth:`EdtArray.instance_modules`)."""
+        return {self.cell_module: EdtCell(self.height, self.width)}
+
     def elaborate(self, platform):
         m = Module()
         h, wd, w = self.height, self.width, self.w
-        m.submodules.array = arr = EdtArray(h, wd, path=f"{self.path}.array")
+        m.submodules.array = arr = EdtArray(h, wd, cell_module=self.cell_module)
 
         dfar = Signal(w["di"])
         start_row = Signal(w["row"])

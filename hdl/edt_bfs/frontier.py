@@ -5,7 +5,7 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs import OFFSETS
 
 from .tile_layouts import named
 

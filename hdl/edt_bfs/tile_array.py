@@ -4,7 +4,7 @@ from amaranth.hdl import Array, Cat, Module, Mux, Signal
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs import OFFSETS
 
 from .tile_cell import TileCell
 from .tile_layouts import cell_layout, flat, named, nb_layout, pixel_layout

@@ -4,7 +4,7 @@ from amaranth.hdl import C, Cat, Module, Mux, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs import OFFSETS
 
 from .tile_layouts import cell_layout, flat, nb_layout
 

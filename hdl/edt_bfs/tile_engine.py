@@ -4,10 +4,10 @@ from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from models.edt_bfs import OFFSETS
-from models.edt_bfs_tiled import Timing
+from navcores.models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs_tiled import Timing
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
 from .state_ram import StateRam
 from .tile_array import TileArray
@@ -182,6 +182,7 @@ class TileEngine(wiring.Component):
                    + str(MAX_PIXELS) + " (about 50 Mbit)", lambda p: {"n": p["max_h"] * p["max_w"]}),
     )
 
+    @checked_init
     def __init__(self, t_r, t_c, max_h, max_w):
         check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w)
         self.t_r, self.t_c, self.max_h, self.max_w = t_r, t_c, max_h, max_w

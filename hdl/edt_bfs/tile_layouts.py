@@ -13,8 +13,8 @@ that are written separately: the EDT's (di, dx, dy) and the BFS's
 from amaranth.hdl import Signal, Value, signed
 from amaranth.lib import data
 
-from models.edt_bfs import widths
-from models.edt_bfs_tiled import state_bits
+from navcores.models.edt_bfs import widths
+from navcores.models.edt_bfs_tiled import state_bits
 
 __all__ = ["named", "flat", "tile_widths", "pixel_layout", "edt_layout", "bfs_layout", "cell_layout", "nb_layout",
            "EDT_FIELDS", "BFS_FIELDS"]

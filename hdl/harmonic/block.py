@@ -4,11 +4,121 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
-from .border import Border
+from ..params import Constraint, Param, check, checked_init
+from .border import Border, BorderExponentsSignature
 from .cluster import COLS, NODES, ROWS, Cluster
+from .limits import (BLOCKS_WHY, CLUSTERS_WHY, DEPTH_WHY, E_WHY, MAX_BLOCKS_SIDE, MAX_CLUSTERS, MAX_DEPTH, MAX_E,
+                     MAX_WORDS, WORDS_WHY)
 
-__all__ = ["Block"]
+__all__ = ["Block", "BlockControlSignature", "BlockHostSignature"]
+
+
+class BlockControlSignature(wiring.Signature):
+    """The link from the Control module to the :class:`Block` (paper 000,
+    5.1 and Fig. 8), seen from the Control module
+    (:class:`~hdl.harmonic.controller.Controller` ``block``); the Block
+    takes the flipped form (``control``).  Out: Control -> Block; In: Block
+    -> Control.  The clusters sample the commands at ``take`` (``p`` when
+    they start); see :class:`~hdl.harmonic.cluster.Cluster` for the timing.
+
+    Parameters
+    ----------
+    n, m : int
+        Block size.
+    blocks : (BR, BC)
+        Blocks of the map.
+    p_max : int
+        Largest precision.
+    exponents : bool
+        Block exponents (issue 10, beyond the paper): the members marked
+        below exist only then.
+    e_max : int
+        Largest block exponent (with ``exponents``).
+
+    Members
+    -------
+    run : Out(1)
+        Start the clusters (while idle) / keep iterating (at ``take``).
+    p : Out(range(p_max + 1))
+        The precision (value bits p..0 of every node word).
+    enable : Out(1)
+        Update iteration (1) or check iteration (0: Maximum only).
+    clear : Out(1)
+        Clear iteration (with ``enable``): every free node writes 0.
+    Sat, sel : Out(1); sel_row : Out(range(n)); sel_col : Out(range(m))
+        The paper's Sel/Sat of one node: with ``sel``, node (sel_row,
+        sel_col) of the block becomes constant Sat (0 obstacle, 1 goal).
+    br, bc : Out
+        The block being visited, b = br*BC + bc (held during the visit).
+    take, done, checked, busy : In(1)
+        The clusters' strobes (all in lockstep): command sampled; flags
+        valid; ``done`` of a check iteration; iterating (RAMs in use).
+    all_stable, any_max : In(1)
+        With ``done``: the Early module (AND of every node's Stable) and Cvg
+        (OR of the Maximum flags).
+    shift : Out(1); shift_d : Out(signed) (exponents)
+        A shift iteration (with ``run``, ``enable`` low) rotating every word
+        by ``shift_d`` value positions.
+    border : Out(:class:`~hdl.harmonic.border.BorderExponentsSignature`) (exponents)
+        The border conversion: exponent differences, clamp scan, leads.
+    lead_own : In(range(p_max + 3)); all_const : In(1) (exponents)
+        The smallest value offset written with a 1 since ``border.scan``
+        (p_max + 2: none); every node constant (the visit's first flags).
+    """
+
+    def __init__(self, n, m, blocks, p_max, exponents=False, e_max=255):
+        BR, BC = blocks
+        self.n, self.m, self.blocks, self.p_max = n, m, tuple(blocks), p_max
+        self.exponents, self.e_max = bool(exponents), e_max
+        members = {
+            "run": Out(1), "p": Out(range(p_max + 1)), "enable": Out(1), "clear": Out(1),
+            "Sat": Out(1), "sel": Out(1), "sel_row": Out(range(n)), "sel_col": Out(range(m)),
+            "br": Out(range(max(BR, 2))), "bc": Out(range(max(BC, 2))),
+            "take": In(1), "done": In(1), "checked": In(1), "busy": In(1),
+            "all_stable": In(1), "any_max": In(1),
+        }
+        if self.exponents:
+            stride = p_max + 2
+            members.update({
+                "shift": Out(1), "shift_d": Out(signed((p_max + 1).bit_length() + 1)),
+                "border": Out(BorderExponentsSignature(stride, e_max)),
+                "lead_own": In(range(stride + 1)), "all_const": In(1),
+            })
+        super().__init__(members)
+
+    def __eq__(self, other):
+        return type(other) is type(self) and (
+            (self.n, self.m, self.blocks, self.p_max, self.exponents, self.e_max)
+            == (other.n, other.m, other.blocks, other.p_max, other.exponents, other.e_max))
+
+
+class BlockHostSignature(wiring.Signature):
+    """The Block's host port (RAM access while the clusters are idle), seen
+    from the host (the planner's LOAD, READ and DIRECTION); the
+    :class:`Block` takes the flipped form (``host``).
+
+    Members
+    -------
+    addr : Out(range(depth)); cluster : Out(range(clusters))
+        Word address and cluster (k = i*CC + j for cluster (i, j)).
+    wdata : Out(18); we : Out(1)
+        Write the cluster's word (18 nodes' bits); a write also updates the
+        border storage of the block's edge nodes, one cycle later (keep the
+        clusters from writing in that cycle: a run writes from its
+        iteration's cycle 2 on).
+    rdata : In(18)
+        The addressed cluster's word, one cycle after the address.
+    """
+
+    def __init__(self, depth, clusters):
+        self.depth, self.clusters = depth, clusters
+        super().__init__({
+            "addr": Out(range(depth)), "cluster": Out(range(max(clusters, 2))),
+            "wdata": Out(NODES), "we": Out(1), "rdata": In(NODES),
+        })
+
+    def __eq__(self, other):
+        return type(other) is type(self) and (self.depth, self.clusters) == (other.depth, other.clusters)
 
 
 class Block(wiring.Component):
@@ -41,39 +151,39 @@ class Block(wiring.Component):
 
     Ports
     -----
-    run, p, enable, clear, Sat : In
-        The clusters' commands (sampled at ``take``; ``p`` at start).
-    sel, sel_row, sel_col : In
-        Sel of the single node (sel_row, sel_col), when ``sel`` is high.
-    br, bc : In
-        The block being computed (hold during the visit).
-    take, done, checked, busy : Out(1)
-        Cluster 0's strobes (all clusters are in lockstep).
-    all_stable, any_max : Out(1)
-        Early (AND of every node's Stable) and Cvg (OR of the Maximum flags).
-    host_addr : In(range(depth)); host_cluster : In; host_wdata : In(18)
-    host_we : In(1); host_rdata : Out(18)
-        Idle RAM access to cluster ``host_cluster`` (read data one cycle
+    control : In(:class:`BlockControlSignature`)
+        The Control module's commands (run, p, enable, clear, Sel/Sat, the
+        block br, bc) and the clusters' strobes and flags (take, done,
+        checked, busy: cluster 0's, all clusters are in lockstep;
+        all_stable, any_max: Early and Cvg); with ``exponents`` also the
+        shift iteration, the border conversion and the re-pick's inputs.
+    host : In(:class:`BlockHostSignature`)
+        Idle RAM access to cluster ``host.cluster`` (read data one cycle
         later); a write also updates the border storage of the edge nodes.
     """
 
     # hdl.emit's names: br, bc are ``blocks`` = (BR, BC).
     PARAMS = (
-        Param("n", int, lo=ROWS, doc=f"block rows, a multiple of {ROWS}",
-              message=f"block rows n={{value!r}}: must be a positive multiple of {ROWS}"),
-        Param("m", int, lo=COLS, doc=f"block columns, a multiple of {COLS}",
-              message=f"block columns m={{value!r}}: must be a positive multiple of {COLS}"),
-        Param("br", int, 1, lo=1, doc="block rows of the map (BR)",
-              message="blocks: BR={value!r} must be an integer >= 1"),
-        Param("bc", int, 1, lo=1, doc="block columns of the map (BC)",
-              message="blocks: BC={value!r} must be an integer >= 1"),
-        Param("p_max", int, 30, lo=2, doc="largest precision",
-              message="precision p_max={value!r} is not supported: p must be at least 2"),
-        Param("depth", int, 1024, lo=1, doc="words per cluster RAM"),
+        Param("n", int, lo=ROWS, hi=ROWS * MAX_CLUSTERS,
+              doc=f"block rows, a multiple of {ROWS} (at most {MAX_CLUSTERS} clusters in all, see the constraint)",
+              message=f"block rows n={{value!r}}: must be a positive multiple of {ROWS}, at most {{hi}} "
+                      f"({CLUSTERS_WHY})"),
+        Param("m", int, lo=COLS, hi=COLS * MAX_CLUSTERS,
+              doc=f"block columns, a multiple of {COLS} (at most {MAX_CLUSTERS} clusters in all)",
+              message=f"block columns m={{value!r}}: must be a positive multiple of {COLS}, at most {{hi}} "
+                      f"({CLUSTERS_WHY})"),
+        Param("br", int, 1, lo=1, hi=MAX_BLOCKS_SIDE, doc=f"block rows of the map (BR; {BLOCKS_WHY})",
+              message=f"blocks: BR={{value!r}} must be an integer in 1..{{hi}} ({BLOCKS_WHY})"),
+        Param("bc", int, 1, lo=1, hi=MAX_BLOCKS_SIDE, doc=f"block columns of the map (BC; {BLOCKS_WHY})",
+              message=f"blocks: BC={{value!r}} must be an integer in 1..{{hi}} ({BLOCKS_WHY})"),
+        Param("p_max", int, 30, lo=2, hi=MAX_DEPTH - 2, doc="largest precision (p_max + 2 <= depth)",
+              message="precision p_max={value!r} is not supported: p must be in 2..{hi} (p_max + 2 <= depth)"),
+        Param("depth", int, 1024, lo=1, hi=MAX_DEPTH, doc=f"words per cluster RAM (at most 2**20: {DEPTH_WHY})",
+              message=f"depth={{value!r}}: must be an integer in 1..{{hi}} ({DEPTH_WHY})"),
         Param("exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
               message="exponents={value!r}: must be True or False"),
-        Param("e_max", int, 255, lo=1, doc="largest block exponent (with exponents)",
-              message="e_max={value!r}: must be an integer >= 1"),
+        Param("e_max", int, 255, lo=1, hi=MAX_E, doc=f"largest block exponent (with exponents; {E_WHY})",
+              message=f"e_max={{value!r}}: must be an integer in 1..{{hi}} ({E_WHY})"),
     )
     CONSTRAINTS = (
         Constraint(f"n % {ROWS} == 0", lambda p: p["n"] % ROWS == 0,
@@ -85,8 +195,17 @@ class Block(wiring.Component):
                    "a map of {br}x{bc} = {b} blocks at p_max={p_max} needs "
                    "{b} * (p_max+2) = {words} words per cluster RAM, but the RAM depth is {depth}",
                    lambda p: {"b": p["br"] * p["bc"], "words": p["br"] * p["bc"] * (p["p_max"] + 2)}),
+        Constraint(f"(n / {ROWS}) * (m / {COLS}) <= {MAX_CLUSTERS}",
+                   lambda p: (p["n"] // ROWS) * (p["m"] // COLS) <= MAX_CLUSTERS,
+                   "a {n}x{m} block is {c} clusters; at most " f"{MAX_CLUSTERS} ({CLUSTERS_WHY})",
+                   lambda p: {"c": (p["n"] // ROWS) * (p["m"] // COLS)}, why=CLUSTERS_WHY),
+        Constraint("clusters * depth <= 2**22", lambda p: (p["n"] // ROWS) * (p["m"] // COLS) * p["depth"] <= MAX_WORDS,
+                   "{c} clusters of {depth} words are {w} RAM words; at most " f"{MAX_WORDS} ({WORDS_WHY})",
+                   lambda p: {"c": (p["n"] // ROWS) * (p["m"] // COLS),
+                              "w": (p["n"] // ROWS) * (p["m"] // COLS) * p["depth"]}, why=WORDS_WHY),
     )
 
+    @checked_init
     def __init__(self, n, m, blocks=(1, 1), p_max=30, depth=1024, exponents=False, e_max=255):
         BR, BC = blocks
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=BR, bc=BC, p_max=p_max, depth=depth,
@@ -96,46 +215,32 @@ class Block(wiring.Component):
         self.p_max, self.depth, self.stride = p_max, depth, stride
         self.CR, self.CC = n // ROWS, m // COLS
         self.exponents, self.e_max = bool(exponents), e_max
-        extra = {}
-        if self.exponents:
-            # Block exponents (issue 10; see Border and Cluster): the border
-            # conversion and scan, the shift iteration, and what the
-            # re-pick needs: ``lead_own`` (the smallest value offset, 1..p+1,
-            # written with a 1 since ``scan``; stride = none: the block's
-            # largest value, as values only rise within a visit),
-            # ``lead_N..E`` (the same for the raw neighbour edges while
-            # ``raw``), ``all_const`` (every node constant, from the flags
-            # of the visit's first iteration).
-            sw = signed(e_max.bit_length() + 1)          # as Border's s_*
-            L = range(stride + 1)
-            extra = {"shift": In(1), "shift_d": In(signed((p_max + 1).bit_length() + 1)),
-                     "s_N": In(sw), "s_S": In(sw), "s_W": In(sw), "s_E": In(sw), "raw": In(1),
-                     "scan": In(1), "scan_busy": Out(1), "scan_len": Out(L), "clamped": Out(1),
-                     "lead_own": Out(L), "lead_N": Out(L), "lead_S": Out(L), "lead_W": Out(L),
-                     "lead_E": Out(L), "all_const": Out(1)}
+        # Block exponents (issue 10; see Border and Cluster): ``control``
+        # gains the border conversion and scan, the shift iteration, and
+        # what the re-pick needs: ``lead_own`` (the smallest value offset,
+        # 1..p+1, written with a 1 since the scan; stride = none: the
+        # block's largest value, as values only rise within a visit),
+        # ``border.lead`` (the same for the raw neighbour edges while
+        # ``border.raw``), ``all_const`` (every node constant, from the flags
+        # of the visit's first iteration).
         super().__init__({
-            **extra,
-            "run": In(1), "p": In(range(p_max + 1)), "enable": In(1), "clear": In(1),
-            "Sat": In(1), "sel": In(1), "sel_row": In(range(n)), "sel_col": In(range(m)),
-            "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
-            "take": Out(1), "done": Out(1), "checked": Out(1), "busy": Out(1),
-            "all_stable": Out(1), "any_max": Out(1),
-            "host_addr": In(range(depth)), "host_cluster": In(range(max(self.CR * self.CC, 2))),
-            "host_wdata": In(NODES), "host_we": In(1), "host_rdata": Out(NODES),
+            "control": In(BlockControlSignature(n, m, blocks, p_max, self.exponents, e_max)),
+            "host": In(BlockHostSignature(depth, self.CR * self.CC)),
         })
 
     def elaborate(self, platform):
         m = Module()
         n, mm, CR, CC, S = self.n, self.m, self.CR, self.CC, self.stride
+        ctl, host = self.control, self.host
         if self.exponents:
-            border = Border(n, mm, (self.BR, self.BC), S, exponents=True, e_max=self.e_max)
+            border = Border(n, mm, (self.BR, self.BC), self.p_max, exponents=True, e_max=self.e_max)
         else:
-            border = Border(n, mm, (self.BR, self.BC), S)
+            border = Border(n, mm, (self.BR, self.BC), self.p_max)
         m.submodules.border = border
         ekw = {"exponents": True} if self.exponents else {}
         cl = [[Cluster(depth=self.depth, p_max=self.p_max, **ekw) for _ in range(CC)] for _ in range(CR)]
         base = Signal(range(self.depth))
-        m.d.comb += base.eq((self.br * self.BC + self.bc) * S)
+        m.d.comb += base.eq((ctl.br * self.BC + ctl.bc) * S)
 
         def bit(r, c):
             return COLS * r + c
@@ -150,15 +255,15 @@ class Block(wiring.Component):
                 for r in range(ROWS):
                     for q in range(COLS):
                         m.d.comb += sel[bit(r, q)].eq(
-                            self.sel & (self.sel_row == ROWS * i + r) & (self.sel_col == COLS * j + q))
+                            ctl.sel & (ctl.sel_row == ROWS * i + r) & (ctl.sel_col == COLS * j + q))
                 m.d.comb += [
-                    c.run.eq(self.run), c.p.eq(self.p), c.enable.eq(self.enable),
-                    c.clear.eq(self.clear), c.Sat.eq(self.Sat), c.Sel.eq(sel), c.base.eq(base),
-                    c.host_addr.eq(self.host_addr), c.host_wdata.eq(self.host_wdata),
-                    c.host_we.eq(self.host_we & (self.host_cluster == k)),
+                    c.run.eq(ctl.run), c.p.eq(ctl.p), c.enable.eq(ctl.enable),
+                    c.clear.eq(ctl.clear), c.Sat.eq(ctl.Sat), c.Sel.eq(sel), c.base.eq(base),
+                    c.host_addr.eq(host.addr), c.host_wdata.eq(host.wdata),
+                    c.host_we.eq(host.we & (host.cluster == k)),
                 ]
-                with m.If(self.host_cluster == k):
-                    m.d.comb += self.host_rdata.eq(c.host_rdata)
+                with m.If(host.cluster == k):
+                    m.d.comb += host.rdata.eq(c.host_rdata)
                 stables.append(c.all_stable)
                 maxes.append(c.any_max)
                 # Neighbours: the adjacent cluster's edge nodes, or the border.
@@ -178,23 +283,31 @@ class Block(wiring.Component):
 
         c0 = cl[0][0]
         m.d.comb += [
-            self.take.eq(c0.take), self.done.eq(c0.done), self.checked.eq(c0.checked),
-            self.busy.eq(c0.busy),
-            self.all_stable.eq(Cat(*stables).all()), self.any_max.eq(Cat(*maxes).any()),
-            border.br.eq(self.br), border.bc.eq(self.bc),
+            ctl.take.eq(c0.take), ctl.done.eq(c0.done), ctl.checked.eq(c0.checked),
+            ctl.busy.eq(c0.busy),
+            ctl.all_stable.eq(Cat(*stables).all()), ctl.any_max.eq(Cat(*maxes).any()),
+            border.br.eq(ctl.br), border.bc.eq(ctl.bc),
             border.cntR.eq(c0.cntR), border.r_cnt.eq(c0.r_cnt),
         ]
 
-        # Border storage writes: the edge nodes' bits of the clusters' write
-        # port while iterating (all clusters write the same address), or of
-        # the host word for the one cluster the host writes.
-        host = ~c0.busy
-        m.d.comb += border.w_addr.eq(c0.w_addr)
-        with m.If(host):
-            m.d.comb += border.w_addr.eq(self.host_addr)
-        # The border RAMs' segments: each cluster edge that faces another
-        # block, with the word bits of its nodes (top/bottom rows, left/right
-        # columns of the block).
+        # Border storage writes, whole edge words (every lane of the four
+        # edges): while iterating, the edge nodes' bits of the clusters'
+        # write port (all clusters write the same address); after a host
+        # write, one cycle later, the edge words at its address: every
+        # cluster's port A read that address in the write's cycle (the host
+        # port's read while idle), the written cluster's word is the host's.
+        # So LOAD, one cluster at a time, keeps the lane words whole.
+        fill = Signal()
+        fill_addr, fill_k = Signal.like(host.addr), Signal.like(host.cluster)
+        fill_data = Signal.like(host.wdata)
+        m.d.sync += fill.eq(~c0.busy & host.we)
+        with m.If(~c0.busy & host.we):
+            m.d.sync += [fill_addr.eq(host.addr), fill_k.eq(host.cluster), fill_data.eq(host.wdata)]
+        m.d.comb += [border.w_addr.eq(Mux(fill, fill_addr, c0.w_addr)),
+                     border.w_en.eq(fill | (c0.busy & c0.w_en))]
+        # The border nodes by cluster edge segment: each cluster edge that
+        # faces another block, with the word bits of its nodes (top/bottom
+        # rows, left/right columns of the block).
         segments = []
         for j in range(CC):
             cols = slice(COLS * j, COLS * (j + 1))
@@ -206,38 +319,32 @@ class Block(wiring.Component):
                          ("right", i, CC - 1, rows, [bit(r, COLS - 1) for r in range(ROWS)])]
         for side, i, j, sl, bits in segments:
             c = cl[i][j]
-            en = getattr(border, f"en_{side}")[sl]
-            d = getattr(border, f"w_{side}")[sl]
-            with m.If(host):
-                m.d.comb += [d.eq(Cat(self.host_wdata[b] for b in bits)),
-                             en.eq(Cat([self.host_we & (self.host_cluster == i * CC + j)] * len(bits)))]
-            with m.Else():
-                m.d.comb += [d.eq(Cat(c.w_data[b] for b in bits)), en.eq(Cat([c.w_en] * len(bits)))]
+            word = Mux(fill_k == i * CC + j, fill_data, c.host_rdata)
+            m.d.comb += getattr(border, f"w_{side}")[sl].eq(
+                Mux(fill, Cat(word[b] for b in bits), Cat(c.w_data[b] for b in bits)))
         if self.exponents:
             self._exponents(m, border, [c for row in cl for c in row], base)
         return m
 
     def _exponents(self, m, border, clusters, base):
-        """Block exponents: pass the border's conversion ports, drive the
+        """Block exponents: pass the border conversion through, drive the
         clusters' shift, track the block's largest value (``lead_own``) and
         whether every node is constant (``all_const``)."""
-        for name in ("s_N", "s_S", "s_W", "s_E", "raw", "scan"):
-            m.d.comb += getattr(border, name).eq(getattr(self, name))
-        m.d.comb += border.p.eq(self.p)
-        for name in ("scan_busy", "scan_len", "clamped", "lead_N", "lead_S", "lead_W", "lead_E"):
-            m.d.comb += getattr(self, name).eq(getattr(border, name))
+        ctl = self.control
+        wiring.connect(m, wiring.flipped(ctl.border), border.conversion)
+        m.d.comb += border.p.eq(ctl.p)
         for c in clusters:
-            m.d.comb += [c.shift.eq(self.shift), c.shift_d.eq(self.shift_d)]
+            m.d.comb += [c.shift.eq(ctl.shift), c.shift_d.eq(ctl.shift_d)]
         c0 = clusters[0]
         off = Signal(range(self.depth), name="w_off")
         m.d.comb += off.eq(c0.w_addr - base)
         written = Cat(*[c.w_data.any() for c in clusters]).any()
-        with m.If(self.scan):
-            m.d.sync += self.lead_own.eq(self.stride)
-        with m.Elif(c0.busy & c0.w_en & written & (off >= 1) & (off < self.lead_own)):
-            m.d.sync += self.lead_own.eq(off)
+        with m.If(ctl.border.scan):
+            m.d.sync += ctl.lead_own.eq(self.stride)
+        with m.Elif(c0.busy & c0.w_en & written & (off >= 1) & (off < ctl.lead_own)):
+            m.d.sync += ctl.lead_own.eq(off)
         # The flags stream at cycle 0; the next cycle is the take.
         flags_all = Signal()
         m.d.sync += flags_all.eq(Cat(*[c.h.all() for c in clusters]).all())
         with m.If(c0.take):
-            m.d.sync += self.all_const.eq(flags_all)
+            m.d.sync += ctl.all_const.eq(flags_all)

@@ -5,8 +5,9 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .counters import Counters
+from .limits import DEPTH_WHY, MAX_DEPTH
 from .node import Node
 
 __all__ = ["Cluster", "ROWS", "COLS"]
@@ -98,10 +99,11 @@ class Cluster(wiring.Component):
     """
 
     PARAMS = (
-        Param("depth", int, 1024, lo=4, doc="RAM depth in words",
-              message="RAM depth must be an integer >= 4, not {value!r}"),
-        Param("p_max", int, None, lo=2, doc="largest precision (default depth - 2)",
-              message="precision p_max={value!r} is not supported: p must be at least 2"),
+        Param("depth", int, 1024, lo=4, hi=MAX_DEPTH, doc=f"RAM depth in words (at most 2**20: {DEPTH_WHY})",
+              message=f"RAM depth must be an integer in 4..{MAX_DEPTH}, not {{value!r}} ({DEPTH_WHY})"),
+        Param("p_max", int, None, lo=2, hi=MAX_DEPTH - 2, doc="largest precision (default depth - 2; "
+              "p_max + 2 <= depth)",
+              message="precision p_max={value!r} is not supported: p must be in 2..{hi} (p_max + 2 <= depth)"),
         Param("exponents", bool, False, doc="shift iterations for block exponents (issue 10)",
               message="exponents={value!r}: must be True or False"),
     )
@@ -112,6 +114,7 @@ class Cluster(wiring.Component):
                    lambda p: {"w": p["p_max"] + 2}),
     )
 
+    @checked_init
     def __init__(self, depth=1024, p_max=None, exponents=False):
         check(self.PARAMS, depth=depth)
         if p_max is None:

@@ -3,16 +3,26 @@
 import enum
 
 from amaranth.hdl import Array, Cat, Module, Mux, Signal, signed
-from amaranth.lib import wiring
+from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-__all__ = ["Controller", "Mode"]
+from .block import BlockControlSignature
+
+__all__ = ["Controller", "Mode", "order_layout"]
 
 
 class Mode(enum.IntEnum):
     UPDATE = 0      # sweep: up to I update iterations per block
     CHECK = 1       # check pass: one check iteration per block (Maximum)
     CLEAR = 2       # clear pass: one clear iteration per block, Sel/Sat of an order
+
+
+def order_layout(blocks, n, m):
+    """A dynamic order (5.1, Sel/Sat): node (row, col) of block (br, bc)
+    becomes constant ``sat`` (0 obstacle, 1 goal)."""
+    BR, BC = blocks
+    return data.StructLayout({"br": range(max(BR, 2)), "bc": range(max(BC, 2)),
+                              "row": range(n), "col": range(m), "sat": 1})
 
 
 class Controller(wiring.Component):
@@ -29,15 +39,15 @@ class Controller(wiring.Component):
       block, the Cvg module ORs the Maximum flags; none: converged;
       otherwise p += step while p <= p_last (the new LSB addresses are 0),
       else the run ends not converged;
-    * a dynamic order (``order``: node (br, bc, row, col) becomes constant
-      ``sat``) is taken by a *clear pass*: every block runs one clear
-      iteration (free nodes write 0) and the ordered node gets Sel/Sat in
-      its block's.  While idle it is run at once (its cycles are not
-      counted); during a run it waits in a one-deep register for the end of
-      the current pass (``order_ready`` low while one waits), then the run
-      continues with a sweep at the same precision.
+    * a dynamic order (an ``order`` stream beat: node (br, bc, row, col)
+      becomes constant ``sat``) is taken by a *clear pass*: every block runs
+      one clear iteration (free nodes write 0) and the ordered node gets
+      Sel/Sat in its block's.  While idle it is run at once (its cycles are
+      not counted); during a run it waits in a one-deep register for the end
+      of the current pass (``order.ready`` low while one waits), then the
+      run continues with a sweep at the same precision.
 
-    Timing (cycles, see the table in :mod:`models.harmonic`): a visit of K
+    Timing (cycles, see the table in :mod:`models.harmonic.schedule`): a visit of K
     iterations takes K*(p+2) + 6 cycles:
 
     =========  ============================================================
@@ -57,7 +67,7 @@ class Controller(wiring.Component):
     ----------
     blocks : (BR, BC); n, m : block size; p_max : largest precision.
     exponents, e_max, headroom : block exponents (issue 10; default off):
-        the ``blk_s_*``, ``blk_scan*``, ``blk_lead_*``, ``blk_shift*`` ports,
+        the exponent members of ``block`` (shift, border conversion, leads),
         e_b registers (0..e_max), the re-pick with headroom h, shift visits
         and the coarsening at a precision rise; an order's clear pass sets
         every e_b back to 0; ``e_rd`` = e of block
@@ -68,8 +78,9 @@ class Controller(wiring.Component):
     -----
     start : In(1); p1, step, p_last : In(range(p_max+1)); iters : In(8)
         Start a run (while idle; the planner checks the parameters).
-    order : In(1); order_ready : Out(1); o_br, o_bc, o_row, o_col : In; o_sat : In(1)
-        A dynamic obstacle (sat 0) or goal (sat 1) at (B, X, Y).
+    order : In(stream.Signature(:func:`order_layout`))
+        A dynamic obstacle (sat 0) or goal (sat 1) at (B, X, Y); ``ready``
+        is low while an order waits (it does not depend on ``valid``).
     busy : Out(1)
         A run or a clear pass in progress (the block's RAMs are in use).
     running, converged : Out(1); p : Out(range(p_max+1))
@@ -77,7 +88,8 @@ class Controller(wiring.Component):
     sweeps, block_iterations, check_iterations, clear_passes : Out(32)
     cycles : Out(48)
         Counters of the last / current run (reset by ``start``).
-    blk_* : the :class:`~hdl.harmonic.block.Block` command and flag ports.
+    block : Out(:class:`~hdl.harmonic.block.BlockControlSignature`)
+        The link to the :class:`~hdl.harmonic.block.Block` (its ``control``).
     """
 
     def __init__(self, blocks, n, m, p_max, exponents=False, e_max=255, headroom=1):
@@ -87,31 +99,18 @@ class Controller(wiring.Component):
         P = range(p_max + 1)
         extra = {}
         if self.exponents:
-            L = range(p_max + 3)
-            sw = signed(e_max.bit_length() + 1)
             extra = {
-                "blk_shift": Out(1), "blk_shift_d": Out(signed((p_max + 1).bit_length() + 1)),
-                "blk_s_N": Out(sw), "blk_s_S": Out(sw), "blk_s_W": Out(sw), "blk_s_E": Out(sw),
-                "blk_raw": Out(1), "blk_scan": Out(1), "blk_scan_len": In(L), "blk_clamped": In(1),
-                "blk_lead_own": In(L), "blk_lead_N": In(L), "blk_lead_S": In(L), "blk_lead_W": In(L),
-                "blk_lead_E": In(L), "blk_all_const": In(1),
                 "e_rd_block": In(range(max(BR * BC, 2))), "e_rd": Out(range(e_max + 1)),
                 "repicks": Out(32),
             }
         super().__init__({
             **extra,
             "start": In(1), "p1": In(P), "step": In(P), "p_last": In(P), "iters": In(8),
-            "order": In(1), "order_ready": Out(1),
-            "o_br": In(range(max(BR, 2))), "o_bc": In(range(max(BC, 2))), "o_row": In(range(n)),
-            "o_col": In(range(m)), "o_sat": In(1),
+            "order": In(stream.Signature(order_layout(blocks, n, m))),
             "busy": Out(1), "running": Out(1), "converged": Out(1), "p": Out(P, init=2),
             "sweeps": Out(32), "block_iterations": Out(32), "check_iterations": Out(32),
             "clear_passes": Out(32), "cycles": Out(48),
-            "blk_run": Out(1), "blk_p": Out(P), "blk_enable": Out(1), "blk_clear": Out(1),
-            "blk_sat": Out(1), "blk_sel": Out(1), "blk_sel_row": Out(range(n)),
-            "blk_sel_col": Out(range(m)), "blk_br": Out(range(max(BR, 2))), "blk_bc": Out(range(max(BC, 2))),
-            "blk_take": In(1), "blk_done": In(1), "blk_busy": In(1),
-            "blk_all_stable": In(1), "blk_any_max": In(1),
+            "block": Out(BlockControlSignature(n, m, blocks, p_max, self.exponents, e_max)),
         })
 
     def elaborate(self, platform):
@@ -132,12 +131,13 @@ class Controller(wiring.Component):
         act_br, act_bc = Signal(range(max(BR, 2))), Signal(range(max(BC, 2)))
         act_row, act_col, act_sat = Signal(range(self.n)), Signal(range(self.m)), Signal()
 
+        blk = self.block
         m.d.comb += [
-            self.blk_p.eq(self.p), self.blk_br.eq(br), self.blk_bc.eq(bc),
-            self.blk_enable.eq(mode != Mode.CHECK), self.blk_clear.eq(mode == Mode.CLEAR),
-            self.blk_sat.eq(act_sat), self.blk_sel_row.eq(act_row), self.blk_sel_col.eq(act_col),
-            self.blk_sel.eq((mode == Mode.CLEAR) & (k == 0) & (br == act_br) & (bc == act_bc)),
-            self.order_ready.eq(~pend),
+            blk.p.eq(self.p), blk.br.eq(br), blk.bc.eq(bc),
+            blk.enable.eq(mode != Mode.CHECK), blk.clear.eq(mode == Mode.CLEAR),
+            blk.Sat.eq(act_sat), blk.sel_row.eq(act_row), blk.sel_col.eq(act_col),
+            blk.sel.eq((mode == Mode.CLEAR) & (k == 0) & (br == act_br) & (bc == act_bc)),
+            self.order.ready.eq(~pend),
         ]
         with m.If(self.running):
             m.d.sync += self.cycles.eq(self.cycles + 1)
@@ -156,10 +156,11 @@ class Controller(wiring.Component):
                 m.d.sync += [*(e.eq(0) for e in self._x["E"]), self._x["sat"].eq(0)]
 
         take_order = Signal()
-        m.d.comb += take_order.eq(self.order & ~pend)
+        order = self.order.payload
+        m.d.comb += take_order.eq(self.order.valid & self.order.ready)
         with m.If(take_order):
-            m.d.sync += [pend.eq(1), pend_br.eq(self.o_br), pend_bc.eq(self.o_bc),
-                         pend_row.eq(self.o_row), pend_col.eq(self.o_col), pend_sat.eq(self.o_sat)]
+            m.d.sync += [pend.eq(1), pend_br.eq(order.br), pend_bc.eq(order.bc),
+                         pend_row.eq(order.row), pend_col.eq(order.col), pend_sat.eq(order.sat)]
 
         with m.FSM() as fsm:
             with m.State("IDLE"):
@@ -196,26 +197,26 @@ class Controller(wiring.Component):
             if X:
                 with m.State("SCANW"):          # the clamp scan: L more cycles
                     m.d.sync += scan_j.eq(scan_j + 1)
-                    with m.If(scan_j == self.blk_scan_len):
+                    with m.If(scan_j == blk.border.scan_len):
                         m.d.sync += scanned.eq(1)
                         m.next = "VSTART"
             with m.State("VRUN"):
-                with m.If(self.blk_take):
+                with m.If(blk.take):
                     m.d.sync += k.eq(k + 1)
-                with m.If(self.blk_done):
+                with m.If(blk.done):
                     m.d.sync += first.eq(0)
                     with m.If(first):
-                        m.d.sync += first_ok.eq(self.blk_all_stable)
+                        m.d.sync += first_ok.eq(blk.all_stable)
                     with m.If(((mode == Mode.UPDATE) & ~rep) if X else (mode == Mode.UPDATE)):
                         with m.If(~seen):
                             m.d.sync += self.block_iterations.eq(self.block_iterations + 1)
-                        with m.If(self.blk_all_stable):
+                        with m.If(blk.all_stable):
                             m.d.sync += seen.eq(1)
                     with m.If(mode == Mode.CHECK):
                         m.d.sync += self.check_iterations.eq(self.check_iterations + 1)
-                        with m.If(self.blk_any_max):
+                        with m.If(blk.any_max):
                             m.d.sync += anymax.eq(1)
-                    with m.If(~self.blk_busy):
+                    with m.If(~blk.busy):
                         m.next = "VEND"
             with m.State("VEND"):
                 m.next = "VSTART"
@@ -235,43 +236,41 @@ class Controller(wiring.Component):
             "mode", "first_ok", "changed", "br", "bc", "anymax", "pend"))
         idle_clear, step, p_last, latch_order = v["idle_clear"], v["step"], v["p_last"], v["latch_order"]
         BR, BC, X = self.BR, self.BC, self.exponents
-        if True:
-            if True:
-                with m.If((mode == Mode.UPDATE) & ~first_ok):
-                    m.d.sync += changed.eq(1)
-                with m.If(bc != BC - 1):
-                    m.d.sync += bc.eq(bc + 1)
-                with m.Elif(br != BR - 1):
-                    m.d.sync += [br.eq(br + 1), bc.eq(0)]
-                with m.Else():                              # the end of a pass
-                    m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
-                    with m.If(mode == Mode.UPDATE):
-                        m.d.sync += self.sweeps.eq(self.sweeps + 1)
-                    with m.If((mode == Mode.CLEAR) & self.running):
-                        m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
-                    with m.If(pend):
-                        latch_order()
-                        m.d.sync += mode.eq(Mode.CLEAR)
-                    with m.Elif(idle_clear):
-                        m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
-                        m.next = "IDLE"
-                    with m.Elif(mode == Mode.UPDATE):
-                        with m.If(~changed & first_ok):
-                            m.d.sync += mode.eq(Mode.CHECK)
-                    with m.Elif(mode == Mode.CLEAR):
-                        m.d.sync += mode.eq(Mode.UPDATE)
-                    with m.Else():                          # the end of a check pass
-                        m.d.sync += mode.eq(Mode.UPDATE)
-                        with m.If(~anymax):
-                            m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
-                            m.next = "IDLE"
-                        with m.Elif((step != 0) & (self.p + step <= p_last)):
-                            m.d.sync += self.p.eq(self.p + step)
-                            if X:
-                                self._rise(m, v)
-                        with m.Else():
-                            m.d.sync += [self.running.eq(0), self.busy.eq(0)]
-                            m.next = "IDLE"
+        with m.If((mode == Mode.UPDATE) & ~first_ok):
+            m.d.sync += changed.eq(1)
+        with m.If(bc != BC - 1):
+            m.d.sync += bc.eq(bc + 1)
+        with m.Elif(br != BR - 1):
+            m.d.sync += [br.eq(br + 1), bc.eq(0)]
+        with m.Else():                              # the end of a pass
+            m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
+            with m.If(mode == Mode.UPDATE):
+                m.d.sync += self.sweeps.eq(self.sweeps + 1)
+            with m.If((mode == Mode.CLEAR) & self.running):
+                m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
+            with m.If(pend):
+                latch_order()
+                m.d.sync += mode.eq(Mode.CLEAR)
+            with m.Elif(idle_clear):
+                m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
+            with m.Elif(mode == Mode.UPDATE):
+                with m.If(~changed & first_ok):
+                    m.d.sync += mode.eq(Mode.CHECK)
+            with m.Elif(mode == Mode.CLEAR):
+                m.d.sync += mode.eq(Mode.UPDATE)
+            with m.Else():                          # the end of a check pass
+                m.d.sync += mode.eq(Mode.UPDATE)
+                with m.If(~anymax):
+                    m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
+                    m.next = "IDLE"
+                with m.Elif((step != 0) & (self.p + step <= p_last)):
+                    m.d.sync += self.p.eq(self.p + step)
+                    if X:
+                        self._rise(m, v)
+                with m.Else():
+                    m.d.sync += [self.running.eq(0), self.busy.eq(0)]
+                    m.next = "IDLE"
 
     def _tail(self, m, v):
         # The clusters' run: start request in VSTART, then the command at each
@@ -279,33 +278,34 @@ class Controller(wiring.Component):
         # they are defined from time 0 on every simulator.
         mode, iters, fsm, k, seen = (v[x] for x in ("mode", "iters", "fsm", "k", "seen"))
         limit = Signal(9)
+        blk = self.block
         if self.exponents:
             rep = v["rep"]
             x = self._x
             m.d.comb += [
-                self.blk_scan.eq(fsm.ongoing("VSTART") & ~x["scanned"] & ~rep
-                                 & ((mode == Mode.UPDATE) | (mode == Mode.CHECK))),
-                x["need_scan"].eq(self.blk_scan & (self.blk_scan_len != 0)),
+                blk.border.scan.eq(fsm.ongoing("VSTART") & ~x["scanned"] & ~rep
+                                   & ((mode == Mode.UPDATE) | (mode == Mode.CHECK))),
+                x["need_scan"].eq(blk.border.scan & (blk.border.scan_len != 0)),
             ]
             m.d.comb += limit.eq(Mux((mode == Mode.UPDATE) & ~rep, iters, 1))
             more = Mux(rep, x["rem"] != 0, (k < limit) & ~((mode == Mode.UPDATE) & seen))
             m.d.comb += [
-                self.blk_run.eq((fsm.ongoing("VSTART") & ~v["need_scan"])
-                                | (fsm.ongoing("VRUN") & self.blk_take & more)),
-                x["rep_take"].eq(fsm.ongoing("VRUN") & self.blk_take & rep & (x["rem"] != 0)),
+                blk.run.eq((fsm.ongoing("VSTART") & ~v["need_scan"])
+                           | (fsm.ongoing("VRUN") & blk.take & more)),
+                x["rep_take"].eq(fsm.ongoing("VRUN") & blk.take & rep & (x["rem"] != 0)),
             ]
         else:
             m.d.comb += limit.eq(Mux(mode == Mode.UPDATE, iters, 1))
-            m.d.comb += self.blk_run.eq(
+            m.d.comb += blk.run.eq(
                 fsm.ongoing("VSTART")
-                | (fsm.ongoing("VRUN") & self.blk_take & (k < limit) & ~((mode == Mode.UPDATE) & seen)))
+                | (fsm.ongoing("VRUN") & blk.take & (k < limit) & ~((mode == Mode.UPDATE) & seen)))
 
     # Block exponents (issue 10; models.harmonic.plan_exponents(..., rtl=True)).
     # Not elaborated by default.
 
     def _exp_signals(self, m, v):
         BR, BC, B, p_max, e_max, h = self.BR, self.BC, self.BR * self.BC, self.p_max, self.e_max, self.headroom
-        br, bc, mode, fsm_state = v["br"], v["bc"], v["mode"], None
+        br, bc, mode = v["br"], v["bc"], v["mode"]
         x = self._x = {}
         x["E"] = E = [Signal(range(e_max + 1), name=f"E_{i}") for i in range(B)]
         Ea = Array(E)
@@ -315,7 +315,7 @@ class Controller(wiring.Component):
         x["crs"] = Signal(name="crs")               # ... of the coarsening at a rise
         x["scanned"] = Signal(name="scanned")
         x["scan_j"] = Signal(range(p_max + 4), name="scan_j")
-        x["shd"] = shd = Signal.like(self.blk_shift_d, name="shd")   # this iteration's rotation
+        x["shd"] = shd = Signal.like(self.block.shift_d, name="shd")   # this iteration's rotation
         x["rem"] = rem = Signal(range(p_max + 2), name="rem")         # rotation still to do
         # A shift visit rotates by at most 3 per iteration (reads LSB first,
         # writes three positions behind: never a bit before it is read; the
@@ -324,7 +324,7 @@ class Controller(wiring.Component):
         with m.If(fsm_take := Signal(name="rep_take")):
             m.d.sync += [shd.eq(Mux(rem > 3, 3, rem)), rem.eq(rem - Mux(rem > 3, 3, rem))]
         x["rep_take"] = fsm_take
-        x["need_scan"] = need_scan = Signal(name="need_scan")
+        x["need_scan"] = Signal(name="need_scan")
         b = x["b"] = Signal(range(max(B, 2)), name="b_cur")
         m.d.comb += b.eq(br * BC + bc)
         e = x["e"] = Signal(range(e_max + 1), name="e_cur")
@@ -334,13 +334,13 @@ class Controller(wiring.Component):
         for side, (valid, off) in sides.items():
             en = Signal(range(e_max + 1), name=f"e_{side}")
             m.d.comb += [en.eq(Mux(valid, Ea[(b + off)[:len(b)]], 0)),
-                         getattr(self, f"blk_s_{side}").eq(Mux(valid, e - en, 0))]
+                         self.block.border.s[side].eq(Mux(valid, e - en, 0))]
             x["nb"][side] = (valid, en)
         rep = x["rep"]
         m.d.comb += [
-            self.blk_enable.eq((mode != Mode.CHECK) & ~rep),
-            self.blk_shift.eq(rep), self.blk_shift_d.eq(shd),
-            self.blk_raw.eq((mode == Mode.UPDATE) & ~rep),
+            self.block.enable.eq((mode != Mode.CHECK) & ~rep),
+            self.block.shift.eq(rep), self.block.shift_d.eq(shd),
+            self.block.border.raw.eq((mode == Mode.UPDATE) & ~rep),
             self.e_rd.eq(Ea[self.e_rd_block]),
         ]
         # The re-pick amount d after an update visit (REPICK rule of
@@ -350,9 +350,9 @@ class Controller(wiring.Component):
         W = signed(max(2 * e_max + p_max + 8, 64).bit_length() + 2)
         NONE = p_max + 2
         BIG = (1 << (W.width - 2)) - 1
-        terms = [(self.blk_lead_own != NONE, self.blk_lead_own - 1 - h)]
+        terms = [(self.block.lead_own != NONE, self.block.lead_own - 1 - h)]
         for side, (valid, en) in x["nb"].items():
-            lead = getattr(self, f"blk_lead_{side}")
+            lead = self.block.border.lead[side]
             terms.append((valid & (lead != NONE), lead - 1 - h - e + en))
         acc = Signal(W, name="d_min")
         cur = BIG
@@ -363,7 +363,7 @@ class Controller(wiring.Component):
         m.d.comb += acc.eq(cur)
         d = x["d"] = Signal(W, name="d_repick")
         room = e_max - e
-        m.d.comb += d.eq(Mux((acc == BIG) | self.blk_all_const | (acc <= 0), 0, Mux(acc > room, room, acc)))
+        m.d.comb += d.eq(Mux((acc == BIG) | self.block.all_const | (acc <= 0), 0, Mux(acc > room, room, acc)))
 
     def _vend_exponents(self, m, v):
         """VEND of the exponent option: the re-pick after an update visit,
@@ -371,13 +371,13 @@ class Controller(wiring.Component):
         context of the ordinary VEND (update/check/clear visits without a
         re-pick, and a re-pick's shift visit, which then moves on)."""
         x = self._x
-        mode, rep, crs, d, b, shd = v["mode"], x["rep"], x["crs"], x["d"], x["b"], x["shd"]
+        mode, rep, crs, d, b = v["mode"], x["rep"], x["crs"], x["d"], x["b"]
         E, sat = x["E"], x["sat"]
         Ea = Array(E)
         with m.If(crs):                               # a coarsening visit ended
             self._next_coarsen(m, v, x["crs_pend"], self.p)
         with m.Elif((mode == Mode.UPDATE) & ~rep):    # an update visit ended
-            m.d.sync += sat.eq(sat | (self.blk_clamped << b))
+            m.d.sync += sat.eq(sat | (self.block.border.clamped << b))
             with m.If(~v["first_ok"]):
                 m.d.sync += v["changed"].eq(1)
             with m.If(d != 0):                        # re-pick: shift visit of this block
@@ -406,7 +406,7 @@ class Controller(wiring.Component):
 
     def _rise(self, m, v):
         """A precision rise: blocks saturated in the ending level with e_b > 0
-        coarsen (plan_exponents' raise_precision_exp); clamps restart."""
+        coarsen (ExponentGrid.raise_precision in models/harmonic/exponents.py); clamps restart."""
         x = self._x
         E, sat = x["E"], x["sat"]
         mask = Signal(len(sat), name="crs_mask")

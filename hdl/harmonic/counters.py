@@ -1,10 +1,11 @@
 """Counters unit shared by the 18 nodes of a cluster (paper 000, section 5.2)."""
 
-from amaranth.hdl import Module, Signal, unsigned
+from amaranth.hdl import Module, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param, check
+from ..params import Param, check, checked_init
+from .limits import MAX_DEPTH
 
 __all__ = ["Counters"]
 
@@ -15,7 +16,7 @@ class Counters(wiring.Component):
     With a synchronous RAM the data of an address appears one cycle after it
     is presented, so each counter presents, in iteration cycle c, the address
     whose bit the nodes need at c+1 (see :class:`~hdl.harmonic.node.Node` for
-    the cycle numbering and :mod:`models.harmonic` for the word layout).
+    the cycle numbering and :mod:`models.harmonic.ram` for the word layout).
 
     * ``cntR`` (port A, LSB first): ``p+1-c``, a down counter p+1 .. 0, so the
       nodes read the flag at c = 0 and value bit k at c = k+1.
@@ -46,9 +47,12 @@ class Counters(wiring.Component):
         there whatever p is; held while ``advance`` is low).
     """
 
-    PARAMS = (Param("p_max", int, lo=2, doc="largest precision; sets the counter widths",
-                    message="p_max must be an integer >= 2, not {value!r}"),)
+    PARAMS = (Param("p_max", int, lo=2, hi=MAX_DEPTH - 2,
+                    doc="largest precision; sets the counter widths (p_max + 2 <= the RAM depth <= 2**20)",
+                    message="p_max must be an integer in 2..{hi} (a word of p_max + 2 bits fills at most a "
+                            "2**20-word RAM), not {value!r}"),)
 
+    @checked_init
     def __init__(self, p_max):
         check(self.PARAMS, p_max=p_max)
         self.p_max = p_max

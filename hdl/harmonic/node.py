@@ -17,7 +17,7 @@ class Node(wiring.Component):
 
     All data ports are 1 bit wide and serial.  The node has no storage of its
     own value: it lives in the cluster's RAM, one bit per address, as described
-    in :mod:`models.harmonic` (constant flag, then bits p..0).  The shared
+    in :mod:`models.harmonic.ram` (constant flag, then bits p..0).  The shared
     Counters unit walks the RAM so that the node sees, in an iteration of p+2
     cycles numbered c = 0 .. p+1:
 

@@ -7,13 +7,14 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .block import Block
 from .cluster import COLS, ROWS
 from .controller import Controller
-from .decision import Decision
+from .decision import NEIGHBOURHOOD, Decision, neighbourhood_layout
+from .limits import MAX_DEPTH
 
-__all__ = ["Planner", "Op", "Code", "command_layout", "response_layout"]
+__all__ = ["Planner", "Op", "Code", "command_layout", "response_layout", "direction_latency"]
 
 
 class Op(enum.Enum, shape=3):
@@ -33,6 +34,18 @@ class Code(enum.Enum, shape=3):
     BUSY = 4            # LOAD / START / READ / DIRECTION while a run or a clear pass is on
     BAD_OP = 5          # op 6 or 7
     BAD_ITERS = 6       # START with iters = 0
+
+
+def direction_latency(p, inside=4):
+    """DIRECTION's response latency at precision ``p`` (fixed point), in
+    cycles from the clock edge that takes the command to the one that
+    raises ``o_stream.valid``: the node and its ``inside`` neighbours in the
+    map are read serially (p+4 cycles each: the flag and p+1 value bits
+    through the host port, one cycle to start the read), a neighbour
+    outside the map costs 1 cycle, then 1 cycle starts the Decision, whose
+    2p+5 cycles (two serial passes) end with the response.  With block
+    exponents each value read adds its conversion: 1 + the shift cycles."""
+    return (1 + inside) * (p + 4) + (4 - inside) + 1 + (2 * p + 5)
 
 
 def _pw(p_max):
@@ -97,7 +110,8 @@ class Planner(wiring.Component):
     DIRECTION  block, row, col: ``triangle`` (0 NE, 1 ES, 2 SW, 3 WN) and the
                gradient (g_row, g_col) of :func:`models.harmonic.decision`
                (block exponents: of :func:`models.harmonic.decision_exponents`,
-               in the centre's units; ``exponent`` = its e_b).
+               in the centre's units; ``exponent`` = its e_b).  Response
+               after :func:`direction_latency` cycles (7p+26 inside the map).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
@@ -142,12 +156,14 @@ class Planner(wiring.Component):
                 for p in Block.PARAMS if p.name != "exponents"),
               Param("block_exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
                     message="block_exponents={value!r}: must be True or False"),
-              Param("headroom", int, 1, lo=0, doc="top mantissa bits a re-pick leaves empty (with block_exponents)",
-                    message="headroom={value!r}: must be an integer >= 0"))
+              Param("headroom", int, 1, lo=0, hi=MAX_DEPTH - 2,
+                    doc="top mantissa bits a re-pick leaves empty (with block_exponents; headroom <= p_max)",
+                    message="headroom={value!r}: must be an integer in 0..{hi} (headroom <= p_max)"))
     CONSTRAINTS = (*Block.CONSTRAINTS,
                    Constraint("headroom <= p_max", lambda p: p["headroom"] <= p["p_max"],
                               "headroom={headroom!r}: leaves no mantissa bit at p_max={p_max}"))
 
+    @checked_init
     def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False, e_max=255,
                  headroom=1):
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=blocks[0], bc=blocks[1], p_max=p_max, depth=depth,
@@ -169,6 +185,8 @@ class Planner(wiring.Component):
         """The cycle figures hdl.emit puts in the manifest (see Controller's table)."""
         return {"iteration_cycles": "p+2", "block_visit_cycles": "K*(p+2)+6 for K iterations",
                 "response": "one o_stream beat per i_stream command, in order",
+                "direction_latency": "7p+26 cycles (a node with 4 neighbours in the map; "
+                                     "p+3 fewer per neighbour outside it: direction_latency())",
                 "run_cycles": "reported by STATUS (cycles field)"}
 
     def elaborate(self, platform):
@@ -181,19 +199,8 @@ class Planner(wiring.Component):
         xkw = {"exponents": True, "e_max": self.e_max, "headroom": self.headroom} if X else {}
         m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, **xkw)
         m.submodules.decision = dec = Decision(p_max)
-        for name in ("run", "p", "enable", "clear", "sel", "sel_row", "sel_col", "br", "bc"):
-            m.d.comb += getattr(blk, name).eq(getattr(ctl, f"blk_{name}"))
-        m.d.comb += [
-            blk.Sat.eq(ctl.blk_sat),
-            ctl.blk_take.eq(blk.take), ctl.blk_done.eq(blk.done), ctl.blk_busy.eq(blk.busy),
-            ctl.blk_all_stable.eq(blk.all_stable), ctl.blk_any_max.eq(blk.any_max),
-        ]
-        if X:
-            for name in ("shift", "shift_d", "s_N", "s_S", "s_W", "s_E", "raw", "scan"):
-                m.d.comb += getattr(blk, name).eq(getattr(ctl, f"blk_{name}"))
-            for name in ("scan_len", "clamped", "lead_own", "lead_N", "lead_S", "lead_W", "lead_E",
-                         "all_const"):
-                m.d.comb += getattr(ctl, f"blk_{name}").eq(getattr(blk, name))
+        wiring.connect(m, ctl.block, blk.control)
+        host = blk.host             # the LOAD / READ / DIRECTION path to the RAMs
 
         cmd = self.i_stream.payload
         resp = self.o_stream.payload
@@ -239,9 +246,9 @@ class Planner(wiring.Component):
         with m.If(rd_go):
             m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0)]
         with m.Elif(rd_busy):
-            m.d.comb += [blk.host_addr.eq(rd_base + rd_j), blk.host_cluster.eq(rd_ci)]
+            m.d.comb += [host.addr.eq(rd_base + rd_j), host.cluster.eq(rd_ci)]
             m.d.sync += rd_j.eq(rd_j + 1)
-            got = blk.host_rdata.bit_select(rd_bit, 1)
+            got = host.rdata.bit_select(rd_bit, 1)
             with m.If(rd_j == 1):
                 m.d.sync += rd_const.eq(got)
             with m.Elif(rd_j > 1):
@@ -250,9 +257,10 @@ class Planner(wiring.Component):
                 m.d.sync += rd_busy.eq(0)
                 m.d.comb += rd_done.eq(1)
 
-        # DIRECTION: the centre, then N, E, S, W (0 outside the map).
+        # DIRECTION: the centre, then N, E, S, W (0 outside the map): q
+        # indexes NEIGHBOURHOOD, the Decision module's values.
         q = Signal(3)
-        vals = [Signal(p_max + 1, name=f"dir_{s}") for s in ("c", "N", "E", "S", "W")]
+        vals = Signal(neighbourhood_layout(p_max), name="dir")
         t_blk, t_row, t_col, t_in = Signal.like(c.block), Signal.like(c.row), Signal.like(c.col), Signal()
         m.d.comb += [t_blk.eq(c.block), t_row.eq(c.row), t_col.eq(c.col), t_in.eq(1)]
         # q: (in-block test, the move inside the block, the test for a block
@@ -277,8 +285,7 @@ class Planner(wiring.Component):
                     with m.Else():
                         m.d.comb += t_in.eq(0)
         _, _, t_ci, t_bit = locate(t_blk, t_row, t_col, "t")
-        m.d.comb += [dec.h.eq(vals[0]), dec.h_N.eq(vals[1]), dec.h_E.eq(vals[2]),
-                     dec.h_S.eq(vals[3]), dec.h_W.eq(vals[4])]
+        m.d.comb += [dec.h.eq(vals), dec.p.eq(ctl.p)]
 
         load_a = Signal(range(S + 1))
         p_bad = Signal()
@@ -361,18 +368,18 @@ class Planner(wiring.Component):
                 base = Signal(range(self.depth))
                 m.d.comb += [
                     base.eq((c_br * BC + c_bc) * S),
-                    blk.host_addr.eq(base + load_a), blk.host_cluster.eq(c_ci),
+                    host.addr.eq(base + load_a), host.cluster.eq(c_ci),
                 ]
                 with m.If(load_a == 0):
-                    m.d.comb += blk.host_wdata.eq(c.flags | c.goals)
+                    m.d.comb += host.wdata.eq(c.flags | c.goals)
                 with m.Elif(load_a == 1):
-                    m.d.comb += blk.host_wdata.eq(c.goals)
+                    m.d.comb += host.wdata.eq(c.goals)
                 m.d.sync += load_a.eq(load_a + 1)
                 with m.If(load_a == S - 1):
                     respond(Code.OK, Op.LOAD)
                     m.next = "IDLE"
             with m.State("SET"):
-                with m.If(ctl.order_ready):
+                with m.If(ctl.order.ready):
                     with m.If(c.flag):
                         m.d.sync += has_goal.eq(1)
                     m.next = "SET_RESP"
@@ -393,20 +400,20 @@ class Planner(wiring.Component):
                     with m.Switch(q):
                         for i in range(1, 5):
                             with m.Case(i):
-                                m.d.sync += vals[i].eq(0)
+                                m.d.sync += vals[NEIGHBOURHOOD[i]].eq(0)
                     m.d.sync += q.eq(q + 1)
                     with m.If(q == 4):
                         m.next = "DECIDE_GO"
             with m.State("FETCH_WAIT"):
                 with m.If(rd_done):
-                    word = Cat(blk.host_rdata.bit_select(rd_bit, 1), rd_val[:-1])
+                    word = Cat(host.rdata.bit_select(rd_bit, 1), rd_val[:-1])
                     if X:
                         # A neighbour in another block: into the centre's units first.
                         m.d.sync += cv.eq(word)
                     with m.Switch(q):
                         for i in range(1 if X else 5):
                             with m.Case(i):
-                                m.d.sync += vals[i].eq(word)
+                                m.d.sync += vals[NEIGHBOURHOOD[i]].eq(word)
                     with m.If(c.op == Op.READ):
                         m.next = "READ_RESP"
                     if X:
@@ -425,7 +432,7 @@ class Planner(wiring.Component):
                         with m.Switch(q):
                             for i in range(5):
                                 with m.Case(i):
-                                    m.d.sync += vals[i].eq(cv)
+                                    m.d.sync += vals[NEIGHBOURHOOD[i]].eq(cv)
                         next_neighbour()
                     with m.Else():
                         m.d.sync += cv_n.eq(cv_n - 1)
@@ -437,7 +444,7 @@ class Planner(wiring.Component):
                             m.d.sync += cv.eq(cv << 1)
             with m.State("READ_RESP"):
                 respond(Code.OK, Op.READ)
-                m.d.sync += [resp.value.eq(vals[0]), resp.const.eq(rd_const)]
+                m.d.sync += [resp.value.eq(vals.c), resp.const.eq(rd_const)]
                 if X:
                     m.d.sync += resp.exponent.eq(ctl.e_rd)
                 m.next = "IDLE"
@@ -446,7 +453,7 @@ class Planner(wiring.Component):
             with m.State("DECIDE"):
                 with m.If(dec.done):
                     respond(Code.OK, Op.DIRECTION)
-                    m.d.sync += [resp.value.eq(vals[0]), resp.triangle.eq(dec.triangle),
+                    m.d.sync += [resp.value.eq(vals.c), resp.triangle.eq(dec.triangle),
                                  resp.g_row.eq(dec.g_row), resp.g_col.eq(dec.g_col)]
                     if X:
                         m.d.sync += resp.exponent.eq(dir_e)
@@ -459,9 +466,10 @@ class Planner(wiring.Component):
             start_ok.eq(accept & (cmd.op == Op.START) & ~ctl.busy & ~p_bad & (cmd.iters != 0) & has_goal),
             ctl.start.eq(start_ok), ctl.p1.eq(cmd.p1), ctl.step.eq(cmd.step),
             ctl.p_last.eq(cmd.p_last), ctl.iters.eq(cmd.iters),
-            ctl.order.eq(fsm.ongoing("SET")), ctl.o_br.eq(c_br), ctl.o_bc.eq(c_bc),
-            ctl.o_row.eq(c.row), ctl.o_col.eq(c.col), ctl.o_sat.eq(c.flag),
-            blk.host_we.eq(fsm.ongoing("LOAD")),
+            ctl.order.valid.eq(fsm.ongoing("SET")), ctl.order.payload.br.eq(c_br),
+            ctl.order.payload.bc.eq(c_bc), ctl.order.payload.row.eq(c.row),
+            ctl.order.payload.col.eq(c.col), ctl.order.payload.sat.eq(c.flag),
+            host.we.eq(fsm.ongoing("LOAD")),
             dec.start.eq(fsm.ongoing("DECIDE_GO")),
             rd_go.eq(fsm.ongoing("FETCH") & t_in),
         ]

@@ -10,9 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models.dflc import DEFAULT_FLL, Dflc
-from sim.cli import CliError, main
-from tb.runner import SIMULATORS
+from navcores.hdl.emit import top_name
+from navcores.models.dflc import DEFAULT_FLL, Dflc
+from navcores.sim.cli import CliError, main
+from navcores.sim.rtl.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 FIXTURES = Path(__file__).resolve().parent / "fll"
@@ -32,10 +33,11 @@ def cli(*args):
 def test_model_engine_json_and_surface(tmp_path):
     csv = write(tmp_path, "in.csv", "phi2,phi1\n0,0\n10,-30\n170,100\n-180,180\n400,-999\n")
     out, png = tmp_path / "o.json", tmp_path / "s.png"
-    assert main(["dflc", "--input", str(csv), "--json", str(out), "--surface", str(png)]) == 0
+    assert main(["dflc", "--input", str(csv), "--json", str(out), "--plot", str(png)]) == 0
     res = json.loads(out.read_text())
     m = Dflc.from_fll(DEFAULT_FLL)
-    vals = np.array([[0, 0], [-30, 10], [100, 170], [180, -180], [-999, 400]], dtype=float)
+    # angles (inputs of range -180..180) outside the range wrap by whole turns: -999 is 81, 400 is 40
+    vals = np.array([[0, 0], [-30, 10], [100, 170], [180, -180], [81, 40]], dtype=float)
     y, codes, zero = m.evaluate(vals)
     assert res["codes"] == codes.tolist() and res["outputs"] == y.tolist()
     assert res["zero_strength"] == zero.tolist()
@@ -55,16 +57,17 @@ def test_zero_strength_flag(tmp_path):
     ("phi1,theta\n1,2\n", "unknown variable 'theta'"),
     ("phi1\n1\n", "lacks input variable.*phi2"),
     ("phi1,phi2\n1,abc\n", "line 2, column phi2: 'abc' is not a number"),
+    ("phi1,phi2\n1,1e999\n", "line 2, column phi2: 1e999 is not a sample"),
     ("phi1,phi2\n1\n", "line 2: 1 cells"),
     ("", "empty file"),
 ])
 def test_bad_csv(tmp_path, text, match):
     csv = write(tmp_path, "in.csv", text)
     with pytest.raises(CliError, match=match):
-        from sim.dflc import run
+        from navcores.sim.dflc import run
         import argparse
         run(argparse.Namespace(fll=str(DEFAULT_FLL), input=str(csv), engine="model", parallel=False,
-                               div="lut", json=None, surface=None))
+                               div="lut", json=None, plot=None))
 
 
 def test_errors_are_one_line(tmp_path, capsys):
@@ -77,10 +80,16 @@ def test_errors_are_one_line(tmp_path, capsys):
         (("--fll", gauss, "--input", csv), "term t1 is Gaussian"),
         (("--fll", junk, "--input", csv), "junk.fll"),
         (("--fll", tmp_path / "none.fll", "--input", csv), "no such .fll"),
-        (("--input", tmp_path / "none.csv"), "cannot read"),
+        (("--input", tmp_path / "none.csv"), "none.csv: no such CSV file"),
         (("--fll", FIXTURES / "n3_prod.fll", "--input", write(tmp_path, "c.csv", "a,b,c\n1,0,2\n"),
-          "--surface", tmp_path / "x.png"), "2-input"),
+          "--plot", tmp_path / "x.png"), "2-input"),
+        (("--fll", write(tmp_path, "bin.fll", "x"), "--input", csv), "bin.fll"),
+        (("--input", write(tmp_path, "inf.csv", "phi1,phi2\n1,inf\n")), "line 2, column phi2: inf is not a sample"),
+        (("--input", write(tmp_path, "nan.csv", "phi1,phi2\nnan,1\n")), "line 2, column phi1: nan is not a sample"),
     ]
+    (tmp_path / "bin.fll").write_bytes(b"garbage\x00\xff\x80 not FLL")
+    (tmp_path / "bin.csv").write_bytes(b"phi1,phi2\n\xff\xfe,1\n")
+    cases.append((("--input", tmp_path / "bin.csv"), r"bin.csv:2: byte 0xff: binary data or not UTF-8"))
     for k, (args, match) in enumerate(cases):
         if k < 2:      # as a user runs it: a subprocess
             r = cli(*args)
@@ -96,14 +105,16 @@ def test_errors_are_one_line(tmp_path, capsys):
 def test_rtl_params_share_the_shipped_build(tmp_path):
     """The shipped controller is the module ``make verilog`` emits (one build for
     every run, the regression's too); any other .fll gets a copy named by its content."""
-    from sim.dflc import rtl_params
+    from navcores.sim.dflc import rtl_params
     copy = write(tmp_path, "mine.fll", DEFAULT_FLL.read_text())
     assert rtl_params(copy, None, "lut", False) == {"fll": "table1"}
     assert rtl_params(DEFAULT_FLL, None, "array", True) == {"fll": "table1", "div": "array", "par": 1}
     changed = write(tmp_path, "mine2.fll", DEFAULT_FLL.read_text() + "\n")
     p = rtl_params(changed, None, "lut", False)
-    assert re.fullmatch(r"mine2_[0-9a-f]{8}", p["fll"])
-    assert (ROOT / "build" / "dflc_fll" / f"{p['fll']}.fll").read_text() == changed.read_text()
+    copy = Path(p["fll"])
+    assert copy.parent == ROOT / "build" / "dflc_fll" and re.fullmatch(r"mine2_[0-9a-f]{8}", copy.stem)
+    assert copy.read_text() == changed.read_text()
+    assert top_name("dflc_stream", p) == f"dflc_stream_{copy.stem}"     # the module carries the stem
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)
@@ -120,7 +131,12 @@ def test_rtl_engine_matches_model(tmp_path, sim):
     assert r.returncode == 0, r.stderr[-2000:]
     res = json.loads(out.read_text())
     assert res["engine"] == sim and len(res["codes"]) == len(vals)
-    y, codes, zero = Dflc.from_fll(DEFAULT_FLL).evaluate(vals)
+    m = Dflc.from_fll(DEFAULT_FLL)
+    # the angles beyond +-180 degrees wrap by whole turns (sim dflc's rule): the model on the wrapped values
+    wrapped = (vals + 180.0) % 360.0 - 180.0
+    wrapped = np.where(np.abs(vals) > 180, wrapped, vals)
+    assert (np.abs(vals) > 180).any() and not np.array_equal(wrapped, vals)
+    y, codes, zero = m.evaluate(wrapped)
     assert res["codes"] == codes.tolist() and res["zero_strength"] == zero.tolist()
     assert res["outputs"] == y.tolist()
     assert res["cycles_per_sample"] == 4 and res["latency"] == 13

@@ -21,7 +21,7 @@ import fuzzylite as fl
 import numpy as np
 import pytest
 
-from models.dflc import DEFAULT_FLL, Dflc, FllError, load_fll, prod_round
+from navcores.models.dflc import DEFAULT_FLL, Dflc, FllError, load_fll, prod_round
 
 FIXTURES = Path(__file__).resolve().parent / "fll"
 ALL_FLL = [DEFAULT_FLL] + sorted(FIXTURES.glob("*.fll"))

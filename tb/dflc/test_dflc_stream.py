@@ -1,7 +1,7 @@
-"""DFLC stream top (hdl/dflc/top.py) against models.dflc, bit-exact, with cocotb-bus.
+"""DFLC stream top (hdl/dflc/top.py) against models.dflc, bit-exact, through sim/rtl/stream.py.
 
 Two builds per simulator: the test top ``dflc_multi_setregress``
-(hdl/dflc/multi.py) holds one DflcStream per configuration, and the paper's
+(tb/dflc/multi.py) holds one DflcStream per configuration, and the paper's
 default runs alone as ``dflc_stream_table1`` (the build the CLI test shares);
 each cocotb test below runs on every instance of the build in turn:
 
@@ -10,8 +10,10 @@ each cocotb test below runs on every instance of the build in turn:
   codes (fewer for the fixtures); all their combinations) through the stream
   at full rate, every output compared with ``Dflc.infer`` (y and zero flag).
 * ``random_stalls``: random samples with random idle cycles on the input and
-  random back-pressure on the output; a cocotb-bus Scoreboard checks that the
-  outputs are the model's, in order, none lost or duplicated.
+  random back-pressure on the output (seeded: SEED=); each output is checked
+  against the model's as it is taken, in order, none lost or duplicated, and
+  the run must have stalled both ways (idle input cycles the core was ready
+  for, output cycles with valid and not ready).
 * ``cycles``: at full throughput the input accepts exactly one sample every
   2^n cycles (1 in the parallel option), outputs come equally spaced, and
   the first output is ``stream_latency`` cycles after its input handshake.
@@ -21,7 +23,7 @@ each cocotb test below runs on every instance of the build in turn:
 
 Configurations: the paper's default (Table 1, min, LUT divider, n = 2, 9
 triangles, sequential, default pipeline; ``dflc_stream_table1``) and
-(hdl/dflc/multi.py SETS["regress"]) n = 3 with
+(tb/dflc/multi.py SETS["regress"]) n = 3 with
 5/3/4 MFs, prod, restoring array and missing rules, every pipeline generic at
 its minimum; trapezoids with gaps (zero firing strength), max, LUT, parallel,
 the front generics at 4; 5/4 MFs, probor, array, parallel, the singleton route
@@ -38,15 +40,15 @@ import random
 import cocotb
 import numpy as np
 import pytest
-from cocotb.triggers import ClockCycles, RisingEdge
-from cocotb_bus.scoreboard import Scoreboard
-
 from cocotb.clock import Clock
-from dflc_bench import PERIOD_NS, DflcStream, StreamBench, pack
-from hdl.dflc.multi import SETS
-from hdl.dflc.top import config_for, split_params, stream_latency
-from models.dflc import Dflc
-from tb.runner import SIMULATORS, run, seed_from_env
+from cocotb.triggers import ClockCycles, RisingEdge
+
+from navcores.hdl.dflc.top import config_for, split_params, stream_latency
+from navcores.models.dflc import Dflc
+from navcores.sim.rtl.clock import PERIOD_NS
+from navcores.sim.rtl.dflc_driver import DflcDriver
+from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
+from tb.dflc.multi import SETS, DflcMulti
 
 SET = "regress"
 ONLY = os.environ.get("DFLC_ONLY")          # e.g. DFLC_ONLY=n3: one instance only
@@ -55,7 +57,8 @@ ONLY = os.environ.get("DFLC_ONLY")          # e.g. DFLC_ONLY=n3: one instance on
 # ``python -m sim dflc --engine icarus|verilator`` runs on the default .fll and
 # test_dflc_cli.py shares; alone, its long sweep does not simulate six idle
 # instances every clock).
-BUILDS = {"multi": ("dflc_multi", {"set": SET}), "table1": ("dflc_stream", {"fll": "table1"})}
+# name, parameters, the factory of a test top (None: one of hdl.emit's tops)
+BUILDS = {"multi": ("dflc_multi", {"set": SET}, DflcMulti), "table1": ("dflc_stream", {"fll": "table1"}, None)}
 TOP = os.environ.get("DFLC_TOP", "multi")
 # Stream latency of every instance, by hand from hdl/dflc/core.py's formula
 # (multi.py's comments); the cycles test asserts both agree with the RTL.
@@ -94,14 +97,11 @@ def start_clock(dut):
     cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
 
 
-async def new_bench(dut, key, config, **kw):
-    """The fast DflcStream bench without kw, the cocotb-bus StreamBench with."""
-    if kw:
-        bench = StreamBench(dut, config, prefix=prefix(key), **kw)
-    else:
-        bench = DflcStream(dut, config, prefix=prefix(key))
-    await bench.reset()
-    return bench
+async def new_driver(dut, key, config, **stalls):
+    """A DflcDriver on instance ``key``, reset; ``stalls``: rng, idle, back_pressure."""
+    drv = DflcDriver(dut, config, prefix=prefix(key), **stalls)
+    await drv.reset()
+    return drv
 
 
 def sweep_axes(model, grid, per_axis_cap=None):
@@ -127,18 +127,19 @@ def sweep_axes(model, grid, per_axis_cap=None):
 async def sweep(dut):
     start_clock(dut)
     for key, config, par, model in instances(dut):
-        bench = await new_bench(dut, key, config)
-        await _sweep(dut, bench, config, model)
+        drv = await new_driver(dut, key, config)
+        await _sweep(dut, drv, config, model)
+        drv.stop()
 
 
-async def _sweep(dut, bench, config, model):
+async def _sweep(dut, drv, config, model):
     if config.name == "dflc_table1":
         axes = sweep_axes(model, 64)                 # >= 64 x 64 plus breakpoints +-1
     else:
         axes = sweep_axes(model, 16, per_axis_cap={1: 400, 2: 40, 3: 9, 4: 4}[config.n])
     codes = np.array(list(itertools.product(*axes)), dtype=np.int64)
     y, zero = model.infer(codes)
-    got = await bench.run(codes.tolist())
+    got = await drv.run(codes.tolist())
     bad = [(list(codes[i]), got[i], (int(y[i]), bool(zero[i])))
            for i in range(len(codes)) if got[i] != (int(y[i]), bool(zero[i]))]
     assert not bad, f"{len(bad)} of {len(codes)} differ; first (codes, rtl, model): {bad[:3]}"
@@ -159,14 +160,14 @@ async def random_stalls(dut):
         # output ready on average half as often as the core delivers: the
         # output FIFO fills and the input sees back-pressure
         ready_p = 0.5 / (1 if par["parallel"] else 1 << config.n)
-        bench = await new_bench(dut, key, config, rng=rng, idle=0.3, ready_p=ready_p)
-        await _random_stalls(dut, bench, config, model, rng, ready_p)
-        bench.stop()
+        drv = await new_driver(dut, key, config, rng=rng, idle=0.3, back_pressure=1 - ready_p)
+        await _random_stalls(dut, drv, config, model, rng, ready_p)
+        drv.stop()
         done.append(key)
     assert len(done) == len(list(instances(dut)))
 
 
-async def _random_stalls(dut, bench, config, model, rng, ready_p):
+async def _random_stalls(dut, drv, config, model, rng, ready_p):
     n = 200 if config.n <= 2 else 60
     codes = np.array([[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(n)])
     # a few saturated corners too
@@ -175,28 +176,31 @@ async def _random_stalls(dut, bench, config, model, rng, ready_p):
                  [(1 << config.ip_sz) - 1] + [0] * (config.n - 1)]
     y, zero = model.infer(codes)
     expected = [(int(a), bool(b)) for a, b in zip(y, zero)]
-    sb = Scoreboard(dut)
-    compared = []
+    compared, errors = [], []
 
-    def check(tr):
-        got = bench.unpack(tr[1])
-        want = expected_q.pop(0)
-        assert got == want, f"output {len(compared)}: rtl {got}, model {want}"
+    def check(cycle, value):        # each output as it is taken (a scoreboard)
+        got, want = drv.result(value), expected_q.pop(0) if expected_q else None
+        if got != want:
+            errors.append(f"output {len(compared)} (cycle {cycle}): rtl {got}, model {want}")
         compared.append(got)
 
     expected_q = list(expected)
-    sb.add_interface(bench.out_mon, expected_q, compare_fn=check)
-    t0 = bench.cycles.now
-    out = await bench.run(codes.tolist(), timeout_cycles=n * 40 + 500)
-    spent = bench.cycles.now - t0
-    dut._log.info(f"random_stalls {config.name}: {n} samples in {spent} cycles")
+    drv.sink.callback = check
+    t0 = drv.streams.cycle
+    out = await drv.run(codes.tolist(), timeout_cycles=n * 40 + 500)
+    spent = drv.streams.cycle - t0
+    src, snk = drv.source, drv.sink
+    dut._log.info(f"random_stalls {config.name}: {n} samples in {spent} cycles; input idle {src.idle} "
+                  f"and stalled {src.stalls} cycles, output stalled {snk.stalls} cycles")
+    assert not errors, errors[:3]
     assert spent > 0.7 * n / ready_p, "the output, not the input, must limit the rate"
     assert out == expected
     await ClockCycles(dut.clk, 40)
-    assert len(compared) == n and not expected_q and len(bench.outputs) == n, "lost or duplicated"
-    assert len(bench.in_mon._recvQ) == n
-    # (Scoreboard.result would end the cocotb test as passed: check by hand.)
-    assert sb.errors == 0 and not expected_q
+    assert len(compared) == n and not expected_q and len(snk.beats) == n, "lost or duplicated"
+    assert len(src.beats) == n
+    # it stalled every way: idle input cycles, input valid and not ready (the
+    # core held back by its output), output valid and not ready
+    assert src.idle > 0 and src.stalls > 0 and snk.stalls > 0, (src.idle, src.stalls, snk.stalls)
 
 
 @cocotb.test()
@@ -205,21 +209,22 @@ async def cycles(dut):
     checked = {}
     for key, config, par, model in instances(dut):
         rng = random.Random(seed() + 1)
-        bench = await new_bench(dut, key, config)
-        checked[key] = await _cycles(dut, bench, config, par, model, rng)
+        drv = await new_driver(dut, key, config)
+        checked[key] = await _cycles(dut, drv, config, par, model, rng)
+        drv.stop()
     assert len(checked) == len(list(instances(dut)))
     if ONLY is None:    # the generics really spread the latency (multi.py's comments)
         assert checked == LATENCIES[TOP], checked
 
 
-async def _cycles(dut, bench, config, par, model, rng):
+async def _cycles(dut, drv, config, par, model, rng):
     p = 1 if par["parallel"] else 1 << config.n
     n = 40
     codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(n)]
-    out = await bench.run(codes)
+    out = await drv.run(codes)
     y, zero = model.infer(np.array(codes))
     assert out == [(int(a), bool(b)) for a, b in zip(y, zero)]
-    ins, outs = bench.in_cycles, bench.out_cycles
+    ins, outs = drv.in_cycles, drv.out_cycles
     assert len(ins) == n and len(outs) == n
     assert set(np.diff(ins)) == {p}, f"input spacing {sorted(set(np.diff(ins)))}, expected {p}"
     assert set(np.diff(outs)) == {p}, f"output spacing {sorted(set(np.diff(outs)))}, expected {p}"
@@ -234,32 +239,31 @@ async def reset_mid_stream(dut):
     start_clock(dut)
     for key, config, par, model in instances(dut):
         rng = random.Random(seed() + 2)
-        bench = await new_bench(dut, key, config, rng=rng, ready_p=0.0)   # output stalled
-        await _reset_mid_stream(dut, bench, config, par, model, rng)
-        bench.stop()
+        drv = await new_driver(dut, key, config, rng=rng, back_pressure=1.0)   # output stalled
+        await _reset_mid_stream(dut, drv, config, par, model, rng)
+        drv.stop()
 
 
-async def _reset_mid_stream(dut, bench, config, par, model, rng):
+async def _reset_mid_stream(dut, drv, config, par, model, rng):
     codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(30)]
-    for row in codes:
-        bench.source.append(pack(row, config.ip_sz))
+    drv.source.extend(codes)
     await ClockCycles(dut.clk, rng.randrange(20, 40))
-    assert len(bench.in_mon._recvQ) > 0, "some samples entered before the reset"
-    await bench.reset()
-    bench.sink.set(1.0)
+    assert len(drv.source.beats) > 0 and drv.source.busy, "some samples entered before the reset, some not"
+    await drv.reset()
+    drv.sink.set_pause(None)
     # ready and empty: input ready at once, nothing comes out
     await RisingEdge(dut.clk)
-    assert int(getattr(dut, f"{bench.i_name}__ready").value) == 1
+    assert int(drv.source.ready.value) == 1
     for _ in range(3 * stream_latency(config, **par)):
         await RisingEdge(dut.clk)
-        assert int(getattr(dut, f"{bench.o_name}__valid").value) == 0, "output after reset without input"
-    assert bench.outputs == []
+        assert int(drv.sink.valid.value) == 0, "output after reset without input"
+    assert drv.sink.beats == []
     fresh = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(12)]
-    out = await bench.run(fresh)
+    out = await drv.run(fresh)
     y, zero = model.infer(np.array(fresh))
     assert out == [(int(a), bool(b)) for a, b in zip(y, zero)]
     await ClockCycles(dut.clk, 2 * stream_latency(config, **par))
-    assert len(bench.outputs) == len(fresh), "nothing from before the reset may appear"
+    assert len(drv.sink.beats) == len(fresh), "nothing from before the reset may appear"
 
 
 @pytest.mark.parametrize("build", BUILDS)
@@ -268,5 +272,5 @@ def test_dflc_stream(sim, build):
     env = {"DFLC_SEED": seed_from_env(), "DFLC_TOP": build}
     if ONLY:
         env["DFLC_ONLY"] = ONLY
-    name, params = BUILDS[build]
-    assert run(name, params, sim, "test_dflc_stream", env=env) == 4
+    name, params, factory = BUILDS[build]
+    assert run(name, params, sim, "test_dflc_stream", env=env, factory=factory) == 4

@@ -1,30 +1,23 @@
 """`python -m sim edt`: JSON keys and values against the model, errors, an RTL engine."""
 
 import json
+import re
 import subprocess
 import sys
-from argparse import Namespace
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from models.edt_bfs import plan_path
-from sim import edt as cmd
-from sim.cli import CliError, main
-from sim.mapfile import load_grid
-from tb.runner import SIMULATORS
+from navcores.models.edt_bfs import plan_path
+from navcores.sim.cli import main
+from navcores.models.maps import load_grid
+from navcores.sim.rtl.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 MAP = ROOT / "maps" / "room-32-32-4.map"
 KEYS = {"height", "width", "engine", "iterations_edt", "iterations_bfs", "cycles", "distance",
-        "nearest", "cfr", "path", "path_found"}
-
-
-def _args(**kw):
-    base = dict(map=str(MAP), dfar=0, goal=["30,30"], start="1,1", engine="model", json=None, plot=None)
-    base.update(kw)
-    return Namespace(**base)
+        "nearest", "cfr", "path", "path_xy", "path_found", "frame"}
 
 
 def test_model_json_and_plot(tmp_path):
@@ -54,17 +47,65 @@ def test_no_obstacles_gives_null_nearest(tmp_path):
     assert all(v == -1 for row in data["distance"] for v in row) and data["path_found"]
 
 
-@pytest.mark.parametrize("kw, message", [
-    (dict(dfar=-1), "--dfar -1"),
-    (dict(goal=["32,0"]), "outside the 32x32 map"),
-    (dict(goal=["a,b"]), "expected ROW,COL"),
-    (dict(start="1,1,1"), "expected ROW,COL"),
-    (dict(engine="icarus", map=str(ROOT / "maps" / "den312d.map")), "supports maps"),
-    (dict(plot="x.jpg"), "expected a .png"),
+@pytest.mark.parametrize("args, message", [
+    (["--dfar=-1"], "--dfar: -1: must be >= 0"),
+    (["--dfar", "45"], "--dfar 45: no distance d_i of a 32x32 map exceeds 44"),
+    (["--goal", "32,0"], "outside the 32x32 map"),
+    (["--goal", "a,b"], "expected ROW,COL"),
+    (["--start", "1,1,1"], "expected ROW,COL"),
+    (["--start", "1,1", "--start", "2,2"], "--start: one start only"),
+    (["--start-xy", "1,1", "--start", "2,2"], "--start: one start only"),
+    (["--goal-xy", "3.3,1"], r"--goal-xy 3.3,1: \(3.3, 1\) m is off the map \(x 0..3.2 m, y 0..3.2 m\)"),
+    (["--engine", "icarus", str(ROOT / "maps" / "den312d.map")], "supports maps"),
+    (["--plot", "x.jpg"], "expected a .png, .pdf, .svg"),
 ])
-def test_errors(kw, message):
-    with pytest.raises(CliError, match=message):
-        cmd.run(_args(**kw))
+def test_errors(args, message, capsys):
+    base = {"--dfar": "0", "--goal": "30,30"}
+    for k, v in base.items():
+        if not any(a.startswith(k) for a in args):
+            args = [*args, k, v]
+    if not any(a.endswith(".map") for a in args):
+        args = [str(MAP), *args]
+    assert main(["edt", *args]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and re.search(message, err), err
+
+
+def test_no_path_exits_1(tmp_path, capsys):
+    """Ran, but no path: a start or goal on an obstacle, a walled-off goal,
+    a start outside the cfr: exit status 1 with the reason, and the JSON."""
+    out = tmp_path / "r.json"
+    for args, why in [(["--start", "0,0", "--goal", "30,30"], r"start \(0, 0\) is on an obstacle"),
+                      (["--start", "3,3", "--goal", "0,0"], r"goal \(0, 0\) is on an obstacle"),
+                      (["--start", "3,3", "--goal", "30,30", "--dfar", "5"], r"start \(3, 3\) is not in the cfr")]:
+        argv = ["edt", str(MAP), "--dfar", "0", *args, "--json", str(out)]
+        if args.count("--dfar"):
+            argv.remove("--dfar"), argv.remove("0")
+        assert main(argv) == 1, args
+        text = capsys.readouterr().out
+        assert re.search("NO PATH: " + why, text), text
+        assert json.loads(out.read_text())["path_found"] is False
+    # without a start: no path asked for, done
+    assert main(["edt", str(MAP), "--dfar", "0", "--goal", "30,30"]) == 0
+
+
+def test_ros_map_and_xy(tmp_path):
+    """The bundled ROS map (room-32-32-4.yaml, 0.1 m cells, origin (-1.6, -1.6)):
+    --start-xy / --goal-xy in metres, the path in cells and in metres, the CSV."""
+    out, csv = tmp_path / "r.json", tmp_path / "r.csv"
+    yaml = ROOT / "maps" / "room-32-32-4.yaml"
+    # cell (30, 30) of the map as drawn is 30 rows down from the top: y = -1.6 + (32 - 30 - 0.5) * 0.1
+    assert main(["edt", str(yaml), "--dfar", "0", "--goal-xy", "1.45,-1.45", "--start-xy", "-1.43,1.42",
+                 "--json", str(out), "--csv", str(csv)]) == 0
+    data = json.loads(out.read_text())
+    m = plan_path(load_grid(MAP), [(30, 30)], (1, 1), 0)
+    assert data["path"] == [list(p) for p in m.path] and data["path"][0] == [1, 1]
+    assert np.allclose(data["path_xy"][0], [-1.45, 1.45]) and np.allclose(data["path_xy"][-1], [1.45, -1.45])
+    assert data["frame"]["origin"] == [-1.6, -1.6, 0.0] and data["frame"]["y_up"]
+    rows = csv.read_text().splitlines()
+    assert rows[0] == "row,col,x,y" and len(rows) == len(m.path) + 1
+    r, c, x, y = rows[1].split(",")
+    assert (int(r), int(c)) == (1, 1) and np.allclose([float(x), float(y)], [-1.45, 1.45])
 
 
 def test_errors_as_subprocess(tmp_path):

@@ -25,9 +25,9 @@ import numpy as np
 import pytest
 
 from images import FAMILIES, free_cells, sparse_points
-from models.edt_bfs import OFFSETS, edt, job_cycles, plan_path, widths
+from navcores.models.edt_bfs import OFFSETS, edt, job_cycles, plan_path, widths
+from navcores.sim.rtl.runner import seed_from_env
 from references import exact_di as _exact_di, scipy_edt as _scipy
-from tb.runner import seed_from_env
 
 
 def _sweep(seed, count, sizes):

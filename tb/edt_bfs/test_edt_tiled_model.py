@@ -28,12 +28,12 @@ import numpy as np
 import pytest
 
 from images import FAMILIES, free_cells
-from models.edt_bfs import plan_path
-from models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, TileEngine, Timing, largest_map,
+from navcores.models.edt_bfs import plan_path
+from navcores.models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, TileEngine, Timing, largest_map,
                                   plan_path_tiled, ram_blocks, state_bits)
 from references import MOVES, bfs_hops, exact_di, lowest_parent, scipy_edt
-from sim.mapfile import load_grid
-from tb.runner import seed_from_env
+from navcores.models.maps import load_grid
+from navcores.sim.rtl.runner import seed_from_env
 
 MAPS = Path(__file__).resolve().parents[2] / "maps"
 FIELDS = ("distance", "nearest", "vector", "sqdist", "done", "cfr", "visited", "parent")

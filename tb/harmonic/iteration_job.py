@@ -1,6 +1,6 @@
 """cocotb job: how many clock cycles one Laplace iteration takes on the cluster RTL.
 
-The performance report (scripts/bench.py) runs it on the harmonic cluster top
+The performance report (scripts/drv.py) runs it on the harmonic cluster top
 at the paper's precision ($ITER_P, default 128) for $ITER_N iterations (default
 4) and writes the cycle at which each iteration's ``done`` rose, counted from
 the start request, to $ITER_RESULT.  The border ring holds a rising ramp so the
@@ -15,9 +15,9 @@ import os
 import cocotb
 import numpy as np
 
-from hdl.harmonic.cluster import COLS, ROWS
-from tb.harmonic.cluster_bench import ClusterBench, Command
-from tb.harmonic.serial import start
+from navcores.hdl.harmonic.cluster import COLS, ROWS
+from navcores.sim.rtl.clock import start
+from tb.harmonic.cluster_driver import ClusterDriver, Command
 
 
 @cocotb.test()
@@ -27,7 +27,7 @@ async def iteration_job(dut):
     await start(dut)
     ring = np.zeros((ROWS + 2, COLS + 2), dtype=object)
     ring[:, -1] = [(1 << p) * (r + 1) // (ROWS + 3) for r in range(ROWS + 2)]
-    bench = ClusterBench(dut, p, ring)
-    dones = await bench.iterate(lambda k: Command(run=k < n))
+    drv = ClusterDriver(dut, p, ring)
+    dones = await drv.iterate(lambda k: Command(run=k < n))
     with open(os.environ["ITER_RESULT"], "w") as f:
         json.dump({"p": p, "done_cycles": [d.cycle for d in dones]}, f)

@@ -1,14 +1,11 @@
-"""Testbench pieces shared by the harmonic tests: clock/reset, the RAM
-addresses of the Counters (models.harmonic.counters), and emulated serial
-words (a border node's or a neighbour's storage, one bit per RAM address)."""
+"""Test helpers shared by the harmonic tests: the RAM addresses of the
+Counters (models.harmonic.counters), emulated serial words (a border node's
+or a neighbour's storage, one bit per RAM address) and cycle steps.  The
+clock and reset: navcores.sim.rtl.clock.start."""
 
-import cocotb
-from cocotb.clock import Clock
-from cocotb.triggers import ClockCycles, FallingEdge, ReadOnly
+from cocotb.triggers import FallingEdge, ReadOnly
 
-from models.harmonic import counters, word_bits
-
-PERIOD_NS = 10
+from navcores.models.harmonic import counters, word_bits
 
 
 def cnt_w(c, p):
@@ -38,15 +35,6 @@ class SerialWord:
 
     def flag(self):
         return bool(self.bits[0])
-
-
-async def start(dut):
-    """Start the clock, pulse the synchronous reset, leave inputs at 0."""
-    cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
-    dut.rst.value = 1
-    await ClockCycles(dut.clk, 2)
-    await FallingEdge(dut.clk)
-    dut.rst.value = 0
 
 
 async def settle():

@@ -1,4 +1,3 @@
-# amaranth: UnusedElaboratable=no
 """The Border's block-exponent option against models.harmonic.convert_mantissa.
 
 ``Border(..., exponents=True)`` on 3x3 blocks of 3x6 nodes: random words
@@ -14,9 +13,8 @@ unconverted and ``lead_*`` is each side's smallest offset holding a 1.
 Counts what it compared (shifts both ways,
 clamps, outside sides) and asserts the counts.
 
-The Border is not a top of ``hdl.emit`` (that file is not this core's to
-edit): the test registers a ``harmonic_border`` entry in ``TOPS`` for the
-runner before building.
+The Border is built as the ``harmonic_border`` top of ``hdl.emit`` with
+``exponents=1``.
 """
 
 import os
@@ -26,9 +24,9 @@ import cocotb
 import pytest
 from cocotb.triggers import FallingEdge, ReadOnly
 
-from models.harmonic import convert_mantissa
-from tb.harmonic.serial import start
-from tb.runner import SIMULATORS, run
+from navcores.models.harmonic import convert_mantissa
+from navcores.sim.rtl.clock import start
+from navcores.sim.rtl.runner import SIMULATORS, run
 
 P = dict(n=3, m=6, br=3, bc=3, p_max=12)
 STRIDE = P["p_max"] + 2
@@ -38,9 +36,17 @@ SIDES = (("N", "bottom", P["m"], (-1, 0)), ("S", "top", P["m"], (1, 0)),
          ("W", "right", P["n"], (0, -1)), ("E", "left", P["n"], (0, 1)))
 
 
-def _top(n, m, br, bc, p_max):
-    from hdl.harmonic.border import Border
-    return Border(n, m, (br, bc), p_max + 2, exponents=True)
+def _layouts():
+    """The per-side layouts of the conversion port (``conversion__s`` in,
+    ``conversion__lead`` out): one field per side."""
+    from navcores.hdl.harmonic.border import BorderExponentsSignature
+    members = BorderExponentsSignature(STRIDE, 255).members
+    return members["s"].shape, members["lead"].shape
+
+
+def _field(word, layout, side):
+    f = layout[side]
+    return (word >> f.offset) & ((1 << f.width) - 1)
 
 
 async def _tick(dut):
@@ -57,7 +63,8 @@ async def border_exponents_against_model(dut):
     rng = random.Random(cocotb.RANDOM_SEED)
     await start(dut)
     BR, BC, B = P["br"], P["bc"], P["br"] * P["bc"]
-    for name in ("s_N", "s_S", "s_W", "s_E", "scan", "cntR", "r_cnt", "p", "raw"):
+    s_layout, lead_layout = _layouts()
+    for name in ("conversion__s", "conversion__scan", "cntR", "r_cnt", "p", "conversion__raw", "w_en"):
         getattr(dut, name).value = 0
     # Random words (bits per offset) in every RAM of every block.
     words = {ram: [[0] * STRIDE for _ in range(B)] for _, ram, _, _ in SIDES}
@@ -79,12 +86,11 @@ async def border_exponents_against_model(dut):
     for b in range(B):
         for off in range(STRIDE):
             dut.w_addr.value = b * STRIDE + off
+            dut.w_en.value = 1
             for _, ram, width, _ in SIDES:
                 getattr(dut, f"w_{ram}").value = words[ram][b][off]
-                getattr(dut, f"en_{ram}").value = (1 << width) - 1
             await _tick(dut)
-    for _, ram, _, _ in SIDES:
-        getattr(dut, f"en_{ram}").value = 0
+    dut.w_en.value = 0
 
     seen = {"right": 0, "left": 0, "zero": 0, "clamp": 0, "outside": 0, "nodes": 0, "scan": 0, "lead": 0}
     for trial in range(TRIALS):
@@ -93,8 +99,7 @@ async def border_exponents_against_model(dut):
         ss = {side: rng.choice([0, rng.randrange(-(p + 3), p + 4), rng.randrange(-3, 4)])
               for side, _, _, _ in SIDES}
         dut.br.value, dut.bc.value, dut.p.value = br, bc, p
-        for side, s in ss.items():
-            getattr(dut, f"s_{side}").value = s
+        dut.conversion__s.value = s_layout.const(ss).as_value().value
         # Expected per side: (values, flags) or None outside the map.
         want, clamp_any, scan_len = {}, False, 0
         for side, ram, width, (dbr, dbc) in SIDES:
@@ -119,22 +124,22 @@ async def border_exponents_against_model(dut):
             s = ss[side]
             seen["right" if s < 0 else "left" if s > 0 else "zero"] += 1
         # The scan: strobe, busy for exactly scan_len cycles after the strobe.
-        dut.scan.value = 1
+        dut.conversion__scan.value = 1
         await ReadOnly()
-        assert int(dut.scan_len.value) == scan_len, f"trial {trial}: scan_len {int(dut.scan_len.value)} != {scan_len}"
+        assert int(dut.conversion__scan_len.value) == scan_len, f"trial {trial}: scan_len {int(dut.conversion__scan_len.value)} != {scan_len}"
         await _tick(dut)
-        dut.scan.value = 0
+        dut.conversion__scan.value = 0
         busy = 0
         while True:
             await ReadOnly()
-            if not int(dut.scan_busy.value):
+            if not int(dut.conversion__scan_busy.value):
                 break
             busy += 1
             await _tick(dut)
         assert busy == scan_len, f"trial {trial}: scan busy {busy} cycles, expected {scan_len}"
         seen["scan"] += scan_len > 0
-        assert int(dut.clamped.value) == clamp_any, (
-            f"trial {trial} block ({br}, {bc}) p={p} s={ss}: clamped {int(dut.clamped.value)}, model {clamp_any}")
+        assert int(dut.conversion__clamped.value) == clamp_any, (
+            f"trial {trial} block ({br}, {bc}) p={p} s={ss}: clamped {int(dut.conversion__clamped.value)}, model {clamp_any}")
         await _tick(dut)
         # Every offset through both streams (data one cycle after its address).
         for port, out in (("cntR", "h"), ("r_cnt", "m")):
@@ -164,11 +169,11 @@ async def border_exponents_against_model(dut):
                 seen["nodes"] += width
         # Raw MSB-first reads (update visits): each side's lead is the smallest
         # offset 1..p+1 holding a 1 (the ring's largest value), or the stride.
-        dut.raw.value = 1
+        dut.conversion__raw.value = 1
         for off in range(p + 2):
             dut.r_cnt.value = off
             await _tick(dut)
-        dut.raw.value = 0
+        dut.conversion__raw.value = 0
         await _tick(dut)
         await ReadOnly()
         for side, ram, width, (dbr, dbc) in SIDES:
@@ -177,7 +182,7 @@ async def border_exponents_against_model(dut):
             if 0 <= nbr < BR and 0 <= nbc < BC:
                 src = words[ram][nbr * BC + nbc]
                 lead = next((o for o in range(1, p + 2) if src[o]), STRIDE)
-            got_lead = int(getattr(dut, f"lead_{side}").value)
+            got_lead = _field(int(dut.conversion__lead.value), lead_layout, side)
             assert got_lead == lead, f"trial {trial} side {side}: lead {got_lead}, expected {lead}"
             seen["lead"] += lead != STRIDE
         await _tick(dut)
@@ -194,9 +199,4 @@ def test_border_exponents(sim):
     # HARMONIC_BIG=1 runs this unit test on Verilator too.
     if sim == "verilator" and os.environ.get("HARMONIC_BIG") != "1":
         pytest.skip("Verilator run of the Border unit test: HARMONIC_BIG=1")
-    from hdl.emit import TOPS
-    TOPS["harmonic_border"] = _top     # a test-only top, registered only while it is built
-    try:
-        run("harmonic_border", P, sim, "test_border_exponents")
-    finally:
-        del TOPS["harmonic_border"]
+    run("harmonic_border", {**P, "exponents": 1}, sim, "test_border_exponents")

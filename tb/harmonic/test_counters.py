@@ -11,9 +11,10 @@ import random
 import cocotb
 import pytest
 
-from models.harmonic import counters
-from tb.harmonic.serial import next_cycle, start
-from tb.runner import SIMULATORS, run
+from navcores.models.harmonic import counters
+from navcores.sim.rtl.clock import start
+from navcores.sim.rtl.runner import SIMULATORS, run
+from tb.harmonic.serial import next_cycle
 
 P_MAX = 40
 

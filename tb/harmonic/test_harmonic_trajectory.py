@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from harmonic_small_maps import corridor, pocket, spiral
-from models.harmonic import ASCENT_MOVES, ascent_next, ascent_reaches, one, trajectory
-from sim.mapfile import load_map, load_scenarios
+from navcores.models.harmonic import ASCENT_MOVES, ascent_next, ascent_reaches, one, trajectory
+from navcores.models.maps import load_map, load_scenarios
 
 import harmonic_fields as hf
 

@@ -18,7 +18,7 @@ properties the section 4 pseudo-code fixes.
 import numpy as np
 import pytest
 
-from models.harmonic import (
+from navcores.models.harmonic import (
     VISIT_OVERHEAD, decision, local_max, neighbours, one, pad_to_blocks, plan, reachable, relax,
     step,
 )

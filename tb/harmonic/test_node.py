@@ -1,6 +1,6 @@
 """Node module against models.harmonic, bit-exact, every iteration.
 
-The bench plays the node's surroundings as a cluster would: the node's own
+The test plays the node's surroundings as a cluster would: the node's own
 word and its four neighbours' words are stored one bit per address and read
 through the Counters' address sequences with one cycle of RAM latency; the
 node's ``w`` output is written back into its own word at ``cntW``, so an error
@@ -21,9 +21,10 @@ import cocotb
 import numpy as np
 import pytest
 
-from models.harmonic import one, step
-from tb.harmonic.serial import SerialWord, cnt_w, next_cycle, read_offsets, settle, start
-from tb.runner import SIMULATORS, run
+from navcores.models.harmonic import one, step
+from navcores.sim.rtl.clock import start
+from navcores.sim.rtl.runner import SIMULATORS, run
+from tb.harmonic.serial import SerialWord, cnt_w, next_cycle, read_offsets, settle
 
 DIRS = ("N", "E", "W", "S")
 PRECISIONS = [int(x) for x in os.environ.get("NODE_P", "8,16,32,64").split(",")]

@@ -1,4 +1,3 @@
-# amaranth: UnusedElaboratable=no
 """The Planner's block-exponent option (``Planner(..., block_exponents=True)``)
 against ``models.harmonic.plan(..., block_exponents=True, rtl=True)``, bit-exact.
 
@@ -21,21 +20,25 @@ the exponents), and DIRECTIONs whose neighbours were shifted left, right
 and clamped.  ``bounded`` (the
 Planner's e_max = 10 and headroom = 0): one random map on which exponents
 stop at e_max, against the model with the same bounds.
-PLANNER_EXP_ONLY=0,2 runs only those maps of the default set.
+PLANNER_EXP_ONLY=0,2 runs only those maps of the default set.  The host
+streams run with random idle cycles before each command and random
+back-pressure on the responses (seeded: SEED= replays): the counters and
+cycles still equal the model's.
 """
 
 import os
+import random
 
 import cocotb
 import numpy as np
 import pytest
 
-from models.harmonic import convert_mantissa, decision_exponents, plan
-from tb.harmonic.planner_bench import Code, Op, PlannerBench, arithmetic, exponent_params
-from tb.harmonic.planner_job import run_map
+from navcores.models.harmonic import convert_mantissa, decision_exponents, plan
+from navcores.sim.rtl.clock import start
+from navcores.sim.rtl.planner_driver import Code, Op, PlannerDriver, arithmetic, exponent_params
+from navcores.sim.rtl.planner_job import run_map
+from navcores.sim.rtl.runner import SIMULATORS, run
 from tb.harmonic.planner_maps import MAPS
-from tb.harmonic.serial import start
-from tb.runner import SIMULATORS, run
 
 PARAMS = dict(n=3, m=6, br=3, bc=3, p_max=14, depth=256)
 # name: (extra Planner parameters, [(map, seed, schedule, I, orders)], what the runs must exercise)
@@ -62,8 +65,9 @@ async def planner_exponents_against_model(dut):
     P = PARAMS
     bounds, runs, claims = SETS[os.environ["PLANNER_EXP_SET"]]
     await start(dut)
-    bench = PlannerBench(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"], exponents=True,
-                         e_max=bounds.get("e_max", 255))
+    drv = PlannerDriver(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"], exponents=True,
+                        e_max=bounds.get("e_max", 255), rng=random.Random(cocotb.RANDOM_SEED),
+                        idle=0.3, back_pressure=0.5)
     seen = dict.fromkeys(("repick", "coarsen", "converged", "not_converged", "at_e_max", "orders", "nodes",
                           "directions", "left", "right", "clamped"), 0)
     if ONLY and not bounds:
@@ -74,32 +78,34 @@ async def planner_exponents_against_model(dut):
         for r, c in goals:
             goal[r, c] = True
         # load, START, each order during its pass (the response proves it), read back
-        st, h, const = await run_map(bench, ob | res.unreachable, goal, arithmetic(sched), iters, events)
+        st, h, const = await run_map(drv, ob | res.unreachable, goal, arithmetic(sched), iters, events)
         tag = f"{name} seed {seed} schedule {sched} I={iters} orders {events}"
         keys = ("p", "converged", "sweeps", "block_iterations", "check_iterations", "clear_passes", "cycles")
         got = {k: int(st[k]) for k in keys}
         want = {k: int(getattr(res, k)) for k in keys}
-        dut._log.info(f"{tag}: RTL {got} exponents {bench.block_exponents.tolist()}")
+        dut._log.info(f"{tag}: RTL {got} exponents {drv.block_exponents.tolist()}")
         dut._log.info(f"{tag}: model {want} exponents {res.exponents.tolist()}")
-        assert bench.block_exponents.tolist() == res.exponents.tolist(), (
-            f"{tag}: exponents RTL {bench.block_exponents.tolist()} model {res.exponents.tolist()}")
+        assert drv.block_exponents.tolist() == res.exponents.tolist(), (
+            f"{tag}: exponents RTL {drv.block_exponents.tolist()} model {res.exponents.tolist()}")
         bad = np.argwhere((h != res.mantissa) | (const != res.padded_const))
         assert not len(bad), (f"{tag}: {len(bad)} nodes differ, first {tuple(bad[0])}\nRTL\n{h}\n"
                               f"model\n{res.mantissa}")
         assert got == want, f"{tag}: RTL {got} model {want}"
         seen["nodes"] += h.size
-        await _directions(dut, bench, res, tag, seen)
+        await _directions(dut, drv, res, tag, seen)
         seen["repick"] += int(res.exponents.max() > 0)
         seen["coarsen"] += int(any(lv["saturated"] for lv in res.levels[:-1]))
         seen["converged" if res.converged else "not_converged"] += 1
         seen["at_e_max"] += int((res.exponents == bounds.get("e_max")).sum())
         seen["orders"] += res.clear_passes
-    dut._log.info(f"compared: {seen}")
+    dut._log.info(f"compared: {seen}; {drv.commands} commands, {drv.cmd.idle} idle cycles, "
+                  f"{drv.resp.stalls} response stalls")
+    assert drv.cmd.idle > 0 and drv.resp.stalls > 0, "the host streams stalled"
     if not ONLY:
         assert all(seen[k] for k in (*claims, "nodes", "directions")), seen
 
 
-async def _directions(dut, bench, res, tag, seen):
+async def _directions(dut, drv, res, tag, seen):
     """DIRECTION where the exponent conversion matters, against the model."""
     n, m = res.block
     mant, E, p = res.mantissa, res.exponents, res.p
@@ -113,8 +119,8 @@ async def _directions(dut, bench, res, tag, seen):
                 seen["left" if s > 0 else "right"] += 1
                 seen["clamped"] += convert_mantissa(int(mant[rr, cc]), s, p)[1]
     for r, c in sorted(cells):
-        b, x, y = bench.locate(r, c)
-        resp = await bench.command(Op.DIRECTION, block=b, row=x, col=y)
+        b, x, y = drv.locate(r, c)
+        resp = await drv.command(Op.DIRECTION, block=b, row=x, col=y)
         t, (gr, gc), e = decision_exponents(mant, E, (n, m), p, r, c)
         got = (resp["code"], resp["triangle"], resp["g_row"], resp["g_col"], resp["value"], resp["exponent"])
         want = (Code.OK, t, gr, gc, mant[r, c], e)
@@ -130,11 +136,12 @@ def test_planner_exponents(sim, name):
 
 
 def test_exponent_option_is_checked_and_default_off():
-    from hdl.harmonic.planner import Planner, response_layout
+    from navcores.hdl.harmonic.planner import Planner, response_layout
+    from navcores.hdl.params import unelaborated
     with pytest.raises(ValueError, match="block_exponents=2: must be True or False"):
         Planner(3, 6, (3, 3), 14, 256, block_exponents=2)
     with pytest.raises(ValueError, match="headroom=15: leaves no mantissa bit at p_max=14"):
         Planner(3, 6, (3, 3), 14, 256, block_exponents=True, headroom=15)
-    Planner(3, 6, (3, 3), 14, 256, block_exponents=True, headroom=14)      # the bound itself
+    unelaborated(Planner(3, 6, (3, 3), 14, 256, block_exponents=True, headroom=14))     # the bound itself
     assert "exponent" not in dict(response_layout(14)) and "exponent" in dict(response_layout(14, exponents=True))
-    assert not Planner(3, 6, (3, 3), 14, 256).exponents
+    assert not unelaborated(Planner(3, 6, (3, 3), 14, 256)).exponents

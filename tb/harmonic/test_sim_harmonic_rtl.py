@@ -12,8 +12,8 @@ import json
 import numpy as np
 import pytest
 
-from sim.cli import main
-from tb.runner import SIMULATORS
+from navcores.sim.cli import main
+from navcores.sim.rtl.runner import SIMULATORS
 
 # (map shape before padding, block, schedule, I): the padded map is the
 # regression's 3x3 blocks of 3x6 at p_max 16.

@@ -9,28 +9,29 @@ import os
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
-from amaranth.hdl import Shape
+from amaranth.hdl import Const, Shape
 from amaranth.lib import wiring
 
-from hdl import emit
-from hdl.dflc.top import config_for, stream_latency
-from hdl.params import REQUIRED
-from models.dflc import WIDTH_LIMITS
-from tb.runner import ROOT, VERILATOR_WAIVERS, tool_env
+from navcores.hdl import emit
+from navcores.hdl.dflc.core import latency
+from navcores.hdl.dflc.top import config_for, stream_latency
+from navcores.hdl.params import REQUIRED, unelaborated
+from navcores.models.dflc import WIDTH_LIMITS
+from navcores.sim.rtl.runner import ROOT, VERILATOR_WAIVERS, tool_env
 
 # A small valid parameter set of every top (the required parameters and some).
 BASE = {
     "harmonic_node": {},
     "harmonic_counters": {"p_max": 6},
     "harmonic_cluster": {"depth": 64},
+    "harmonic_decision": {"p_max": 6},
+    "harmonic_border": {"n": 3, "m": 6, "br": 2, "bc": 2, "p_max": 6},
     "harmonic_block": {"n": 3, "m": 6, "p_max": 14, "depth": 64},
     "harmonic_planner": {"n": 3, "m": 6, "br": 1, "bc": 2, "p_max": 14, "depth": 64},
     "dflc_stream": {"fll": "table1"},
     "dflc_core": {"fll": "table1"},
-    "dflc_multi": {},
     "edt_cell": {"height": 5, "width": 7},
     "edt_array": {"height": 5, "width": 7},
     "edt_bfs": {"height": 5, "width": 7},
@@ -63,7 +64,25 @@ def test_list_shows_every_top_and_parameter():
     assert {p["name"]: p["min"] for p in tops["edt_bfs"]["parameters"]} == {"height": 3, "width": 3}
     text = cli("--list").stdout
     assert all(f"{name}:" in text for name in emit.TOPS)
-    assert "p_max: int, >= 2, required" in text
+    assert "p_max: int, 2..1048574, required" in text
+
+
+def test_list_is_whole_and_plain():
+    """--list: every top's description is its docstring's whole first
+    paragraph, without Sphinx markup; every int parameter of the harmonic
+    cores has an upper bound, and the bounds' reasons are printed."""
+    tops = emit.listing()
+    for name, t in tops.items():
+        for text in [t["doc"]] + [p["doc"] for p in t["parameters"]]:
+            assert not re.search(r"``|:[a-z]+:`|`", text), (name, text)
+        assert t["doc"].rstrip().endswith((".", ")")), (name, t["doc"])     # a whole sentence
+    for name in ("harmonic_counters", "harmonic_cluster", "harmonic_block", "harmonic_planner"):
+        for p in tops[name]["parameters"]:
+            assert p["type"] != "int" or "max" in p, (name, p["name"])
+    text = emit.main.__module__ and cli("--list").stdout
+    for reason in ("18 Mbit, more block RAM than a whole Artix-7 200T", "at most 2**18 blocks",
+                   "the paper's largest block (48x96, Table 3)", "about 0.8 KB each, measured"):
+        assert reason in " ".join(text.split()), reason
 
 
 def test_every_parameter_is_declared():
@@ -109,6 +128,7 @@ BAD = [
     (["dflc_stream", "op_sz=8"], "op_sz = 8 < MF_op_sz = 12"),
     (["dflc_stream", "div=fast"], "div_type = 'fast': expected one of"),
     (["dflc_stream", "fll=nosuch"], "fll = 'nosuch': no such .fll"),
+    (["dflc_stream", "fll=my_rules.fll"], "fll = 'my_rules.fll': no such file"),      # not my_rules.fll.fll
     (["harmonic_cluster", "depth=64", "p_max=63"], "p_max=63 needs words of p_max+2=65 bits"),
     (["harmonic_block", "n=4", "m=6"], "block rows n=4: must be a positive multiple of 3"),
     (["harmonic_block", "m=6"], "missing parameter n"),
@@ -116,6 +136,18 @@ BAD = [
     (["edt_bfs", "height=2", "width=8"], "array height 2: must be an integer in 3..256"),
     (["edt_cell", "height=300", "width=8"], "array height 300: must be an integer in 1..256"),
     (["harmonic_counters", "p_max"], "parameters are name=value"),
+    # issue 20's probes: unbounded parameters get bounds with their reasons
+    (["harmonic_block", "n=3", "m=6", "depth=1000000000"], "depth=1000000000: must be an integer in 1..1048576 "
+                                                         "(a cluster RAM of 2**20 words x 18 bits is 18 Mbit"),
+    (["harmonic_planner", "br=1000", "bc=1000", "depth=1048576", "p_max=2"],
+     "a map of 1000x1000 = 1000000 blocks at p_max=2 needs"),
+    (["harmonic_planner", "br=300000"], "BR=300000 must be an integer in 1..262144"),
+    (["harmonic_block", "n=96", "m=192"], "a 96x192 block is 1024 clusters; at most 256 (elaborating takes about 10 MB"),
+    (["harmonic_block", "n=48", "m=96", "depth=32768"], "256 clusters of 32768 words are 8388608 RAM words"),
+    (["harmonic_counters", "p_max=2000000"], "p_max must be an integer in 2..1048574"),
+    (["harmonic_planner", "e_max=70000", "block_exponents=1"], "e_max=70000: must be an integer in 1..65535"),
+    (["harmonic_cluster", "depth=2000000"], "RAM depth must be an integer in 4..1048576"),
+    (["nosuch_top"], "unknown top 'nosuch_top'"),
 ]
 
 
@@ -131,32 +163,45 @@ def test_bad_parameters_subprocess(args, message):
 def test_bad_parameters(capsys, tmp_path):
     n = 0
     for args, message in BAD:
-        with pytest.raises(SystemExit) as e:
-            emit.main([*args, "-o", str(tmp_path)])
+        code = emit.main([*args, "-o", str(tmp_path / "out")])
         err = capsys.readouterr().err.strip().splitlines()
-        assert e.value.code == 2 and len(err) == 1 and message in err[0], (args, err)
+        assert code == 2 and len(err) == 1 and message in err[0], (args, err)
         n += 1
-    assert n == len(BAD) and not any(tmp_path.iterdir())      # nothing written
+    assert n == len(BAD) and not any(tmp_path.iterdir())      # nothing written, no folder made
 
+
+def test_output_folder_probes(capsys, tmp_path):
+    """issue 20: -o an existing file, -o and --manifests where nothing can be
+    written, a lone unknown word (once taken as the output folder): one line,
+    exit status 2, nothing written, before any work."""
+    (tmp_path / "file").write_text("keep")
+    for args, message in [
+        (["harmonic_node", "-o", str(tmp_path / "file")], "is a file, not a folder"),
+        (["harmonic_node", "-o", "/proc/x"], "-o /proc/x: cannot write there"),
+        (["harmonic_node", "-o", str(tmp_path / "file" / "sub")], "cannot write there"),
+        (["--manifests", "/proc/x"], "--manifests /proc/x: cannot write there"),
+        (["--manifests", str(tmp_path / "file")], "is a file, not a folder"),
+        (["nosuch_top"], "unknown top 'nosuch_top'; tops: harmonic_node"),
+        (["harmonic_node", "--frobnicate"], "unrecognized arguments: --frobnicate"),
+    ]:
+        assert emit.main(args) == 2, args
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and message in err[0] and err[0].startswith("python -m hdl.emit: error:"), (args, err)
+    assert (tmp_path / "file").read_text() == "keep" and sorted(p.name for p in tmp_path.iterdir()) == ["file"]
+    assert not (ROOT / "nosuch_top").exists()
+    # a folder is still taken as the legacy form's output folder, created if missing (make verilog)
+    assert emit._is_folder("build/verilog") and emit._is_folder(str(tmp_path)) and not emit._is_folder("nosuch")
+
+
+N3_PROD = ROOT / "tb" / "dflc" / "fll" / "n3_prod.fll"     # a test fixture: hdl takes it by path
 
 # Non-default parameter sets: manifest against the signature and the Verilog, then lint.
 SETS = [
     ("dflc_stream", {"ip_sz": 10, "op_sz": 14, "div": "array", "par": 1, "cpr9_no": 3}),
+    ("dflc_core", {"fll": str(N3_PROD), "div": "array"}),  # an always_ready stream (no ready port)
     ("harmonic_cluster", {"depth": 64, "p_max": 30}),
     ("edt_bfs", {"height": 5, "width": 7}),
 ]
-
-
-def _verilog_ports(text, module):
-    """The port list of ``module`` (an independent reading of the emitted Verilog)."""
-    body = text[text.index(f"module {module}("):]
-    body = body[:body.index("endmodule")]
-    ports = {}
-    for line in body.splitlines():
-        m = re.match(r"\s*(input|output)\s+(?:signed\s+)?(?:\[(\d+):0\])?\s*([\w$\\]+)\s*;", line)
-        if m:
-            ports[m[3]] = (m[1], int(m[2]) + 1 if m[2] else 1)
-    return ports
 
 
 @pytest.mark.parametrize("name,params", SETS, ids=[s[0] for s in SETS])
@@ -170,16 +215,16 @@ def test_manifest_and_lint(name, params, tmp_path):
     assert man["module"] == module and man["top"] == name
     assert all(man["parameters"][k] == v for k, v in params.items())
 
-    # every port of the signature, with its direction and width
-    comp = emit.TOPS[name](**params)
-    comp._MustUse__silence = True
+    # every port of the signature, with its direction and width (a constant
+    # member, an always_ready stream's ready, is no port)
+    comp = unelaborated(emit.TOPS[name](**params))
     sig_ports = {"__".join(map(str, path)): ("input" if member.flow == wiring.Flow.In else "output",
                                              Shape.cast(value.shape()).width)
-                 for path, member, value in comp.signature.flatten(comp)}
+                 for path, member, value in comp.signature.flatten(comp) if not isinstance(value, Const)}
     man_ports = {p["name"]: (p["direction"], p["width"]) for p in man["ports"]}
     assert man_ports == sig_ports
     # ... which are the Verilog module's ports, besides the clock and the reset
-    vports = _verilog_ports(vfile.read_text(), module)
+    vports = emit.verilog_ports(vfile.read_text(), module)
     assert vports.pop("clk") == ("input", 1) and vports.pop("rst") == ("input", 1)
     assert vports == man_ports
     assert man["clock"]["name"] == "clk" and man["reset"] == {**man["reset"], "name": "rst", "synchronous": True}
@@ -189,8 +234,11 @@ def test_manifest_and_lint(name, params, tmp_path):
     assert streams == set(man["streams"]) and bool(streams) == (name != "harmonic_cluster")
     for s in streams:
         roles = {p["role"]: p for p in man["ports"] if p.get("stream") == s}
-        assert set(roles) == {"valid", "ready", "payload"}
-        assert roles["valid"]["direction"] != roles["ready"]["direction"]
+        always_ready = man["streams"][s]["always_ready"]
+        assert set(roles) == {"valid", "payload"} | ({"ready"} if not always_ready else set())
+        assert man["streams"][s]["ready"] == (None if always_ready else roles["ready"]["name"])
+        if not always_ready:
+            assert roles["valid"]["direction"] != roles["ready"]["direction"]
         assert roles["payload"]["direction"] == roles["valid"]["direction"]
         bits = sorted((f["lsb"], f["msb"]) for f in roles["payload"]["fields"])
         assert bits[0][0] == 0 and bits[-1][1] == roles["payload"]["width"] - 1
@@ -206,6 +254,10 @@ def test_manifest_and_lint(name, params, tmp_path):
         assert [(f["lsb"], f["msb"]) for f in payload["fields"]] == [(0, 9), (10, 19)]
     elif name == "harmonic_cluster":
         assert t["iteration_cycles"] == "p+2"
+    elif name == "dflc_core":             # n = 3: 8 cycles per sample; no back-pressure on o_stream
+        assert t["initiation_interval_cycles"] == 8
+        assert t["latency_cycles"] == latency(config_for(fll=str(N3_PROD), div="array"))
+        assert man["streams"]["o_stream"]["always_ready"] and not man["streams"]["i_stream"]["always_ready"]
     else:
         assert t["load_cycles"] == 7 and t["readout_cycles"] == 35
 

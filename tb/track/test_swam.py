@@ -19,8 +19,8 @@ import math
 import numpy as np
 import pytest
 
-from models.swam import Swam, SwamError
-from tb.runner import seed_from_env
+from navcores.models.swam import Swam, SwamError
+from navcores.sim.rtl.runner import seed_from_env
 
 
 def random_chain(rng, n=None, spread=None):
@@ -72,7 +72,7 @@ def test_round_trip():
         strips_seen |= sum(1 << int(k) for k in set(m.strip_of_x(x)) if k in (0, m.n))
         # heading too
         tc = rng.uniform(-math.pi, math.pi, 50)
-        x2, y2, tc2, _ = m.psi_inv(m.psi((x, y, tc)))
+        _, _, tc2, _ = m.psi_inv(m.psi((x, y, tc)))
         assert np.abs(np.angle(np.exp(1j * (tc2 - tc)))).max() < 1e-9
         checked += 150
     assert checked == 200 * 150

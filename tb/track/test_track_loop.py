@@ -18,10 +18,10 @@ import math
 import numpy as np
 import pytest
 
-from models.swam import Swam
-from models.tracker import ClosedLoop, TrackerParams, canonical_inputs, distance_to_chain, run_model
-from sim.tracking import load_dflc
-from tb.runner import seed_from_env
+from navcores.models.swam import Swam
+from navcores.models.tracker import ClosedLoop, TrackerParams, canonical_inputs, distance_to_chain, run_model
+from navcores.sim.rtl.runner import seed_from_env
+from navcores.sim.tracking import load_dflc
 
 LINE = Swam([(0.0, 0.0), (1.0, 0.5)])
 _t = np.linspace(0, 1, 30)
@@ -99,13 +99,25 @@ def test_slip_drift(dflc):
 
 
 def test_params_checked(dflc):
-    with pytest.raises(ValueError, match="lookahead must be > 0"):
-        TrackerParams(lookahead=0)
+    """The run's ranges live in models/tracker.py (check_run), with reasons;
+    a start past the end of a single chain is refused (nothing to track)."""
+    from navcores.models.tracker import MAX_PERIODS, RangeError
+    for kw, match in ((dict(lookahead=0), r"lookahead 0: must be in \(0, 1\]"),
+                      (dict(speed=0.001), r"speed 0.001: must be in \[0.008, 1\] \(m/s: the Khepera II"),
+                      (dict(speed=float("nan")), "speed nan: must be a finite number"),
+                      (dict(kappa_fs=-1), "kappa_fs -1")):
+        with pytest.raises(RangeError, match=match):
+            TrackerParams(**kw)
+    with pytest.raises(ValueError, match="past the end of the path"):
+        ClosedLoop(CURVE, dflc, start=(5.0, 0.0, 0.0))
+    long = Swam([[0, 0], [3e4, 1]])
+    with pytest.raises(ValueError, match=f"may need 144002800 control periods of 12.5 ms .a 3e.04 m path.* at most {MAX_PERIODS}"):
+        ClosedLoop(long, dflc)
 
 
 def test_fired_rules(dflc):
     """The rule count of the demo's summary: exact at MF peaks, and a strict subset of Table 1 in a run."""
-    from models.tracker import fired_rules
+    from navcores.models.tracker import fired_rules
     assert len(fired_rules(dflc, dflc.encode([[0.0, 0.0]]))) == 1            # both inputs on a peak
     assert len(fired_rules(dflc, dflc.encode([[22.5, 0.0]]))) == 2           # one between two MFs
     assert len(fired_rules(dflc, dflc.encode([[22.5, -22.5]]))) == 4

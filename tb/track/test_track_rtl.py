@@ -6,7 +6,7 @@ regression's own build of the paper's Table 1 controller
 so it costs no extra simulator build:
 
 * ``rtl_closed_loop``: the whole closed loop runs inside the simulator
-  (sim/track_rtl.py ``closed_loop``: odometry -> Ψ⁻¹ -> φ1, φ2 -> DFLC RTL,
+  (sim/rtl/track_job.py ``closed_loop``: odometry -> Ψ⁻¹ -> φ1, φ2 -> DFLC RTL,
   one sample per control period -> Ω -> eq. 14 -> robot), on a short curved
   chain from off the path, then the same job with the golden model
   (models.tracker.run_model); every period's output code and zero flag must
@@ -31,15 +31,14 @@ import cocotb
 import numpy as np
 import pytest
 
-from tb.runner import SIMULATORS, run
+from navcores.sim.rtl.runner import SIMULATORS, run
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
 def short_job():
-    from models.swam import Swam
-    from models.tracker import TrackerParams
-    from sim.tracking import loop_job
+    from navcores.models.swam import Swam
+    from navcores.models.tracker import TrackerParams, loop_job
     t = np.linspace(0, 1, 12)
     chain = Swam(np.stack([0.35 * t, 0.05 * np.sin(2 * math.pi * t)], 1))
     # 0.1 m/s over ~0.4 m: about 300 control periods, started 2 cm off and turned away
@@ -48,9 +47,9 @@ def short_job():
 
 @cocotb.test()
 async def rtl_closed_loop(dut):
-    from models.tracker import run_model
-    from sim.track_rtl import closed_loop
-    from sim.tracking import load_dflc, loop_from_job
+    from navcores.models.tracker import loop_from_job, run_model
+    from navcores.sim.rtl.track_job import closed_loop
+    from navcores.sim.tracking import load_dflc
 
     job = short_job()
     rtl = await closed_loop(dut, job)
@@ -74,9 +73,9 @@ def test_track_rtl(sim, tmp_path):
     if sim != "icarus":
         return
     # the command's --engine path (a subprocess)
-    from models.swam import Swam
-    from models.tracker import TrackerParams
-    from sim.tracking import read_path_csv, run_loop
+    from navcores.models.swam import Swam
+    from navcores.models.tracker import TrackerParams
+    from navcores.sim.tracking import read_path_csv, run_loop
     line = ROOT / "paths" / "line.csv"
     ref = run_loop([Swam(read_path_csv(line))], "model", TrackerParams(speed=1.0),
                    start=(0.0, 0.02, math.radians(10)))

@@ -1,8 +1,8 @@
 """cocotb job: one EDT/BFS job on the emitted core (hdl/edt_bfs/edt_bfs.py).
 
 Reads the job (image, goals, start, d_far) from the JSON file named by
-$EDT_JOB, runs it through tb/edt_bfs/edt_bench.py and writes the decoded
-results to $EDT_RESULT.  It checks nothing itself: sim/edt.py compares the
+$EDT_JOB, runs it through :class:`.edt_bfs_driver.EdtBfsDriver` and writes the
+decoded results to $EDT_RESULT.  It checks nothing itself: sim/edt.py compares the
 result with the golden model.
 """
 
@@ -13,11 +13,11 @@ from pathlib import Path
 import cocotb
 import numpy as np
 
-from tb.edt_bfs.edt_bench import EdtBfsDriver
+from .edt_bfs_driver import EdtBfsDriver
 
 
 @cocotb.test()
-async def edt_job(dut):
+async def edt_bfs_job(dut):
     job = json.loads(Path(os.environ["EDT_JOB"]).read_text())
     img = np.array(job["obstacle"], dtype=bool)
     h, w = img.shape

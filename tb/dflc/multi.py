@@ -1,13 +1,22 @@
-"""Test top: several DflcStream configurations side by side in one design."""
+"""Test top: several DflcStream configurations side by side in one design.
+
+Not one of hdl.emit's tops: the regression builds it through the runner's
+``factory`` (``run("dflc_multi", {"set": "regress"}, sim, ..., factory=DflcMulti)``,
+module ``dflc_multi_setregress``).  Its controllers are the test fixtures in
+tb/dflc/fll/, given by path.
+"""
+
+from pathlib import Path
 
 from amaranth.hdl import Module
 from amaranth.lib import wiring
-from amaranth.lib.wiring import Flow
 
-from ..params import Param, check
-from .top import DflcStream, config_for, split_params
+from navcores.hdl.dflc.top import DflcStream, config_for, split_params
+from navcores.hdl.params import Param, check
 
 __all__ = ["DflcMulti", "SETS"]
+
+FIXTURES = Path(__file__).resolve().parent / "fll"
 
 # Named sets of configurations; each key prefixes its instance's ports
 # (``n3_i_stream__valid`` ...).  "regress" covers, between them, the four
@@ -44,6 +53,9 @@ SETS = {
                "cpr7_no": 1, "cpr8_no": 4, "cpr9_no": 4},         #   cpr8 > cpr7, the back at 4; L 36
     },
 }
+# The stems above name the fixtures tb/dflc/fll/<stem>.fll, which hdl takes by path.
+for _params in (p for configs in SETS.values() for p in configs.values()):
+    _params["fll"] = str(FIXTURES / f"{_params['fll']}.fll")
 
 
 class DflcMulti(wiring.Component):
@@ -75,18 +87,6 @@ class DflcMulti(wiring.Component):
         m = Module()
         for key, top in self.tops.items():
             m.submodules[key] = top
-            for name, member in top.signature.members.items():
-                outer = getattr(self, f"{key}_{name}")
-                if member.flow == Flow.In:
-                    m.d.comb += _connect_in(outer, getattr(top, name))
-                else:
-                    m.d.comb += _connect_out(outer, getattr(top, name))
+            for name in top.signature.members:     # each instance's streams pass through
+                wiring.connect(m, wiring.flipped(getattr(self, f"{key}_{name}")), getattr(top, name))
         return m
-
-
-def _connect_in(outer, inner):
-    return [inner.payload.eq(outer.payload), inner.valid.eq(outer.valid), outer.ready.eq(inner.ready)]
-
-
-def _connect_out(outer, inner):
-    return [outer.payload.eq(inner.payload), outer.valid.eq(inner.valid), inner.ready.eq(outer.ready)]

@@ -1,6 +1,6 @@
 """Simulation speed of any top: clock cycles per wall-clock second.
 
-A cocotb module the benchmark runs through :func:`tb.runner.run` on any top:
+A cocotb module the benchmark runs through :func:`.runner.run` on any top:
 it holds ``rst`` for two cycles, then lets the clock run for ``$SIMSPEED_CYCLES``
 cycles with every other input at 0 (the clock is cocotb's GPI clock and the
 wait is one Timer, so no Python runs per cycle), and writes ``{"cycles": n, "seconds": s}``
@@ -18,17 +18,19 @@ import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, Timer
 
+from .clock import PERIOD_NS
+
 
 @cocotb.test()
 async def simspeed(dut):
     cycles = int(os.environ.get("SIMSPEED_CYCLES", "20000"))
-    cocotb.start_soon(Clock(dut.clk, 10, unit="ns").start())
+    cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
     if hasattr(dut, "rst"):
         dut.rst.value = 1
         await ClockCycles(dut.clk, 2)
         dut.rst.value = 0
     t0 = time.perf_counter()
-    await Timer(cycles * 10, unit="ns")    # one wake-up: Python is not in the loop
+    await Timer(cycles * PERIOD_NS, unit="ns")    # one wake-up: Python is not in the loop
     seconds = time.perf_counter() - t0
     with open(os.environ["SIMSPEED_RESULT"], "w") as f:
         json.dump({"cycles": cycles, "seconds": seconds}, f)

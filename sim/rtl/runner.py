@@ -11,7 +11,7 @@ import os
 import random
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]       # the source tree (sim/rtl/runner.py)
 BUILD = ROOT / "build"
 SIMULATORS = ("icarus", "verilator")
 TIMESCALE = ("1ns", "1ps")
@@ -49,16 +49,17 @@ def seed_from_env(default=12345):
     return random.randrange(1 << 31) if text == "random" else int(text)
 
 
-def run(name, params, sim, test_module, env=None, seed=None, log_file=None):
+def run(name, params, sim, test_module, env=None, seed=None, log_file=None, factory=None):
     """Emit ``name`` at ``params``, build it for ``sim`` and run ``test_module``.
 
     ``env`` is passed to the test (its parameters); ``log_file`` takes the
-    simulator's output instead of the console.  Fails unless at least one test
-    ran and none failed.
+    simulator's output instead of the console; ``factory`` builds a top that
+    is not one of hdl.emit's (a test's own, e.g. tb/dflc/multi.py), named
+    ``name``.  Fails unless at least one test ran and none failed.
     """
     os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
     tool_env()
-    from hdl.emit import top_name
+    from navcores.hdl.emit import top_name
 
     if sim not in SIMULATORS:
         raise ValueError(f"unknown simulator {sim!r}; expected one of {SIMULATORS}")
@@ -67,7 +68,7 @@ def run(name, params, sim, test_module, env=None, seed=None, log_file=None):
     # Parallel pytest workers (make test runs pytest-xdist) may ask for the same
     # build at once: the first builds it, the others wait and reuse it.
     with _locked(build_dir):
-        return _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir)
+        return _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir, factory)
 
 
 @contextlib.contextmanager
@@ -81,14 +82,14 @@ def _locked(build_dir):
             fcntl.flock(lock, fcntl.LOCK_UN)
 
 
-def _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir):
+def _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir, factory):
     from cocotb_tools.check_results import get_results
     from cocotb_tools.runner import get_runner
 
-    from hdl.emit import emit
+    from navcores.hdl.emit import emit
 
     waves = os.environ.get("WAVES") == "1"          # WAVES=1: dump a waveform
-    source = emit(name, params, build_dir)
+    source = emit(name, params, build_dir, factory=factory)
     runner = get_runner(sim)
     runner.build(
         sources=[source],

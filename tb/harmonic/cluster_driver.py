@@ -1,6 +1,6 @@
 """Drive a harmonic Cluster in simulation: host port, border words, iterations.
 
-Used by the cluster regression (tb/harmonic/test_cluster.py).  The bench
+Used by the cluster regression (tb/harmonic/test_cluster.py).  The driver
 emulates the border nodes around the 3x6 cluster: fixed words stored one bit per address and read, with one
 cycle of RAM latency, at the addresses the cluster presents (cntR for the
 LSB-first streams, r_cnt for the MSB-first ones).
@@ -10,8 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from hdl.harmonic.cluster import COLS, ROWS
-from models.harmonic import from_ram_image
+from navcores.hdl.harmonic.cluster import COLS, ROWS
+from navcores.models.harmonic import from_ram_image
 from tb.harmonic.serial import SerialWord, next_cycle
 
 
@@ -44,7 +44,7 @@ class Done:
     checked: bool
 
 
-class ClusterBench:
+class ClusterDriver:
     def __init__(self, dut, p, ring):
         """``ring``: (5, 8) array whose outer ring holds the border values."""
         self.dut, self.p = dut, p

@@ -5,7 +5,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sim.mapfile import MapFormatError, load_map, load_scenarios
+from navcores.models.maps import MapFormatError, load_map, load_scenarios
 
 MAPS = Path(__file__).resolve().parents[2] / "maps"
 
@@ -66,7 +66,7 @@ def test_scenario_checks(tmp_path):
 def test_ascii_and_images_agree(tmp_path):
     from PIL import Image
 
-    from sim.mapfile import load_grid
+    from navcores.models.maps import load_grid
     ref = load_map(MAPS / "room-32-32-4.map")
     (tmp_path / "m.txt").write_text("\n".join("".join("#" if v else "." for v in row) for row in ref) + "\n\n")
     img = Image.fromarray(np.where(ref, 0, 255).astype(np.uint8))
@@ -85,7 +85,7 @@ def test_ascii_and_images_agree(tmp_path):
     ("e.xyz", "", "unknown map format"),
 ])
 def test_bad_grids(tmp_path, name, text, message):
-    from sim.mapfile import load_grid
+    from navcores.models.maps import load_grid
     (tmp_path / name).write_text(text)
     with pytest.raises(MapFormatError, match=message):
         load_grid(tmp_path / name)

