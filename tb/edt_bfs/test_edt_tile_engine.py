@@ -31,10 +31,10 @@ import pytest
 from cocotb.triggers import ReadOnly, RisingEdge
 
 from images import FAMILIES, free_cells
-from models.edt_bfs_tiled import plan_path_tiled
-from sim.mapfile import load_grid
-from tb.runner import run, seed_from_env
-from tile_driver import TileEngineDriver, compare
+from navcores.models.edt_bfs_tiled import plan_path_tiled
+from navcores.models.maps import load_grid
+from navcores.sim.rtl.edt_tile_driver import TileEngineDriver, compare
+from navcores.sim.rtl.runner import run, seed_from_env
 
 T_R, T_C, MAX_H, MAX_W = (int(v) for v in os.environ.get("TILE_PARAMS", "8,8,64,64").split(","))
 JOBS = int(os.environ.get("TILE_JOBS", "6"))
@@ -57,11 +57,12 @@ def _model(img, goals, start, dfar, readout=True):
 
 
 async def _check(drv, img, goals, start, dfar, readout=True, **kw):
-    """One job on the engine and the model; everything compared (cycles unless stalled)."""
+    """One job on the engine and the model; everything compared, the cycles
+    too (the model's plus what the stalls set by the caller cost)."""
     model = _model(img, goals, start, dfar, readout)
     raw = await drv.job(img, goals, start, dfar, readout=readout, **kw)
     got = drv.decode(raw, img.shape, readout)
-    n = compare(got, model, cycles="rng" not in kw, readout=readout)
+    n = compare(got, model, readout=readout)
     assert raw["cmd_err"] == raw["start_err"] == raw["goal_err"] == 0
     return n, model, raw
 
@@ -99,14 +100,19 @@ async def bundled_and_random(dut):
     # thin maps along the RAM's full width and height, then random sizes up to the mid size
     big = (MAX_H, MAX_W) if LARGE else MID
     shapes = [(_partial(2, big[0], T_R), _partial(2, big[1] * 3 // 4, T_C)), (1, MAX_W), (MAX_H, 1)]
+    stalled = 0
     for n in range(JOBS):
         shape = shapes[n] if n < len(shapes) else tuple(int(v) for v in rng.integers(1, [MID[0] + 1, MID[1] + 1]))
         img, start, goals = _case(rng, shape)
-        c, model, _ = await _check(drv, img, goals, start, int(rng.integers(0, 2)))
+        drv.set_stalls(rng, 0.3, 0.3) if n % 2 else drv.set_stalls()    # every other job stalled
+        c, model, raw = await _check(drv, img, goals, start, int(rng.integers(0, 2)))
         compared, visits, paths = compared + c, visits + model.tile_visits, paths + model.path_found
         partial += shape[0] % T_R != 0 and shape[1] % T_C != 0
-    dut._log.info(f"{compared} values compared, {visits} tile visits, {paths} paths, {partial} partial maps")
-    assert visits > 5 * JOBS and paths >= 2 and partial >= 1
+        stalled += raw["starved"] > 0 and raw["stalls"] > 0
+    drv.set_stalls()
+    dut._log.info(f"{compared} values compared, {visits} tile visits, {paths} paths, {partial} partial maps, "
+                  f"{stalled} jobs stalled")
+    assert visits > 5 * JOBS and paths >= 2 and partial >= 1 and stalled >= JOBS // 2 - 1
 
 
 @cocotb.test()
@@ -166,13 +172,14 @@ async def changed_environment(dut):
 async def back_pressure(dut):
     """Random idle cycles on the map and goal streams, back-pressure on the results."""
     drv, rng = await _setup(dut)
-    for n, (pv, pr) in enumerate(((0.6, 0.4), (1.0, 0.3), (0.3, 1.0))):
+    for n, (idle, bp) in enumerate(((0.4, 0.6), (0.0, 0.7), (0.7, 0.0))):
         shape = (MID[0], MAX_W) if n == 1 else (MID[0] // 2 + 1, MID[1])
         img, start, goals = _case(rng, shape, "random")
-        model = _model(img, goals, start, 0)
-        raw = await drv.job(img, goals, start, 0, rng=rng, p_valid=pv, p_ready=pr)
-        compare(drv.decode(raw, img.shape), model, cycles=False)
-        assert raw["cycles"] > model.cycles
+        drv.set_stalls(rng, idle, bp)
+        _, model, raw = await _check(drv, img, goals, start, 0)
+        assert (raw["starved"] > 0) == (idle > 0) and (raw["stalls"] > 0) == (bp > 0)
+        assert raw["cycles"] == model.cycles + raw["starved"] + raw["stalls"] > model.cycles
+    drv.set_stalls()
 
 
 async def _idle_after_reset(drv):
