@@ -81,11 +81,17 @@ def job(name):
     return obstacle, goal, start
 
 
-def fit_result(array, ram=RAM, part=PART):
-    """The fit flow's JSON for the tile engine with ``array`` and ``ram`` on ``part``, or None."""
+def fit_result(array, ram=RAM, part=PART, top="edt_tile_engine"):
+    """The fit flow's JSON for ``top`` (the tile engine, or its cell alone: ``edt_tile_cell``, from
+    scripts/tile_engine_size.py --cell-fit) with ``array`` and ``ram`` on ``part``, or None."""
     params = {"t_r": array[0], "t_c": array[1], "max_h": ram[0], "max_w": ram[1]}
-    path = ROOT / "build" / "fit" / f"{top_name('edt_tile_engine', params)}--{part}.json"
+    path = ROOT / "build" / "fit" / f"{top_name(top, params)}--{part}.json"
     return json.loads(path.read_text()) if path.exists() else None
+
+
+def cell_bound(arrays):
+    """The cell alone's fit (any of ``arrays``: the cell's widths follow the RAM), or None."""
+    return next((c for c in (fit_result(a, top="edt_tile_cell") for a in (*arrays, (8, 8))) if c), None)
 
 
 def measure(name, arrays=ARRAYS, repeats=3):
@@ -95,9 +101,11 @@ def measure(name, arrays=ARRAYS, repeats=3):
     bits = state_bits(h, w)
     ebr = ram_blocks(h, w, 8)["blocks"]
     rows = []
+    cell = cell_bound(arrays)
     for array in arrays:
         fit = fit_result(array)
         mhz = fit["fmax_mhz"] if fit and fit["fits"] else None
+        bound = cell["fmax_mhz"] if cell and not mhz else None     # the engine's clock is at most the cell's
         t0, c0 = time.perf_counter(), time.process_time()
         res = plan_path_tiled(obstacle, [goal], start, DFAR, array=array)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
@@ -112,7 +120,8 @@ def measure(name, arrays=ARRAYS, repeats=3):
             "cycles_split": st["cycles"], "model_wall_s": wall, "model_cpu_s": cpu,
             "sw_seconds": sw["sw_seconds"], "sw_edt_s": sw["edt_seconds"], "sw_bfs_s": sw["bfs_csgraph_seconds"],
             "break_even_mhz": res.cycles / sw["sw_seconds"] / 1e6,
-            "mhz": mhz, "hw_seconds": res.cycles / (mhz * 1e6) if mhz else None,
+            "mhz": mhz or bound, "bound": bool(bound),
+            "hw_seconds": res.cycles / ((mhz or bound) * 1e6) if (mhz or bound) else None,
             "fit": fit, "in_ram": h <= RAM[0] and w <= RAM[1],
             "cycles_per_visit": (st["cycles"]["edt"] + st["cycles"]["bfs"]) / max(1, st["visits_edt"] + st["visits_bfs"]),
             "state_bits": bits["total"], "ebr": ebr,
@@ -133,9 +142,10 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
     ]
     for r in rows:
         c = r["cycles_split"]
-        clock = f"{r['mhz']:.1f} MHz" if r["mhz"] else "no fit result"
-        speedup = f"{r['sw_seconds'] / r['hw_seconds']:.1f}x" if r["hw_seconds"] else "-"
-        when = (f"{r['hw_seconds'] * 1e3:.3f} ms" + ("" if r["in_ram"] else " (external RAM)")
+        le, ge = ("<= ", ">= ") if r["bound"] else ("", "")
+        clock = f"{le}{r['mhz']:.1f} MHz" if r["mhz"] else "no fit result"
+        speedup = f"{le}{r['sw_seconds'] / r['hw_seconds']:.1f}x" if r["hw_seconds"] else "-"
+        when = (f"{ge}{r['hw_seconds'] * 1e3:.3f} ms" + ("" if r["in_ram"] else " (external RAM)")
                 if r["hw_seconds"] else "-")
         lines.append(
             f"| {r['map']} ({r['shape'][0]}x{r['shape'][1]}) | {r['array'][0]}x{r['array'][1]} | {r['levels']} "
@@ -148,11 +158,23 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
             f"| {speedup} | {r['break_even_mhz']:.1f} MHz | {r['model_wall_s']:.2f} ({r['model_cpu_s']:.2f}) |")
     lines += ["", f"The paper's own figure for its map: {PAPER_JOBS['edt_job']}.", ""]
     fits = {tuple(r["array"]): r["fit"] for r in rows}
+    cell = cell_bound(arrays)
     lines += [f"| tile engine on the {PART} (RAM {RAM[0]}x{RAM[1]}) | fits | LUT4 | FF | EBR | DSP | clock "
               "| critical path |", "|---|---|---:|---:|---:|---:|---|---|"]
+    if cell:
+        cp = cell["critical_path"]
+        lines.append(f"| one cell alone ({cell['generator']}) | - | {cell['resources']['lut4']:,} "
+                     f"| {cell['resources']['ff']} | 0 | 0 | {cell['fmax_mhz']:.1f} MHz (a bound on the engine's) "
+                     f"| {cp['from']['cell']} -> {cp['to']['cell']} ({cp['to']['port']}), {cp['delay_ns']} ns, "
+                     f"{cp['logic_levels']} levels |")
+    luts = cell["utilisation"]["TRELLIS_COMB"][1] if cell else None
     for array, fit in fits.items():
         if fit is None:
-            lines.append(f"| {array[0]}x{array[1]} | not run | | | | | | |")
+            est = (f"not run; {array[0] * array[1]} cells x {cell['resources']['lut4']:,} = "
+                   f"{array[0] * array[1] * cell['resources']['lut4']:,} LUT4 of {luts:,}: "
+                   f"{'no' if array[0] * array[1] * cell['resources']['lut4'] > luts else 'perhaps'}"
+                   if cell else "not run")
+            lines.append(f"| {array[0]}x{array[1]} | {est} | | | | | | |")
             continue
         cp = fit.get("critical_path") or {}
         path = (f"{cp['from']['cell']} -> {cp['to']['cell']}, {cp.get('delay_ns', '?')} ns, "

@@ -148,7 +148,8 @@ def synth(spec):
 def cell_fit(spec, part="lfe5u-85f", progress=None):
     """One TileCell (the widths of ``spec``'s engine) alone in the fit flow's
     registered harness (scripts/fmax.py: every input from a register, every
-    output into one) on ``part``, seed 1: its LUT4 and clock.  The clock is
+    output into one) on ``part``, seed 1: its LUT4 and clock, written to
+    build/fit/edt_tile_cell_<params>--<part>.json.  The clock is
     an upper bound on the engine's, which adds the wires between cells, the
     halo and the array-wide OR of ``upd``; the critical path names the cell's
     own logic that bounds it."""
@@ -165,7 +166,12 @@ def cell_fit(spec, part="lfe5u-85f", progress=None):
         src.write_text(text)
     _, syn, cells = fmax.synthesize("edt_tile_cell", p, prt.synth, work, progress, source=src)
     r = fmax.place(syn.dir / "netlist.json", prt, 1, progress)
-    return {"params": p, "part": prt.name, "resources": fmax.resources(prt.family, cells), **r}
+    out = {"module": module, "params": p, "part": prt.name, "resources": fmax.resources(prt.family, cells), **r,
+           "generator": f"python scripts/tile_engine_size.py --cell-fit {spec}",
+           "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
+    # beside the fit flow's results (scripts/bench_edt_tiled.py reads it)
+    (ROOT / "build" / "fit" / f"{module}--{prt.name}.json").write_text(json.dumps(out, indent=1) + "\n")
+    return out
 
 
 def main():
