@@ -41,6 +41,7 @@ dicts) for the `make bench` report to include.
 
 import argparse
 import json
+import os
 import re
 import sys
 import time
@@ -209,8 +210,16 @@ def main(argv=None):
     arrays = [tuple(int(v) for v in a.split("x")) for a in args.arrays.split(",")]
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text, _ = comparison(args.maps.split(","), arrays)
-    text = (f"Measured by `python scripts/bench_edt_tiled.py --arrays {args.arrays}` on {stamp} "
-            f"(module docstring: what runs, the clock's source).\n\n" + text)
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    text = (f"Measured by `python scripts/bench_edt_tiled.py --arrays {args.arrays}` on {stamp}, load average "
+            f"{load} on {os.cpu_count()} cores (the software's times vary with the load; module docstring: what "
+            "runs, the clock's source). room-64-64-8x4 is room-64-64-8 with each cell drawn as 4 x 4 pixels. "
+            "Cycles are the tiled model's, which the regression proves equal to the tile engine's RTL; the cost "
+            "breakdown: tile visits, cycles per visit (EDT and BFS cycles over their visits), RAM words moved "
+            "against the floor of reading and writing each visited tile once. A clock marked <= is the cell "
+            "alone's (the engine's own place and route did not finish on the shared machine), so the job "
+            "times are lower bounds and the speed-ups upper bounds; maze512-1-0 does not fit the part's block "
+            "RAM and would need an external store with StateRam's timing (not built).\n\n" + text)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text + "\n")
