@@ -35,8 +35,8 @@ LFE5U-85F's 208 EBRs hold.
                                       [--md BENCHMARKS.md]
 
 --md replaces the section "EDT/BFS tile engine" of that file with this
-run's tables.  `comparison()` returns (markdown text, rows as a list of
-dicts) for the `make bench` report to include.
+run's tables.  `section()` is that section's text (`make bench` includes
+it); `comparison()` returns (its tables, rows as a list of dicts).
 """
 
 import argparse
@@ -60,6 +60,8 @@ from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 MAPS = ("maze512-1-0", "den312d", "room-64-64-8", "random-64-64-10", "room-64-64-8x4")
 ARRAYS = ((8, 8), (16, 16))
+# make bench: also the smallest array and the largest that may fit the LFE5U-85F (hdl/edt_bfs/README.md)
+BENCH_ARRAYS = ((2, 2), (6, 6), (8, 8), (16, 16))
 DFAR = 0
 PART = "LFE5U-85F"
 RAM = (256, 256)            # the fitted tops' RAM: the largest square map the part's EBRs hold
@@ -200,18 +202,13 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
     return "\n".join(lines), rows
 
 
-def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", default=str(ROOT / "build" / "bench" / "edt_tiled.md"))
-    ap.add_argument("--maps", default=",".join(MAPS))
-    ap.add_argument("--arrays", default=",".join(f"{r}x{c}" for r, c in ARRAYS))
-    ap.add_argument("--md", help=f"replace the section '{SECTION}' of this markdown file (added at its end if absent)")
-    args = ap.parse_args(argv)
-    arrays = [tuple(int(v) for v in a.split("x")) for a in args.arrays.split(",")]
+def section(maps=MAPS, arrays=ARRAYS):
+    """The BENCHMARKS.md section: what ran and how to read it, then :func:`comparison`'s tables."""
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
-    text, _ = comparison(args.maps.split(","), arrays)
+    spec = ",".join(f"{r}x{c}" for r, c in arrays)
+    text, _ = comparison(maps, arrays)
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
-    text = (f"Measured by `python scripts/bench_edt_tiled.py --arrays {args.arrays}` on {stamp}, load average "
+    text = (f"Measured by `python scripts/bench_edt_tiled.py --arrays {spec}` on {stamp}, load average "
             f"{load} on {os.cpu_count()} cores (the software's times vary with the load; module docstring: what "
             "runs, the clock's source). room-64-64-8x4 is room-64-64-8 with each cell drawn as 4 x 4 pixels. "
             "Cycles are the tiled model's, which the regression proves equal to the tile engine's RTL; the cost "
@@ -220,6 +217,18 @@ def main(argv=None):
             "alone's (the engine's own place and route did not finish on the shared machine), so the job "
             "times are lower bounds and the speed-ups upper bounds; maze512-1-0 does not fit the part's block "
             "RAM and would need an external store with StateRam's timing (not built).\n\n" + text)
+    return text
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--out", default=str(ROOT / "build" / "bench" / "edt_tiled.md"))
+    ap.add_argument("--maps", default=",".join(MAPS))
+    ap.add_argument("--arrays", default=",".join(f"{r}x{c}" for r, c in ARRAYS))
+    ap.add_argument("--md", help=f"replace the section '{SECTION}' of this markdown file (added at its end if absent)")
+    args = ap.parse_args(argv)
+    arrays = [tuple(int(v) for v in a.split("x")) for a in args.arrays.split(",")]
+    text = section(args.maps.split(","), arrays)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text + "\n")
@@ -227,10 +236,10 @@ def main(argv=None):
     if args.md:
         md = Path(args.md)
         old = md.read_text()
-        section = f"## {SECTION}\n\n{text}\n"
+        new = f"## {SECTION}\n\n{text}\n"
         pattern = re.compile(rf"^## {re.escape(SECTION)}\n.*?(?=^## |\Z)", re.S | re.M)
-        md.write_text(pattern.sub(lambda _: section + "\n", old) if pattern.search(old)
-                      else old.rstrip("\n") + "\n\n" + section)
+        md.write_text(pattern.sub(lambda _: new + "\n", old) if pattern.search(old)
+                      else old.rstrip("\n") + "\n\n" + new)
     return 0
 
 
