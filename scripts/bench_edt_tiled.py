@@ -173,10 +173,11 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
     luts = cell["utilisation"]["TRELLIS_COMB"][1] if cell else None
     for array, fit in fits.items():
         if fit is None:
-            est = (f"not run; {array[0] * array[1]} cells x {cell['resources']['lut4']:,} = "
-                   f"{array[0] * array[1] * cell['resources']['lut4']:,} LUT4 of {luts:,}: "
-                   f"{'no' if array[0] * array[1] * cell['resources']['lut4'] > luts else 'perhaps'}"
-                   if cell else "not run")
+            need = array[0] * array[1] * cell["resources"]["lut4"] if cell else None
+            verdict = ("" if need is None else "no" if need > luts else "likely" if need <= 0.8 * luts
+                       else "borderline")
+            est = (f"no fit result; estimate: {array[0] * array[1]} cells x {cell['resources']['lut4']:,} = "
+                   f"{need:,} LUT4 of {luts:,}: {verdict}" if cell else "no fit result")
             lines.append(f"| {array[0]}x{array[1]} | {est} | | | | | | |")
             continue
         cp = fit.get("critical_path") or {}
