@@ -123,8 +123,8 @@ def _check_args(args):
         raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
     starts = places(args, "start", grid, frame, free=False)
     array = args.array or ((h, w) if h * w <= WHOLE_MAP_CELLS else DEFAULT_ARRAY)
-    tiled = array[0] < h or array[1] < w
-    array = (min(array[0], h), min(array[1], w))
+    tiled = array[0] < h or array[1] < w          # else the whole map is the array: the untiled design
+    array = array if tiled else (h, w)
     if args.engine != "model" and not tiled:
         if h * w > RTL_LIMIT[args.engine] or min(h, w) < MIN_SIDE:
             raise CliError(f"the map is {h}x{w}: --engine {args.engine} with the whole map as the array supports "
