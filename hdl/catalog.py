@@ -137,6 +137,9 @@ SETS = (
     Set("edt_16x16", "edt_array", {"height": 16, "width": 16}, family="xc2v", hierarchical=True),
     Set("edt_bfs_16", "edt_bfs", {"height": 16, "width": 16}, emit=True),
     Set("edt_bfs_32", "edt_bfs", {"height": 32, "width": 32}, emit=True),
+    # The tile engine (issue 18): an 8x8 array over maps up to 64x64 in block RAM.
+    Set("edt_tile_8x8", "edt_tile_engine", {"t_r": 8, "t_c": 8, "max_h": 64, "max_w": 64}, emit=True,
+        beyond="the paper's future work: a small array over a map in block RAM"),
 )
 
 # (top, params) of every set make verilog emits, in order.

@@ -104,8 +104,10 @@ until an iteration lowers no hop (that iteration counted; parents change
 only when hop(p) = m + 1, and the last iteration sets every visited
 non-root's parent from the final values).  Goals in the cfr start at hop 0
 (roots: m + 1 <= 0 never holds, parent 0), everything else at NONE; a root
-pushes its tile and the tiles of its cfr neighbours in other tiles.  After
-a visit, a border pixel q whose hop fell marks the tile of each 8-adjacent
+pushes its own tile only, and counts as fallen in every visit of that tile
+(so the visit offers hop 1 to its neighbours in other tiles; the goal phase
+reads one word per goal, never its neighbourhood).  After
+a visit, a border pixel q whose hop fell (or a root) marks the tile of each 8-adjacent
 halo pixel x with cfr(x) and either hop(q) + 1 < hop(x) (x will fall) or
 hop(q) + 1 = hop(x) with q's index (seen from x) below parent(x) (x's
 parent will change): the halo cells compare what the array loaded.
@@ -122,9 +124,9 @@ it set parent(p) from those values.  Every fall is strict and values are
 bounded below, so the schedule ends.  When the worklist is empty, every pixel
 still satisfies the invariant against the final values (a pixel of a tile
 never visited is NONE with no visited neighbour): a neighbour q of p in
-another tile that fell after p's tile's last visit (a root counts as a fall
-from NONE before every visit, and pushed the tiles of its neighbours) either
-offered
+another tile that fell after p's tile's last visit (a root counts as fallen
+in every visit of its tile, and its goal pushed that tile, so it is visited
+at least once after the root was set) either offered
 hop(q) + 1 < hop(p), or equal from a smaller index than parent(p), and then
 marked p's tile (a contradiction), or left m(p) and the smallest minimising
 index as they were.  So the final state is a fixpoint of
@@ -157,8 +159,8 @@ ready, counted from the command (exclusive) to the last beat:
                                         flags of W_1 are computed on the fly)
     scan       = tiles                  W_1 from the per-tile frontier flags
     EDT        = sum over levels (level + sum over the level's visits: visit)
-    goals      = sum over goals: goal (+ the tiles pushed: a goal in the cfr pushes its tile
-                                        and each other tile holding a cfr neighbour of it)
+    goals      = goal * len(goals)      read the goal's word, write hop 0 and push its tile
+                                        (when in the cfr and not queued) in the same beat
     BFS        = sum over visits: visit
     path       = latency + len(path)    (latency + 1 without a path; 0 without a start)
     readout    = latency + H * W        optional: every pixel, one per beat
@@ -168,8 +170,10 @@ ready, counted from the command (exclusive) to the last beat:
 ``read_beats(t)``: the window's rows inside the map times the beats of the
 words covering its columns inside the map; ``write_beats(t)``: the tile's
 rows times the beats of its own words; ``iterations``: 1 per EDT visit, the
-relaxation's count per BFS visit; ``marks``: the marks the visit pushes
-(self and each marked direction), one per beat during the store.  The
+relaxation's count per BFS visit; ``marks``: the tiles the visit enqueues
+(self, then each marked direction in Fig. 1 order, when not already queued:
+the engine reads the queued bits of the tile's 3 x 3 tile neighbourhood
+while it schedules the visit), one per beat during the store.  The
 constants are :class:`Timing`'s.  Words moved counts every word read or
 written; the floor is each visit reading and writing each pixel of its tile
 once, ``2 ceil(T_r T_c / p)`` words per visit.
@@ -197,7 +201,7 @@ class Timing:
     sched: int = 2        # pop the worklist, set up the window's addresses
     latency: int = 1      # RAM read latency before the first word of a burst
     level: int = 1        # EDT: swap the worklists of levels k and k+1
-    goal: int = 2         # per goal: read its word (cfr?), write hop 0 (then one beat per tile pushed)
+    goal: int = 2         # per goal: read its word (cfr?), write hop 0 and push its tile
 
     def __post_init__(self):
         for name in ("sched", "latency", "level", "goal"):
@@ -386,9 +390,12 @@ class _Fifo:
         self.fifo = deque()
 
     def push(self, t):
-        if not self.queued[t]:
-            self.queued[t] = True
-            self.fifo.append(t)
+        """Enqueue t unless it is queued; returns whether it was enqueued (a mark's beat)."""
+        if self.queued[t]:
+            return False
+        self.queued[t] = True
+        self.fifo.append(t)
+        return True
 
     def pop(self):
         """The next tile, or None when empty."""
@@ -520,11 +527,12 @@ class TileEngine:
             for lo in range(0, len(work), step):
                 hi = min(len(work), lo + step)
                 for t, (me, dirs) in zip(work[lo:hi], self.edt_level(k, work, lo, hi)):
-                    if me:
-                        nxt.push(t)
-                    for i in dirs:
-                        nxt.push(int(g.nbr[t, i]))
-                    self._account("edt", k, t, 1, int(me) + len(dirs))
+                    # self first, then the directions in Fig. 1 order; a mark costs a
+                    # beat when it enqueues (the self mark always does: t was just popped
+                    # and no earlier visit of the level marks a tile still queued in W_k)
+                    marks = nxt.push(t) if me else 0
+                    marks += sum(nxt.push(int(g.nbr[t, i])) for i in dirs)
+                    self._account("edt", k, t, 1, int(marks))
             work = list(nxt.fifo)
 
     # -- BFS -----------------------------------------------------------------------------------
@@ -552,7 +560,9 @@ class TileEngine:
         eq = hw[ix.nb] == hi - 1
         self.parent[inner] = np.where(eq.any(axis=0), eq.argmax(axis=0) + 1, 0).reshape(g.tr, g.tc)
         self.hop[inner] = hi.reshape(g.tr, g.tc)
-        changed = hi < before
+        # A root counts as fallen in every visit of its tile: its tile is the only one
+        # its goal pushes, so this visit offers hop 1 to its neighbours in other tiles.
+        changed = (hi < before) | (hi == 0)
         if not changed[ix.border].any():
             return iterations, []
         # Halo pixel x is marked when a fallen tile neighbour offers hop + 1 below hop(x),
@@ -571,24 +581,15 @@ class TileEngine:
         self.cfr = g.present & ((self.di == NONE) | (self.di > dfar))
         work = _Fifo(g.tiles)
         for r, c in goals:
+            # Read the goal's word (cfr?), write hop 0 and push its tile in the same beat.
             self.cycles["goals"] += self.timing.goal
             if self.cfr[r + 1, c + 1]:
-                # The root is no visit's change: its own tile and the tiles of its cfr
-                # neighbours in other tiles are pushed here, one per beat.
                 self.hop[r + 1, c + 1] = 0
-                tiles = [g.tile_of(r, c)]
-                for dr, dc in OFFSETS.values():
-                    rr, cc = r + dr, c + dc
-                    if self.cfr[rr + 1, cc + 1] and self.hop[rr + 1, cc + 1] and g.tile_of(rr, cc) not in tiles:
-                        tiles.append(g.tile_of(rr, cc))
-                for t in tiles:
-                    work.push(t)
-                self.cycles["goals"] += len(tiles)
+                work.push(g.tile_of(r, c))
         while (t := work.pop()) is not None:
             iterations, dirs = self.bfs_visit(t)
-            for i in dirs:
-                work.push(int(g.nbr[t, i]))
-            self._account("bfs", 0, t, iterations, len(dirs))
+            marks = sum(work.push(int(g.nbr[t, i])) for i in dirs)
+            self._account("bfs", 0, t, iterations, int(marks))
 
     def plain(self, a):
         """A padded array cut to the map (a view)."""

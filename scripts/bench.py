@@ -31,8 +31,9 @@ by this run on this machine; only the papers' column is copied.
    results of the runs above (sim_time / wall time of the test, build
    excluded), and an idle-clock probe (sim/rtl/simspeed.py) for tops without a job.
 5. The regression's wall time (build/regression.json, written by make test).
-6. The harmonic schedule study (scripts/bench_harmonic.py) and, when present,
-   the block-exponent comparison (scripts/bench_exponents.py).
+6. The harmonic schedule study (scripts/bench_harmonic.py), when present,
+   the block-exponent comparison (scripts/bench_exponents.py), and the EDT/BFS
+   tile engine's jobs (scripts/bench_edt_tiled.py).
 
 yosys and nextpnr come from PyPI (scripts/toolchain.py); their runs are
 cached under build/cache by the hash of the Verilog, the tool's version and
@@ -606,7 +607,7 @@ def markdown(data, hw, extra):
 
 
 def study_sections():
-    """The harmonic schedule study and the block-exponent comparison, as markdown."""
+    """The harmonic schedule study, the block-exponent comparison and the tile engine's jobs, as markdown."""
     import bench_harmonic
     out = []
     lines = []
@@ -624,9 +625,12 @@ def study_sections():
     try:
         import bench_exponents
     except ImportError:
-        return out
-    text, _ = bench_exponents.comparison()
-    out.append(("Harmonic planner: fixed point against block exponents", text))
+        bench_exponents = None
+    if bench_exponents is not None:
+        text, _ = bench_exponents.comparison()
+        out.append(("Harmonic planner: fixed point against block exponents", text))
+    import bench_edt_tiled
+    out.append((bench_edt_tiled.SECTION, bench_edt_tiled.section(arrays=bench_edt_tiled.BENCH_ARRAYS)))
     return out
 
 

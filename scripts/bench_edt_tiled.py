@@ -1,32 +1,48 @@
-"""Benchmark (issue 18): the tiled EDT/BFS model's cost on the bundled maps, against scipy.
+"""Benchmark (issue 18): the EDT/BFS tile engine's whole job on the bundled maps, at its own clock, against scipy.
 
 For each map and array (default: maze512-1-0, den312d, room-64-64-8,
-random-64-64-10 on 8x8 and 16x16 arrays) one job of the tiled model
-(models.edt_bfs_tiled.plan_path_tiled, RAM words of one tile row, 3 banks,
-the default Timing; d_far 0; the goal and start of the map's longest
+random-64-64-10 and room-64-64-8 x4, a 256x256 map built from the bundled
+room-64-64-8 by drawing each cell as 4 x 4 pixels (the same rooms at a
+finer resolution; the job's goal and start are its scenario's, scaled);
+arrays 8x8, 16x16 and any given with --arrays) one job of the tiled model
+(models.edt_bfs_tiled.plan_path_tiled, the RTL's cycle model, which the
+regression proves equal to the tile engine's RTL cycle for cycle; RAM words
+of one tile row, 3 banks; d_far 0; the goal and start of the map's longest
 scenario, else its last and first free cell): EDT levels, tile visits,
-array iterations, RAM words moved against the floor (every visit reading
-and writing each pixel of its tile once), the job's cycles (load, EDT,
-cfr and goals, BFS, path; no map read-out) and the model's own run time.
-Beside it the software a user would run instead, on the same machine in
-the same run: scipy.ndimage.distance_transform_edt(return_indices=True)
-plus a scipy.sparse.csgraph BFS over the cfr (scripts/software.py, median
-of 3 runs, graph construction included).  "Break-even" is the clock at
-which the job's cycles take as long as the software (cycles / software
-seconds): any clock above it is faster.  No RTL exists yet, so there is no
-clock of its own to put here.
+array iterations, cycles per visit, RAM words moved against the floor
+(every visit reading and writing each pixel of its tile once), the job's
+cycles (load + scan, EDT, goals + BFS, path; no map read-out) and the
+model's own run time.  Beside it the software a user would run instead,
+on the same machine in the same run: scipy.ndimage.distance_transform_edt
+(return_indices=True) plus a scipy.sparse.csgraph BFS over the cfr
+(scripts/software.py, median of 3 runs, graph construction included).
+
+Clock: the tile engine's own, from place and route on the LFE5U-85F
+(``make fit TOP=edt_tile_engine PARAMS="t_r=R t_c=C max_h=256 max_w=256"
+PART=lfe5u-85f``: build/fit/<module>--LFE5U-85F.json, read here; the RAM
+of a 256x256 map, the largest the part's EBRs hold).  The job's time is
+its cycles at that clock; an array without a fit result shows the
+break-even clock only (cycles / software seconds: any clock above it is
+faster than the software).  A map larger than the RAM (maze512-1-0) needs
+an external state store with StateRam's timing, which is not built: its
+time is that of the same top at the same clock.
 
 Memory: bits of state per pixel (models.edt_bfs_tiled.state_bits) times the
 map, the EBRs that needs (8 pixels a word), and the largest square map the
 LFE5U-85F's 208 EBRs hold.
 
     python scripts/bench_edt_tiled.py [--out build/bench/edt_tiled.md] [--maps NAME,...] [--arrays 8x8,16x16]
+                                      [--md BENCHMARKS.md]
 
-`comparison()` returns (markdown text, rows as a list of dicts) for the
-`make bench` report to include.
+--md replaces the section "EDT/BFS tile engine" of that file with this
+run's tables.  `section()` is that section's text (`make bench` includes
+it); `comparison()` returns (its tables, rows as a list of dicts).
 """
 
 import argparse
+import json
+import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -34,22 +50,51 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
+import numpy as np  # noqa: E402
 import software  # noqa: E402
 from navcores.models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, largest_map, plan_path_tiled,  # noqa: E402
                                   ram_blocks, state_bits)
+from navcores.hdl.catalog import PAPER_JOBS  # noqa: E402
+from navcores.hdl.emit import top_name  # noqa: E402
 from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
-MAPS = ("maze512-1-0", "den312d", "room-64-64-8", "random-64-64-10")
+MAPS = ("maze512-1-0", "den312d", "room-64-64-8", "random-64-64-10", "room-64-64-8x4")
 ARRAYS = ((8, 8), (16, 16))
+# make bench: also the smallest array and the largest that may fit the LFE5U-85F (hdl/edt_bfs/README.md)
+BENCH_ARRAYS = ((2, 2), (6, 6), (8, 8), (16, 16))
 DFAR = 0
+PART = "LFE5U-85F"
+RAM = (256, 256)            # the fitted tops' RAM: the largest square map the part's EBRs hold
+SECTION = "EDT/BFS tile engine: whole jobs at its own clock against scipy (issue 18)"
 
 
 def job(name):
-    """(obstacle, goal, start) of maps/NAME.map: its job (models.maps.longest_scenario)."""
-    path = ROOT / "maps" / f"{name}.map"
+    """(obstacle, goal, start) of maps/NAME.map: its job (models.maps.longest_scenario);
+    NAMExF: that map with each cell drawn as F x F pixels, the job scaled."""
+    scaled = re.fullmatch(r"(.+)x(\d+)", name)
+    base, factor = (scaled[1], int(scaled[2])) if scaled else (name, 0)
+    path = ROOT / "maps" / f"{base}.map"
     obstacle = load_map(path)
     s = longest_scenario(path, obstacle)
-    return obstacle, tuple(s.goal), tuple(s.start)
+    goal, start = tuple(s.goal), tuple(s.start)
+    if factor:
+        f = factor
+        obstacle = np.kron(obstacle, np.ones((f, f), dtype=bool)).astype(bool)
+        goal, start = (tuple(f * v + f // 2 for v in p) for p in (goal, start))
+    return obstacle, goal, start
+
+
+def fit_result(array, ram=RAM, part=PART, top="edt_tile_engine"):
+    """The fit flow's JSON for ``top`` (the tile engine, or its cell alone: ``edt_tile_cell``, from
+    scripts/tile_engine_size.py --cell-fit) with ``array`` and ``ram`` on ``part``, or None."""
+    params = {"t_r": array[0], "t_c": array[1], "max_h": ram[0], "max_w": ram[1]}
+    path = ROOT / "build" / "fit" / f"{top_name(top, params)}--{part}.json"
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def cell_bound(arrays):
+    """The cell alone's fit (any of ``arrays``: the cell's widths follow the RAM), or None."""
+    return next((c for c in (fit_result(a, top="edt_tile_cell") for a in (*arrays, (8, 8))) if c), None)
 
 
 def measure(name, arrays=ARRAYS, repeats=3):
@@ -59,7 +104,11 @@ def measure(name, arrays=ARRAYS, repeats=3):
     bits = state_bits(h, w)
     ebr = ram_blocks(h, w, 8)["blocks"]
     rows = []
+    cell = cell_bound(arrays)
     for array in arrays:
+        fit = fit_result(array)
+        mhz = fit["fmax_mhz"] if fit and fit["fits"] else None
+        bound = cell["fmax_mhz"] if cell and not mhz else None     # the engine's clock is at most the cell's
         t0, c0 = time.perf_counter(), time.process_time()
         res = plan_path_tiled(obstacle, [goal], start, DFAR, array=array)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
@@ -74,6 +123,10 @@ def measure(name, arrays=ARRAYS, repeats=3):
             "cycles_split": st["cycles"], "model_wall_s": wall, "model_cpu_s": cpu,
             "sw_seconds": sw["sw_seconds"], "sw_edt_s": sw["edt_seconds"], "sw_bfs_s": sw["bfs_csgraph_seconds"],
             "break_even_mhz": res.cycles / sw["sw_seconds"] / 1e6,
+            "mhz": mhz or bound, "bound": bool(bound),
+            "hw_seconds": res.cycles / ((mhz or bound) * 1e6) if (mhz or bound) else None,
+            "fit": fit, "in_ram": h <= RAM[0] and w <= RAM[1],
+            "cycles_per_visit": (st["cycles"]["edt"] + st["cycles"]["bfs"]) / max(1, st["visits_edt"] + st["visits_bfs"]),
             "state_bits": bits["total"], "ebr": ebr,
         })
     return rows
@@ -85,22 +138,54 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
         progress(f"{name} ...")
         rows += measure(name, arrays)
     lines = [
-        "| map | array | levels | visits EDT / BFS (tiles) | array iterations EDT / BFS | words moved (floor) "
-        "| cycles: load / EDT / goals+BFS / path = total | model s (CPU) | scipy EDT + csgraph BFS | break-even |",
-        "|---|---|---:|---|---|---|---|---|---|---:|",
+        "| map | array | levels | visits EDT / BFS (tiles) | array iterations EDT / BFS | cycles / visit "
+        "| words moved (floor) | cycles: load / EDT / goals+BFS / path = total | clock (LFE5U-85F) | job time "
+        "| scipy EDT + csgraph BFS | speed-up | break-even | model s (CPU) |",
+        "|---|---|---:|---|---|---:|---|---|---|---:|---|---:|---:|---|",
     ]
     for r in rows:
         c = r["cycles_split"]
+        le, ge = ("<= ", ">= ") if r["bound"] else ("", "")
+        clock = f"{le}{r['mhz']:.1f} MHz" if r["mhz"] else "no fit result"
+        speedup = f"{le}{r['sw_seconds'] / r['hw_seconds']:.1f}x" if r["hw_seconds"] else "-"
+        when = (f"{ge}{r['hw_seconds'] * 1e3:.3f} ms" + ("" if r["in_ram"] else " (external RAM)")
+                if r["hw_seconds"] else "-")
         lines.append(
             f"| {r['map']} ({r['shape'][0]}x{r['shape'][1]}) | {r['array'][0]}x{r['array'][1]} | {r['levels']} "
             f"| {r['visits_edt']:,} / {r['visits_bfs']:,} ({r['tiles']:,}) "
-            f"| {r['iterations_edt']:,} / {r['iterations_bfs']:,} "
+            f"| {r['iterations_edt']:,} / {r['iterations_bfs']:,} | {r['cycles_per_visit']:.1f} "
             f"| {r['words_moved']:,} ({r['words_floor']:,}) "
             f"| {c['load'] + c['scan']:,} / {c['edt']:,} / {c['goals'] + c['bfs']:,} / {c['path']:,} "
-            f"= {r['cycles']:,} "
-            f"| {r['model_wall_s']:.2f} ({r['model_cpu_s']:.2f}) "
+            f"= {r['cycles']:,} | {clock} | {when} "
             f"| {r['sw_seconds'] * 1e3:.2f} ms ({r['sw_edt_s'] * 1e3:.2f} + {r['sw_bfs_s'] * 1e3:.2f}) "
-            f"| {r['break_even_mhz']:.1f} MHz |")
+            f"| {speedup} | {r['break_even_mhz']:.1f} MHz | {r['model_wall_s']:.2f} ({r['model_cpu_s']:.2f}) |")
+    lines += ["", f"The paper's own figure for its map: {PAPER_JOBS['edt_job']}.", ""]
+    fits = {tuple(r["array"]): r["fit"] for r in rows}
+    cell = cell_bound(arrays)
+    lines += [f"| tile engine on the {PART} (RAM {RAM[0]}x{RAM[1]}) | fits | LUT4 | FF | EBR | DSP | clock "
+              "| critical path |", "|---|---|---:|---:|---:|---:|---|---|"]
+    if cell:
+        cp = cell["critical_path"]
+        lines.append(f"| one cell alone ({cell['generator']}) | - | {cell['resources']['lut4']:,} "
+                     f"| {cell['resources']['ff']} | 0 | 0 | {cell['fmax_mhz']:.1f} MHz (a bound on the engine's) "
+                     f"| {cp['from']['cell']} -> {cp['to']['cell']} ({cp['to']['port']}), {cp['delay_ns']} ns, "
+                     f"{cp['logic_levels']} levels |")
+    luts = cell["utilisation"]["TRELLIS_COMB"][1] if cell else None
+    for array, fit in fits.items():
+        if fit is None:
+            need = array[0] * array[1] * cell["resources"]["lut4"] if cell else None
+            verdict = ("" if need is None else "no" if need > luts else "likely" if need <= 0.8 * luts
+                       else "borderline")
+            est = (f"no fit result; estimate: {array[0] * array[1]} cells x {cell['resources']['lut4']:,} = "
+                   f"{need:,} LUT4 of {luts:,}: {verdict}" if cell else "no fit result")
+            lines.append(f"| {array[0]}x{array[1]} | {est} | | | | | | |")
+            continue
+        cp = fit.get("critical_path") or {}
+        path = (f"{cp['from']['cell']} -> {cp['to']['cell']}, {cp.get('delay_ns', '?')} ns, "
+                f"{cp.get('logic_levels', '?')} levels" if cp else "-")
+        clock = f"{fit['fmax_mhz']:.1f} MHz" if fit["fits"] else "-"
+        lines.append(f"| {array[0]}x{array[1]} | {'yes' if fit['fits'] else 'no'} | {fit['lut4']:,} | {fit['ff']:,} "
+                     f"| {fit['bram']} | {fit['dsp']} | {clock} | {path} |")
     n = largest_map(LFE5U_85F_EBR, 8)
     lines += ["", "| map | bits / pixel | state | EBRs (8 pixels a word) | fits the LFE5U-85F (208 EBR)? |",
               "|---|---:|---:|---:|---|"]
@@ -118,18 +203,44 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
     return "\n".join(lines), rows
 
 
+def section(maps=MAPS, arrays=ARRAYS):
+    """The BENCHMARKS.md section: what ran and how to read it, then :func:`comparison`'s tables."""
+    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    spec = ",".join(f"{r}x{c}" for r, c in arrays)
+    text, _ = comparison(maps, arrays)
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    text = (f"Measured by `python scripts/bench_edt_tiled.py --arrays {spec}` on {stamp}, load average "
+            f"{load} on {os.cpu_count()} cores (the software's times vary with the load; module docstring: what "
+            "runs, the clock's source). room-64-64-8x4 is room-64-64-8 with each cell drawn as 4 x 4 pixels. "
+            "Cycles are the tiled model's, which the regression proves equal to the tile engine's RTL; the cost "
+            "breakdown: tile visits, cycles per visit (EDT and BFS cycles over their visits), RAM words moved "
+            "against the floor of reading and writing each visited tile once. A clock marked <= is the cell "
+            "alone's (the engine's own place and route did not finish on the shared machine), so the job "
+            "times are lower bounds and the speed-ups upper bounds; maze512-1-0 does not fit the part's block "
+            "RAM and would need an external store with StateRam's timing (not built).\n\n" + text)
+    return text
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=str(ROOT / "build" / "bench" / "edt_tiled.md"))
     ap.add_argument("--maps", default=",".join(MAPS))
     ap.add_argument("--arrays", default=",".join(f"{r}x{c}" for r, c in ARRAYS))
+    ap.add_argument("--md", help=f"replace the section '{SECTION}' of this markdown file (added at its end if absent)")
     args = ap.parse_args(argv)
     arrays = [tuple(int(v) for v in a.split("x")) for a in args.arrays.split(",")]
-    text, _ = comparison(args.maps.split(","), arrays)
+    text = section(args.maps.split(","), arrays)
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(text + "\n")
     print(text)
+    if args.md:
+        md = Path(args.md)
+        old = md.read_text()
+        new = f"## {SECTION}\n\n{text}\n"
+        pattern = re.compile(rf"^## {re.escape(SECTION)}\n.*?(?=^## |\Z)", re.S | re.M)
+        md.write_text(pattern.sub(lambda _: new + "\n", old) if pattern.search(old)
+                      else old.rstrip("\n") + "\n\n" + new)
     return 0
 
 

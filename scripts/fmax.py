@@ -100,6 +100,12 @@ def ports(verilog_text, module):
     return [(d, name, w) for name, (d, w) in verilog_ports(verilog_text, module).items()]
 
 
+def _port(name):
+    """A port name in a connection: an escaped identifier (a port named like a keyword, ``\\reg``)
+    ends at white space."""
+    return name + " " if name.startswith("\\") else name
+
+
 def harness(verilog_text, module, clock="clk"):
     """Verilog of ``fmax_<module>``: the core between a serial input chain and an XOR tree."""
     ps = ports(verilog_text, module)
@@ -113,12 +119,12 @@ def harness(verilog_text, module, clock="clk"):
              else f"  always @(posedge {clock}) chain <= si;"]
     conns, pos = [f".{clock}({clock})"], 0
     for name, w in ins:
-        conns.append(f".{name}(chain[{pos + w - 1}:{pos}])")
+        conns.append(f".{_port(name)}(chain[{pos + w - 1}:{pos}])")
         pos += w
     pos = 0
     lines.append(f"  wire [{n_out - 1}:0] q;")
     for name, w in outs:
-        conns.append(f".{name}(q[{pos + w - 1}:{pos}])")
+        conns.append(f".{_port(name)}(q[{pos + w - 1}:{pos}])")
         pos += w
     lines.append(f"  {module} core ({', '.join(conns)});")
     lines.append(f"  reg [{n_out - 1}:0] s0;")

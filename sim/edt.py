@@ -1,42 +1,57 @@
 """EDT/NNT + BFS path planning on a map (paper 004): distance map, cfr, path.
 
     python -m sim edt MAP --dfar D (--goal R,C | --goal-xy X,Y) [...] [--start R,C | --start-xy X,Y]
-        [--engine model|icarus|verilator] [--cell METRES] [--unknown obstacle|free]
+        [--array RxC] [--engine model|icarus|verilator] [--cell METRES] [--unknown obstacle|free]
         [--json OUT] [--csv OUT] [--plot OUT.png]
 
 Runs Parallel_Path_Plan on MAP (.map, .txt, .pgm/.png or a ROS map's .yaml,
 as for `sim harmonic`): the Euclidean distance transform with nearest
 obstacles, the collision-free region (integer distance d_i > --dfar), a BFS
 from the goal(s) (repeatable) and the path from the one start to the
-nearest goal.  --engine model uses models/edt_bfs.py; icarus / verilator run
-the RTL core (an array as large as the map, built on demand; at most 32x32
-= 1024 cells on Icarus and 16x16 = 256 on Verilator, whose build grows with
-the cell count) and check it against the model.  Start and goal may lie on
-an obstacle (the core takes any pixel): there is then no path.  The model's
-work grows with the cells times the iterations (about the map's height plus
-width): a run estimated at more than 10 minutes says so first, and a
-terminal shows the iterations as they go.
+nearest goal.
 
-JSON (--json): height, width, engine, iterations_edt, iterations_bfs, cycles,
-distance (d_i; 0 on obstacles, -1 where never reached, i.e. a map without
-obstacles), nearest ([r, c] of the nearest obstacle, null where none), cfr
-(0/1), path ([r, c] from start to goal), path_xy (the path in metres in the
-map frame), path_found, frame, rtl_matches_model (RTL engines); --csv: the
-path as rows row,col,x,y; --plot: the distance map (obstacles and
-unreached cells in their own colours) and the cfr with the path.
+--array RxC: the physical array of the paper's cells.  Default: the whole
+map when it has at most 256 cells, else 8x8.  An array as large as the map
+(or larger) is the paper's design: models/edt_bfs.py, and on icarus /
+verilator the untiled core (built on demand at the map's size; at most
+32x32 = 1024 cells on Icarus and 16x16 = 256 on Verilator, whose build
+grows with the cell count).  A smaller array is the tile engine (issue
+18): models/edt_bfs_tiled.py, and on icarus / verilator the tile engine's
+RTL (hdl/edt_bfs/tile_engine.py, 2..32 cells a side, at most 256; its RAM
+holds any map up to 2^20 pixels; one build per array and RAM size, the
+RAM's sides powers of two from 64).  Results are the same either way (the
+tiled engine's invariant); cycles and tile visits are the engine's.  The
+RTL engines are checked against the model of the same array.  The
+untiled model's work grows with the cells times the iterations (about the
+map's height plus width), an RTL run with the simulated cycles: a run
+estimated at more than 10 minutes says so first, and a terminal shows the
+iterations or the tile visits as they go.
+
+JSON (--json): height, width, engine, array ([rows, columns]), tile_visits
+(null for the untiled array), iterations_edt, iterations_bfs, cycles (the
+whole job: load, EDT, goals, BFS, path, map read-out), distance (d_i; 0 on
+obstacles, -1 where never reached, i.e. a map without obstacles), nearest
+([r, c] of the nearest obstacle, null where none), cfr (0/1), path ([r, c]
+from start to goal), path_xy (the path in metres in the map frame),
+path_found, frame, rtl_matches_model (RTL engines); --csv: the path as rows
+row,col,x,y; --plot: the distance map (obstacles and unreached cells in
+their own colours) and the cfr with the path.
 
 Exit status: 0 done (a path found, or no start given); 1 ran, but no path
 from the start (no path in the cfr, or start or goal on an obstacle or
 outside the cfr), or an RTL engine differs from the model; 2 bad input.
 """
 
+import argparse
 import json
+import re
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from navcores.models.edt_bfs import plan_path, widths
+from navcores.models.edt_bfs_tiled import plan_path_tiled
 
 from .cli import (CliError, add_engine, add_map, add_outputs, add_place, integer, load_map_arg, path_csv,
                   path_xy, places, save_figure, write_text)
@@ -48,6 +63,37 @@ MIN_SIDE = 3
 # model's numpy planes); iterations: about the height plus width (EDT: the
 # largest distance, BFS: the longest path), at least.
 NS_PER_CELL_ITERATION = 80.0
+# The tile engine's RTL under cocotb, simulated cycles a second (8x8 array,
+# 64x64 RAM, the shared 2-core machine at load 7: sim edt on room-64-64-8)
+# and the build, for the estimate a long run announces.
+CYCLES_PER_SECOND = {"icarus": 200.0, "verilator": 700.0}
+BUILD_SECONDS = {"icarus": 90.0, "verilator": 240.0}
+WHOLE_MAP_CELLS = 256       # --array's default: the whole map up to this many cells, else DEFAULT_ARRAY
+DEFAULT_ARRAY = (8, 8)
+RAM_SIDE = 64               # the tile engine's RAM: sides powers of two from this (shared builds)
+
+
+def parse_array(text):
+    """``RxC`` -> (R, C), both >= 1."""
+    m = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
+    if not m or min(int(m[1]), int(m[2])) < 1:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected RxC with R, C >= 1, e.g. 8x8")
+    return int(m[1]), int(m[2])
+
+
+def ram_for(h, w):
+    """The tile engine's RAM (max_h, max_w) for an h x w map: powers of two
+    from RAM_SIDE (one build serves many maps), the map's own size where
+    those would exceed the engine's pixel limit."""
+    from navcores.hdl.edt_bfs.tile_engine import MAX_PIXELS
+
+    def side(n):
+        s = RAM_SIDE
+        while s < n:
+            s *= 2
+        return s
+    ram = side(h), side(w)
+    return ram if ram[0] * ram[1] <= MAX_PIXELS and max(ram) <= 4096 else (max(h, RAM_SIDE), max(w, RAM_SIDE))
 
 
 def add_arguments(p):
@@ -56,7 +102,11 @@ def add_arguments(p):
                    help="d_far: robot radius in pixels (cfr: d_i > d_far)")
     add_place(p, "goal", many=True, required=True, help="goal")
     add_place(p, "start", help="start (without it: no path read-out)")
-    add_engine(p, "the EDT/BFS core's RTL in that simulator (maps up to 1024 / 256 cells)")
+    p.add_argument("--array", type=parse_array, metavar="RxC",
+                   help="the physical array of cells (default: the whole map up to 256 cells, else 8x8); "
+                        "smaller than the map: the tile engine")
+    add_engine(p, "the RTL in that simulator: the untiled core (maps up to 1024 / 256 cells) or, with an "
+                  "array smaller than the map, the tile engine (maps up to 2^20 pixels)")
     add_outputs(p, csv=True, plot_help="plot distance map, cfr and path")
 
 
@@ -72,12 +122,23 @@ def _check_args(args):
     if not goals:
         raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
     starts = places(args, "start", grid, frame, free=False)
-    if args.engine != "model":
+    array = args.array or ((h, w) if h * w <= WHOLE_MAP_CELLS else DEFAULT_ARRAY)
+    tiled = array[0] < h or array[1] < w          # else the whole map is the array: the untiled design
+    array = array if tiled else (h, w)
+    if args.engine != "model" and not tiled:
         if h * w > RTL_LIMIT[args.engine] or min(h, w) < MIN_SIDE:
-            raise CliError(f"the map is {h}x{w}: --engine {args.engine} supports maps of {MIN_SIDE}x{MIN_SIDE} "
-                           f"up to {RTL_LIMIT[args.engine]} cells (the array is as large as the map); "
-                           f"use --engine model or a smaller map")
-    return grid, frame, goals, starts[0] if starts else None
+            raise CliError(f"the map is {h}x{w}: --engine {args.engine} with the whole map as the array supports "
+                           f"maps of {MIN_SIDE}x{MIN_SIDE} up to {RTL_LIMIT[args.engine]} cells; "
+                           f"use a smaller --array (the tile engine), --engine model or a smaller map")
+    if args.engine != "model" and tiled:
+        from navcores.hdl.edt_bfs.tile_engine import TileEngine
+        from navcores.hdl.params import check
+        try:
+            check(TileEngine.PARAMS, TileEngine.CONSTRAINTS, t_r=array[0], t_c=array[1], max_h=max(h, RAM_SIDE),
+                  max_w=max(w, RAM_SIDE))
+        except ValueError as e:
+            raise CliError(f"--array {array[0]}x{array[1]} on a {h}x{w} map: the tile engine's {e}") from None
+    return grid, frame, goals, starts[0] if starts else None, array, tiled
 
 
 def run_rtl(grid, goals, start, dfar, sim, work):
@@ -92,20 +153,46 @@ def run_rtl(grid, goals, start, dfar, sim, work):
     return json.loads(result.read_text())
 
 
+def run_tile_rtl(grid, goals, start, dfar, array, sim, work, ticker=None):
+    """Run sim/rtl/edt_tile_job.py on the tile engine (``array``, the RAM of
+    :func:`ram_for`); returns its decoded result.  ``ticker``: a
+    :class:`.progress.Ticker` whose line shows the tile visits."""
+    from .rtl.runner import run
+    job, result, progress = work / "job.json", work / "result.json", work / "progress"
+    max_h, max_w = ram_for(*grid.shape)
+    params = {"t_r": array[0], "t_c": array[1], "max_h": max_h, "max_w": max_w}
+    job.write_text(json.dumps({"obstacle": grid.tolist(), "goals": [list(g) for g in goals],
+                               "start": list(start) if start else None, "dfar": dfar, **params}))
+    if ticker is not None:
+        def poll():
+            try:
+                visits, cycles = progress.read_text().split()
+            except (OSError, ValueError):
+                return None
+            return f"{visits} tile visits, {cycles} cycles"
+        ticker.poll = poll
+    run("edt_tile_engine", params, sim, "navcores.sim.rtl.edt_tile_job",
+        env={"EDT_JOB": job, "EDT_RESULT": result, "EDT_PROGRESS": progress}, log_file=work / "sim.log")
+    return json.loads(result.read_text())
+
+
 def _matches(rtl, model):
     keys = ("distance", "nearest", "cfr", "parent", "visited")
     same = all(np.array_equal(np.asarray(rtl[k]), np.asarray(getattr(model, k))) for k in keys)
-    return (same and [tuple(p) for p in rtl["path"]] == model.path
+    tiles = "tile_visits" not in rtl or (rtl["tile_visits"] == model.tile_visits
+                                         and [tuple(t) for t in rtl["trace"]] == list(model.trace))
+    return (same and tiles and [tuple(p) for p in rtl["path"]] == model.path
             and rtl["iterations_edt"] == model.iterations_edt
             and rtl["iterations_bfs"] == model.iterations_bfs and rtl["cycles"] == model.cycles)
 
 
-def to_json(res, engine, h, w):
+def to_json(res, engine, h, w, array):
     nearest = [[None if res_n[0] < 0 else [int(res_n[0]), int(res_n[1])] for res_n in row]
                for row in np.asarray(res["nearest"] if isinstance(res, dict) else res.nearest)]
     get = (lambda k: res[k]) if isinstance(res, dict) else (lambda k: getattr(res, k))
     return {
-        "height": h, "width": w, "engine": engine,
+        "height": h, "width": w, "engine": engine, "array": list(array),
+        "tile_visits": int(get("tile_visits")) if array != (h, w) else None,
         "iterations_edt": int(get("iterations_edt")), "iterations_bfs": int(get("iterations_bfs")),
         "cycles": int(get("cycles")),
         "distance": np.asarray(get("distance")).astype(int).tolist(),
@@ -175,26 +262,41 @@ def no_path_reason(grid, data, goals, start, dfar):
 
 
 def run(args):
-    grid, frame, goals, start = _check_args(args)
+    grid, frame, goals, start, array, tiled = _check_args(args)
     h, w = grid.shape
-    seconds = (h + w) * h * w * NS_PER_CELL_ITERATION * 1e-9
-    announce("sim edt", seconds, f"the model on {h}x{w}",
-             f"at least {h + w} iterations of {h * w} cells at {NS_PER_CELL_ITERATION:.0f} ns")
-    with Progress("edt model", total=None, unit="iterations") as bar:
-        model = plan_path(grid, goals, start, args.dfar,
-                          progress=lambda stage, k: bar.update(k, f"{stage}"))
-    data = to_json(model, "model", h, w)
+    if tiled:
+        # the tiled model: a few seconds even on 512x512 (scripts/bench_edt_tiled.py)
+        model = plan_path_tiled(grid, goals, start, args.dfar, array=array, readout=True)
+    else:
+        seconds = (h + w) * h * w * NS_PER_CELL_ITERATION * 1e-9
+        announce("sim edt", seconds, f"the model on {h}x{w}",
+                 f"at least {h + w} iterations of {h * w} cells at {NS_PER_CELL_ITERATION:.0f} ns")
+        with Progress("edt model", total=None, unit="iterations") as bar:
+            model = plan_path(grid, goals, start, args.dfar,
+                              progress=lambda stage, k: bar.update(k, f"{stage}"))
+    data = to_json(model, "model", h, w, array)
     if args.engine != "model":
-        with Ticker(f"EDT/BFS RTL on {args.engine}"), tempfile.TemporaryDirectory(prefix="sim_edt_") as tmp:
-            rtl = run_rtl(grid, goals, start, args.dfar, args.engine, Path(tmp))
-        data = to_json(rtl, args.engine, h, w)
+        what = f"the {array[0]}x{array[1]} tile engine" if tiled else "the EDT/BFS core"
+        if tiled:
+            rate = CYCLES_PER_SECOND[args.engine] * 64 / (array[0] * array[1])
+            announce("sim edt", BUILD_SECONDS[args.engine] + model.cycles / rate,
+                     f"{what} on {args.engine}, {h}x{w}",
+                     f"{model.cycles} cycles at about {rate:.0f} a second, and the build")
+        with Ticker(f"EDT/BFS RTL ({what}) on {args.engine}") as ticker, \
+                tempfile.TemporaryDirectory(prefix="sim_edt_") as tmp:
+            if tiled:
+                rtl = run_tile_rtl(grid, goals, start, args.dfar, array, args.engine, Path(tmp), ticker)
+            else:
+                rtl = run_rtl(grid, goals, start, args.dfar, args.engine, Path(tmp))
+        data = to_json(rtl, args.engine, h, w, array)
         data["rtl_matches_model"] = bool(_matches(rtl, model))
     data["path_xy"] = path_xy(frame, data["path"])
     data["frame"] = frame.as_dict()
     found = data["path_found"]
     why = None if found or start is None else no_path_reason(grid, data, goals, start, args.dfar)
-    print(f"{args.map}: {h}x{w}, engine {args.engine}: EDT {data['iterations_edt']} iterations, "
-          f"BFS {data['iterations_bfs']} iterations, {data['cycles']} cycles; "
+    tiles = f"{data['tile_visits']} tile visits, " if tiled else ""
+    print(f"{args.map}: {h}x{w}, engine {args.engine}, array {array[0]}x{array[1]}: EDT {data['iterations_edt']} "
+          f"iterations, BFS {data['iterations_bfs']} iterations, {tiles}{data['cycles']} cycles; "
           + (f"path of {len(data['path']) - 1} steps to {tuple(data['path'][-1])}" if found
              else f"NO PATH: {why}" if start else "no start given"))
     if "rtl_matches_model" in data:

@@ -95,12 +95,13 @@ def announce(prog, seconds, what, basis):
 class Ticker(Progress):
     """A :class:`Progress` line that also moves on its own, once a second,
     while work it cannot watch runs (a simulator in a subprocess): the
-    elapsed time, then whatever :meth:`status` last said."""
+    elapsed time, then whatever :meth:`status` last said, or ``poll()``
+    returns (when given and not None: a status the work leaves in a file)."""
 
-    def __init__(self, what, note="building / simulating", **kw):
+    def __init__(self, what, note="building / simulating", poll=None, **kw):
         import threading
         super().__init__(what, **kw)
-        self.note = note
+        self.note, self.poll = note, poll
         self.done = threading.Event()
         self.thread = threading.Thread(target=self._run, daemon=True)
         if self.on:
@@ -108,6 +109,8 @@ class Ticker(Progress):
 
     def _run(self):
         while not self.done.wait(1.0):
+            if self.poll is not None:
+                self.note = self.poll() or self.note
             self.update(note=self.note)
 
     def status(self, note):

@@ -23,7 +23,7 @@ from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_la
 from .clock import PERIOD_NS
 from .stream import Streams, pauses
 
-__all__ = ["EdtBfsDriver", "compare"]
+__all__ = ["EdtBfsDriver", "compare", "compare_fields"]
 
 
 class EdtBfsDriver:
@@ -130,16 +130,23 @@ class EdtBfsDriver:
                 "nearest": nearest, "done": done, "cfr": cfr, "visited": visited, "parent": parent}
 
 
-def compare(got, model, cycles=True):
-    """Assert the RTL's decoded results equal the model's bit for bit; returns #values compared."""
+def compare_fields(got, model, names):
+    """Assert the RTL's arrays ``got[name]`` equal the model's ``model.name`` for each of ``names``
+    (the first differing pixels in the message); returns the number of values compared."""
     n = 0
-    for name in ("distance", "vector", "nearest", "done", "cfr", "visited", "parent"):
+    for name in names:
         a, b = np.asarray(got[name]), np.asarray(getattr(model, name))
         if not np.array_equal(a, b):
             bad = np.argwhere(a != b)[:5].tolist()
             raise AssertionError(f"{name} differs at {bad}: rtl {[a[tuple(p)].tolist() for p in bad]} "
                                  f"model {[b[tuple(p)].tolist() for p in bad]}")
         n += a.size
+    return n
+
+
+def compare(got, model, cycles=True):
+    """Assert the RTL's decoded results equal the model's bit for bit; returns #values compared."""
+    n = compare_fields(got, model, ("distance", "vector", "nearest", "done", "cfr", "visited", "parent"))
     assert got["path"] == model.path, f"path rtl {got['path']} model {model.path}"
     assert got["path_found"] == model.path_found == bool(got["path_found_flag"])
     assert got["iterations_edt"] == model.iterations_edt, (got["iterations_edt"], model.iterations_edt)

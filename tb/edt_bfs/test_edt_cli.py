@@ -10,14 +10,15 @@ import numpy as np
 import pytest
 
 from navcores.models.edt_bfs import plan_path
+from navcores.models.edt_bfs_tiled import plan_path_tiled
 from navcores.sim.cli import main
 from navcores.models.maps import load_grid
 from navcores.sim.rtl.runner import SIMULATORS
 
 ROOT = Path(__file__).resolve().parents[2]
 MAP = ROOT / "maps" / "room-32-32-4.map"
-KEYS = {"height", "width", "engine", "iterations_edt", "iterations_bfs", "cycles", "distance",
-        "nearest", "cfr", "path", "path_xy", "path_found", "frame"}
+KEYS = {"height", "width", "engine", "array", "tile_visits", "iterations_edt", "iterations_bfs", "cycles",
+        "distance", "nearest", "cfr", "path", "path_xy", "path_found", "frame"}
 
 
 def test_model_json_and_plot(tmp_path):
@@ -30,11 +31,33 @@ def test_model_json_and_plot(tmp_path):
     m = plan_path(grid, [(30, 30), (2, 29)], (1, 1), 0)
     assert np.array_equal(data["distance"], m.distance) and np.array_equal(data["cfr"], m.cfr.astype(int))
     assert data["path"] == [list(p) for p in m.path] and data["path_found"] == m.path_found
-    assert data["cycles"] == m.cycles and data["iterations_edt"] == m.iterations_edt
+    assert data["iterations_edt"] == m.iterations_edt
+    # 1024 cells: the default array is 8x8, the tile engine's cycles (with the map's read-out)
+    t = plan_path_tiled(grid, [(30, 30), (2, 29)], (1, 1), 0, array=(8, 8), readout=True)
+    assert data["array"] == [8, 8] and data["tile_visits"] == t.tile_visits > 16 and data["cycles"] == t.cycles
     r, c = np.argwhere(~grid)[0]
     assert data["nearest"][r][c] == m.nearest[r, c].tolist()
     assert png.stat().st_size > 10_000
     assert data["path_found"] and len(data["path"]) > 20
+
+
+def test_array(tmp_path):
+    """--array: as large as the map, the paper's untiled array (its cycles, no tile visits); smaller,
+    the tile engine's figures; the results the same either way."""
+    out = tmp_path / "r.json"
+    grid = load_grid(MAP)
+    m = plan_path(grid, [(30, 30)], (1, 1), 0)
+    for array, want in (("32x32", None), ("40x99", None), ("5x7", (5, 7)), ("32x1", (32, 1))):
+        assert main(["edt", str(MAP), "--dfar", "0", "--goal", "30,30", "--start", "1,1", "--array", array,
+                     "--json", str(out)]) == 0
+        data = json.loads(out.read_text())
+        assert data["path"] == [list(p) for p in m.path] and np.array_equal(data["distance"], m.distance)
+        if want is None:
+            assert data["array"] == [32, 32] and data["tile_visits"] is None and data["cycles"] == m.cycles
+        else:
+            t = plan_path_tiled(grid, [(30, 30)], (1, 1), 0, array=want, readout=True)
+            assert data["array"] == list(want) and data["tile_visits"] == t.tile_visits
+            assert data["cycles"] == t.cycles != m.cycles
 
 
 def test_no_obstacles_gives_null_nearest(tmp_path):
@@ -56,7 +79,12 @@ def test_no_obstacles_gives_null_nearest(tmp_path):
     (["--start", "1,1", "--start", "2,2"], "--start: one start only"),
     (["--start-xy", "1,1", "--start", "2,2"], "--start: one start only"),
     (["--goal-xy", "3.3,1"], r"--goal-xy 3.3,1: \(3.3, 1\) m is off the map \(x 0..3.2 m, y 0..3.2 m\)"),
-    (["--engine", "icarus", str(ROOT / "maps" / "den312d.map")], "supports maps"),
+    (["--engine", "icarus", "--array", "99x99", str(ROOT / "maps" / "den312d.map")],
+     "with the whole map as the array supports maps"),
+    (["--array", "0x8"], "--array: '0x8': expected RxC"),
+    (["--array", "8"], "--array: '8': expected RxC"),
+    (["--array", "1x8", "--engine", "verilator"], "the tile engine's array rows t_r 1: must be an integer in 2..32"),
+    (["--array", "31x9", "--engine", "icarus"], "the tile engine's array 31x9 has 279 cells: at most 256"),
     (["--plot", "x.jpg"], "expected a .png, .pdf, .svg"),
 ])
 def test_errors(args, message, capsys):
@@ -116,6 +144,25 @@ def test_errors_as_subprocess(tmp_path):
         res = subprocess.run([sys.executable, "-m", "sim", *argv], capture_output=True, text=True, cwd=ROOT)
         assert res.returncode != 0 and text in res.stderr and "Traceback" not in res.stderr
         assert len(res.stderr.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_tile_rtl_engine(tmp_path, sim):
+    """The tile engine's RTL: an 8x8 array on a 21x19 map (the engine test's 8x8 / 64x64 builds are
+    reused: the RAM's sides are powers of two from 64), two goals, checked against the tiled model."""
+    rng = np.random.default_rng(5)
+    grid = rng.random((21, 19)) < 0.15
+    grid[0, 0] = grid[20, 18] = grid[0, 18] = False
+    txt = tmp_path / "m.txt"
+    txt.write_text("\n".join("".join("#" if v else "." for v in row) for row in grid) + "\n")
+    out = tmp_path / "m.json"
+    code = main(["edt", str(txt), "--dfar", "0", "--goal", "20,18", "--goal", "0,18", "--start", "0,0",
+                 "--array", "8x8", "--engine", sim, "--json", str(out)])
+    data = json.loads(out.read_text())
+    t = plan_path_tiled(grid, [(20, 18), (0, 18)], (0, 0), 0, array=(8, 8), readout=True)
+    assert code == (0 if t.path_found else 1) and data["rtl_matches_model"] and data["engine"] == sim
+    assert data["array"] == [8, 8] and data["tile_visits"] == t.tile_visits > 9 and data["cycles"] == t.cycles
+    assert data["path"] == [list(p) for p in t.path] and np.array_equal(data["distance"], t.distance)
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)

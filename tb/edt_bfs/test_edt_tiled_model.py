@@ -301,15 +301,7 @@ def test_cycle_model_brute_force():
             read, written = read + rw, written + ww
             cyc[phase] += tm.sched + tm.latency + rb + iterations + max(wb, marks)
         cyc["edt"] += tm.level * res.stats["levels"]
-        goals, roots = 0, set()
-        for r, c in cells[1:3]:
-            goals += tm.goal
-            if res.cfr[r, c]:
-                roots.add((r, c))
-                near = {(r + dr, c + dc) for dr, dc in MOVES.values()}
-                goals += len({rr // tr * nc + cc // tc for rr, cc in near | {(r, c)}
-                              if (rr, cc) == (r, c) or (0 <= rr < h and 0 <= cc < w and res.cfr[rr, cc]
-                                                        and (rr, cc) not in roots)})
+        goals = tm.goal * len(cells[1:3])
         total = (h * -(-w // p) + res.stats["tiles"] + cyc["edt"] + goals + cyc["bfs"]
                  + (tm.latency + max(1, len(res.path)) if start else 0) + (tm.latency + h * w if n % 2 else 0))
         assert (res.stats["words_read"], res.stats["words_written"]) == (read, written)
@@ -327,11 +319,11 @@ def test_cycles_by_hand():
     # level 2 the rest.  A visit: sched 2 + latency 1 + 2 rows x 1 word + 1 iteration
     # + max(2 stores, marks) = 8; plus 1 per level.
     assert [e[:2] + e[3:] for e in res.trace] == [("edt", 1, 1, 1), ("edt", 2, 1, 0), ("bfs", 0, 3, 0)]
-    assert res.stats["cycles"] == {"load": 2, "scan": 1, "edt": 2 * 8 + 2, "goals": 2 + 1,
+    assert res.stats["cycles"] == {"load": 2, "scan": 1, "edt": 2 * 8 + 2, "goals": 2,
                                    # BFS: hop 1 at iteration 1, (1, 0) hop 2 at 2, nothing at 3
                                    "bfs": 2 + 1 + 2 + 3 + 2,
                                    "path": 1 + 2, "readout": 1 + 6}
-    assert res.cycles == 2 + 1 + 18 + 3 + 10 + 3 + 7
+    assert res.cycles == 2 + 1 + 18 + 2 + 10 + 3 + 7
     assert res.path == [(0, 1), (1, 2)] and res.parent[0, 1] == 8 and res.parent[1, 0] == 1
 
 

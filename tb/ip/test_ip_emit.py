@@ -35,6 +35,7 @@ BASE = {
     "edt_cell": {"height": 5, "width": 7},
     "edt_array": {"height": 5, "width": 7},
     "edt_bfs": {"height": 5, "width": 7},
+    "edt_tile_engine": {"t_r": 2, "t_c": 3, "max_h": 5, "max_w": 7},
 }
 
 

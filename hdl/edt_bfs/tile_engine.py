@@ -1,0 +1,584 @@
+"""The EDT/BFS tile engine (issue 18): paper 004's cells as a T_r x T_c array over a map in block RAM."""
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed
+from amaranth.lib import data, stream, wiring
+from amaranth.lib.wiring import In, Out
+
+from navcores.models.edt_bfs import OFFSETS
+from navcores.models.edt_bfs_tiled import Timing
+
+from ..params import Constraint, Param, check, checked_init
+from .frontier import FrontierFlags
+from .state_ram import StateRam
+from .tile_array import TileArray
+from .tile_layouts import named, pixel_layout, tile_widths
+from .worklist import Worklist, tile_layout
+
+STATES = ("IDLE", "LOAD", "SCAN", "LEVEL", "SCHED0", "SCHED1", "READ", "ITER", "STORE",
+          "GOAL0", "GOAL1", "PATH", "READOUT")
+
+__all__ = ["TileEngine", "command_layout", "map_layout", "goal_layout", "result_layout", "visit_layout",
+           "TIMING", "MAX_CELLS"]
+
+TIMING = Timing()       # the cycle constants this RTL implements (the model's defaults)
+MAX_CELLS = 256         # T_r * T_c: a 16 x 16 array of the paper's cells is ~120k LUT4, beyond the LFE5U-85F
+MAX_SIDE = 4096         # a map side (issue 18: real maps are 200 .. 4000 cells a side)
+MAX_PIXELS = 1 << 20    # on-chip state of a 1024 x 1024 map is ~50 Mbit: more than any FPGA's block RAM today
+
+
+def command_layout(w):
+    """One job: the map size, d_far, the goal count, the start, what to stream out."""
+    return data.StructLayout({
+        "height": w["height"], "width": w["width"], "dfar": w["di"], "goals": 16,
+        "start_row": w["row"], "start_col": w["col"], "path": 1, "readout": 1,
+    })
+
+
+def map_layout(p):
+    """One map word: bit j = column w p + j of the row is an obstacle."""
+    return data.StructLayout({"obst": p})
+
+
+def goal_layout(w):
+    return data.StructLayout({"row": w["row"], "col": w["col"]})
+
+
+def result_layout(w):
+    """A path pixel (``map`` = 0) or a pixel of the map read-out (``map`` = 1), with its state."""
+    return data.StructLayout({
+        "map": 1, "row": w["row"], "col": w["col"],
+        "done": 1, "di": w["di"], "dx": signed(w["dx"]), "dy": signed(w["dy"]),
+        "cfr": 1, "visited": 1, "hop": w["hop"], "parent": 4, "last": 1,
+    })
+
+
+def visit_layout(w):
+    """The visit monitor: one cycle of ``valid`` at the end of each tile visit."""
+    return data.StructLayout({"valid": 1, "bfs": 1, "r": range(w["tile_rows"]), "c": range(w["tile_cols"]),
+                              "iterations": w["iters"], "marks": 4})
+
+
+def divmod_const(value, d):
+    """(value // d, value % d) for a constant d (slices when d is a power of two)."""
+    if d & (d - 1) == 0:
+        s = d.bit_length() - 1
+        return value >> s, value[:s] if s else Const(0, 1)
+    return value // d, value % d
+
+
+def _above(value, limit):
+    """value > limit, or 0 when the field cannot exceed it (no constant comparison in the Verilog)."""
+    return value > limit if limit < (1 << len(value)) - 1 else Const(0)
+
+
+class TileEngine(wiring.Component):
+    """Parallel_Path_Plan (paper 004) on a ``t_r`` x ``t_c`` array over a map of up to ``max_h`` x ``max_w``.
+
+    The golden model is :mod:`models.edt_bfs_tiled` (its docstring is the
+    design and the proof): the map's per-pixel state lives in block RAM
+    (:class:`~hdl.edt_bfs.state_ram.StateRam`); a worklist
+    (:class:`~hdl.edt_bfs.worklist.Worklist`) picks a tile, the array
+    (:class:`~hdl.edt_bfs.tile_array.TileArray`, cells
+    :class:`~hdl.edt_bfs.tile_cell.TileCell`) loads it with a one-pixel halo,
+    iterates, writes it back and marks the tiles to visit next.  EDT:
+    level-synchronous, one iteration k per visit, exact (invariant E); BFS:
+    per-pixel hop counts relaxed to convergence per visit, FIFO worklist
+    (invariant B).  Results equal the untiled model's (and so the untiled
+    core's) on every pixel.
+
+    A job: a command, the map (``H * ceil(W / T_c)`` words, row-major), then
+    (after the EDT) the goals, then the results: the path, then on request
+    every pixel.
+
+    Parameters
+    ----------
+    t_r, t_c : int
+        The physical array (T_r x T_c cells, 2..32 a side, at most 256; a RAM
+        word holds ``T_c`` pixels).
+    max_h, max_w : int
+        The largest map (the RAM: ``max_h * ceil(ceil(max_w / T_c) / 3)``
+        words of ``T_c`` pixels in each of 3 banks; more than one tile each
+        way, up to 4096 a side and 2^20 pixels).  The widths follow it
+        (:func:`~hdl.edt_bfs.tile_layouts.tile_widths`).
+
+    Ports
+    -----
+    c_stream : In(stream of command_layout)
+        ``height``, ``width`` (H, W: 1..max_h, 1..max_w; otherwise the
+        command is refused: ``cmd_err``, nothing else happens), ``dfar``
+        (d_far), ``goals`` (how many goal beats follow the EDT), ``start_row``
+        / ``start_col`` (p_s) and ``path`` (stream the path), ``readout``
+        (stream every pixel).  Taken in the idle state only.
+    m_stream : In(stream of map_layout)
+        The map, one word per beat, row-major: row r's words 0 ..
+        ceil(W / T_c) - 1; bit j of word w = column w T_c + j is an obstacle
+        (bits past W are ignored).
+    g_stream : In(stream of goal_layout)
+        ``goals`` goal pixels (p_g), taken after the EDT.  A goal outside
+        the cfr is dropped (the paper's rule), outside the map too
+        (``goal_err``).
+    o_stream : Out(stream of result_layout)
+        With ``path`` and the start reached: the path from p_s to a goal, one
+        pixel per beat (``map`` = 0, Step 5).  Then with ``readout`` every
+        pixel row-major (``map`` = 1): ``done`` (0 only without obstacles),
+        ``di``, the vector ``dx`` / ``dy`` (p - nearest obstacle), ``cfr``,
+        ``visited``, ``hop`` (BFS steps to the nearest goal), ``parent``.
+        ``last`` marks the job's final beat.  A job may end without a beat
+        (no path, no read-out): watch ``busy``.
+    busy : Out(1)
+        A job runs: from the cycle after the command's to its last cycle.
+    cmd_err, start_err, goal_err : Out(1)
+        The last command's size was out of range (job refused); its start
+        lies outside the map (no path); a goal lay outside the map (dropped).
+    path_found : Out(1)
+        The start was reached (valid after the path phase).
+    levels : Out
+        EDT levels of the last job (the untiled ``iterations_edt`` = levels + 1).
+    tile_visits : Out(32)
+        Tile visits of the last job (EDT and BFS).
+    visit : Out(visit_layout)
+        A monitor: ``valid`` for one cycle as each visit ends, with its
+        phase, tile, iterations and the tiles it enqueued (the model's
+        ``trace``).
+
+    Timing (:mod:`models.edt_bfs_tiled`'s cycle model, ``Timing()``: sched
+    2, latency 1, level 1, goal 2; source always valid, sink always ready;
+    cycles from the command's handshake, exclusive, to the last busy cycle)::
+
+        load    = H * ceil(W / T_c)          one map word per beat (the frontier flags on the fly)
+        scan    = tiles                      W_1: one tile per cycle
+        EDT     = sum over levels (1 + sum over the level's visits: visit)
+        goals   = 2 * goals                  read the goal's word; write hop 0, push its tile
+        BFS     = sum over visits: visit
+        path    = 1 + len(path)              (2 without a path; 0 without a start)
+        readout = 1 + H * W                  (0 without)
+        visit   = 2 (pop; address, queued bits) + 1 (RAM latency) + window rows in the map
+                  + iterations (EDT 1) + max(tile rows in the map, tiles enqueued)
+
+    A synchronous reset at any point returns to idle; the next job rewrites
+    every RAM word it reads (the load), the flag RAM and the queued bits
+    (the scan).
+    """
+
+    PARAMS = (
+        Param("t_r", int, lo=2, hi=32, doc="array rows T_r",
+              message="array rows t_r {value!r}: must be an integer in {lo}..{hi}"),
+        Param("t_c", int, lo=2, hi=32, doc="array columns T_c (pixels per RAM word)",
+              message="array columns t_c {value!r}: must be an integer in {lo}..{hi}"),
+        Param("max_h", int, lo=3, hi=MAX_SIDE, doc="largest map height (the RAM)",
+              message="largest map height max_h {value!r}: must be an integer in {lo}..{hi}"),
+        Param("max_w", int, lo=3, hi=MAX_SIDE, doc="largest map width (the RAM)",
+              message="largest map width max_w {value!r}: must be an integer in {lo}..{hi}"),
+    )
+    CONSTRAINTS = (
+        Constraint("max_h > t_r and max_w > t_c", lambda p: p["max_h"] > p["t_r"] and p["max_w"] > p["t_c"],
+                   "largest map {max_h}x{max_w} fits one {t_r}x{t_c} tile: the RAM must hold at least two "
+                   "tiles each way (a map of one tile is the untiled core's, edt_bfs)"),
+        Constraint(f"t_r * t_c <= {MAX_CELLS}", lambda p: p["t_r"] * p["t_c"] <= MAX_CELLS,
+                   "array {t_r}x{t_c} has {n} cells: at most " + str(MAX_CELLS) +
+                   " (16x16 is ~120k LUT4, more than the largest ECP5)", lambda p: {"n": p["t_r"] * p["t_c"]}),
+        Constraint(f"max_h * max_w <= {MAX_PIXELS}", lambda p: p["max_h"] * p["max_w"] <= MAX_PIXELS,
+                   "largest map {max_h}x{max_w} has {n} pixels: the on-chip state store holds at most "
+                   + str(MAX_PIXELS) + " (about 50 Mbit)", lambda p: {"n": p["max_h"] * p["max_w"]}),
+    )
+
+    @checked_init
+    def __init__(self, t_r, t_c, max_h, max_w):
+        check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w)
+        self.t_r, self.t_c, self.max_h, self.max_w = t_r, t_c, max_h, max_w
+        w = self.w = tile_widths(t_r, t_c, max_h, max_w)
+        super().__init__({
+            "c_stream": In(stream.Signature(command_layout(w))),
+            "m_stream": In(stream.Signature(map_layout(t_c))),
+            "g_stream": In(stream.Signature(goal_layout(w))),
+            "o_stream": Out(stream.Signature(result_layout(w))),
+            "busy": Out(1), "cmd_err": Out(1), "start_err": Out(1), "goal_err": Out(1),
+            "path_found": Out(1), "levels": Out(w["k"]), "tile_visits": Out(32),
+            "visit": Out(visit_layout(w)),
+        })
+
+    def timing(self):
+        """The cycle figures hdl.emit puts in the manifest (models.edt_bfs_tiled's cycle model)."""
+        t = TIMING
+        return {"load_cycles": "H * ceil(W / T_c)", "scan_cycles": "tiles",
+                "edt_cycles": f"sum over levels ({t.level} + visits)", "goal_cycles": t.goal,
+                "visit_cycles": f"{t.sched} + {t.latency} + window rows + iterations + max(tile rows, marks)",
+                "path_cycles": f"{t.latency} + len(path)", "readout_cycles": f"{t.latency} + H * W",
+                "note": "source always valid, sink always ready; back-pressure adds cycles"}
+
+    def elaborate(self, platform):
+        m = Module()
+        t_r, t_c, w = self.t_r, self.t_c, self.w
+        nonedi = (1 << w["di"]) - 1
+        nonehop = (1 << w["hop"]) - 1
+        m.submodules.ram = ram = StateRam(w, t_c, self.max_h)
+        m.submodules.work = work = Worklist(w)
+        m.submodules.front = front = FrontierFlags(w, t_c)
+        m.submodules.array = arr = TileArray(t_r, t_c, w)
+        mem = ram                                 # the state store's ports (StateSignature)
+
+        state = Signal(range(len(STATES)))
+        at = {name: named(m, f"at_{name.lower()}", state == n) for n, name in enumerate(STATES)}
+
+        def goto(name):
+            m.d.sync += state.eq(STATES.index(name))
+
+        # -- job registers
+        H = Signal(w["height"])
+        W = Signal(w["width"])
+        ncw = Signal(range(w["words"] + 1))       # word columns = tile columns of the map
+        nr = Signal(range(w["tile_rows"] + 1))
+        last_px = Signal(range(t_c))              # (W - 1) mod T_c: the last word's last pixel
+        dfar = Signal(w["di"])
+        goals_left = Signal(16)
+        start = Signal(goal_layout(w))
+        want_path = Signal()
+        want_readout = Signal()
+        bfs = Signal()                            # phase: 0 EDT, 1 BFS
+        k = Signal(w["k"])
+        kk1 = Signal(w["delta"])
+        rem = Signal(range(work.depth + 1))       # tiles of W_k still queued
+
+        # -- the array's broadcast inputs
+        m.d.comb += [arr.phase.eq(bfs), arr.k.eq(k), arr.kk1.eq(kk1), arr.dfar.eq(dfar)]
+
+        # -- after a phase: the next one (and its first registers)
+        cur = Signal(goal_layout(w))              # path: the pixel read / shown
+        p_need = Signal()                         # path / read-out: a read is owed
+        p_first = Signal()
+        ro_row = Signal(w["row"])
+        ro_w = Signal(range(w["words"]))
+        ro_j = Signal(range(t_c))
+
+        def after_bfs():
+            with m.If(want_path & ~self.start_err):
+                m.d.sync += [cur.eq(start), p_need.eq(1), p_first.eq(1)]
+                goto("PATH")
+            with m.Else():
+                after_path()
+
+        def after_path():
+            with m.If(want_readout):
+                m.d.sync += [ro_row.eq(0), ro_w.eq(0), ro_j.eq(0), p_need.eq(1)]
+                goto("READOUT")
+            with m.Else():
+                goto("IDLE")
+
+        def after_edt():
+            m.d.sync += bfs.eq(1)
+            with m.If(goals_left != 0):
+                goto("GOAL0")
+            with m.Else():
+                after_bfs()
+
+        # -- IDLE: a command
+        cmd = self.c_stream.payload
+        ncw_new, _ = divmod_const(cmd.width + (t_c - 1), t_c)
+        nr_new, _ = divmod_const(cmd.height + (t_r - 1), t_r)
+        _, lp_new = divmod_const(cmd.width - 1, t_c)
+        bad = Signal()
+        m.d.comb += bad.eq((cmd.height == 0) | (cmd.width == 0)
+                           | _above(cmd.height, self.max_h) | _above(cmd.width, self.max_w))
+        lr = Signal(w["row"])
+        lw = Signal(range(w["words"]))
+        ltr = Signal(range(w["tile_rows"]))
+        lj = Signal(range(t_r))
+        with m.If(at["IDLE"] & self.c_stream.valid):
+            m.d.sync += self.cmd_err.eq(bad)
+            with m.If(~bad):
+                m.d.sync += [
+                    H.eq(cmd.height), W.eq(cmd.width), ncw.eq(ncw_new), nr.eq(nr_new), last_px.eq(lp_new),
+                    dfar.eq(cmd.dfar), goals_left.eq(cmd.goals), start.row.eq(cmd.start_row),
+                    start.col.eq(cmd.start_col), want_path.eq(cmd.path), want_readout.eq(cmd.readout),
+                    self.start_err.eq(cmd.path & ((cmd.start_row >= cmd.height) | (cmd.start_col >= cmd.width))),
+                    self.goal_err.eq(0), self.path_found.eq(0), self.levels.eq(0), self.tile_visits.eq(0),
+                    bfs.eq(0), k.eq(0), kk1.eq(0), lr.eq(0), lw.eq(0), ltr.eq(0), lj.eq(0),
+                ]
+                goto("LOAD")
+        m.d.comb += [self.c_stream.ready.eq(at["IDLE"]), self.busy.eq(~at["IDLE"]),
+                     work.init.eq(at["IDLE"]), front.init.eq(at["IDLE"])]
+
+        # -- LOAD: one map word per beat: the RAM's initial state, the frontier flags
+        sr = Signal(range(w["tile_rows"]))        # the scan's tile
+        sc = Signal(range(w["tile_cols"]))
+        load_fire = named(m, "load_fire", at["LOAD"] & self.m_stream.valid & mem.wr.ready)
+        row_end = named(m, "row_end", lw == ncw - 1)
+        load_last = named(m, "load_last", row_end & (lr == H - 1))
+        init_word = Signal(data.ArrayLayout(pixel_layout(w), t_c))
+        for j in range(t_c):
+            m.d.comb += [init_word[j].di.eq(Mux(self.m_stream.payload.obst[j], 0, nonedi)),
+                         init_word[j].hop.eq(nonehop)]
+        m.d.comb += [self.m_stream.ready.eq(at["LOAD"] & mem.wr.ready),
+                     front.beat.eq(load_fire), front.obst.eq(self.m_stream.payload.obst),
+                     front.row.eq(lr), front.wcol.eq(lw), front.tile_row.eq(ltr), front.tile_top.eq(lj == 0),
+                     front.row_end.eq(row_end), front.last.eq(load_last), front.width.eq(W)]
+        with m.If(load_fire):
+            with m.If(row_end):
+                m.d.sync += [lw.eq(0), lr.eq(lr + 1)]
+                with m.If(lj == t_r - 1):
+                    m.d.sync += [lj.eq(0), ltr.eq(ltr + 1)]
+                with m.Else():
+                    m.d.sync += lj.eq(lj + 1)
+            with m.Else():
+                m.d.sync += lw.eq(lw + 1)
+            with m.If(load_last):
+                m.d.sync += [sr.eq(0), sc.eq(0)]
+                goto("SCAN")
+
+        # -- SCAN: W_1 in raster order, and every tile's queued bit
+        flag = named(m, "flag", front.flags.bit_select(sc, 1))
+        scan_end_row = named(m, "scan_end_row", sc == ncw - 1)
+        scan_last = named(m, "scan_last", (sr == nr - 1) & scan_end_row)
+        m.d.comb += [front.scan_en.eq((load_fire & load_last) | (at["SCAN"] & scan_end_row & ~scan_last)),
+                     front.scan_row.eq(Mux(at["SCAN"], sr + 1, 0))]
+        push = Signal()
+        push_tile = Signal(tile_layout(w))
+        m.d.comb += [work.push.eq(push), work.push_tile.eq(push_tile)]
+        queued_after = named(m, "queued_after", work.count + push != 0)     # the FIFO after this cycle
+        with m.If(at["SCAN"]):
+            m.d.comb += [push.eq(flag), push_tile.r.eq(sr), push_tile.c.eq(sc),
+                         work.clear.eq(~flag), work.clear_tile.r.eq(sr), work.clear_tile.c.eq(sc)]
+            with m.If(scan_end_row):
+                m.d.sync += [sc.eq(0), sr.eq(sr + 1)]
+            with m.Else():
+                m.d.sync += sc.eq(sc + 1)
+            with m.If(scan_last):
+                with m.If(queued_after):
+                    goto("LEVEL")
+                with m.Else():
+                    after_edt()
+
+        # -- LEVEL: W_{k+1} becomes W_k
+        with m.If(at["LEVEL"]):
+            m.d.sync += [k.eq(k + 1), kk1.eq(kk1 + (k << 1)), self.levels.eq(self.levels + 1),
+                         rem.eq(work.count)]
+            goto("SCHED0")
+
+        # -- a visit: SCHED0 pops, SCHED1 sets the window up, READ loads it, ITER, STORE
+        vt = Signal(tile_layout(w))
+        r0 = Signal(w["row"] + 1)
+        win_first = Signal(w["row"])
+        rows_left = Signal(range(t_r + 3))        # window rows still to read
+        recv_left = Signal(range(t_r + 3))        # and to receive
+        ld_row = Signal(range(t_r + 2))
+        own = Signal(range(t_r + 1))              # tile rows inside the map
+        col_present = Signal(t_c + 2)
+        iters = Signal(w["iters"])
+        sj = Signal(range(t_r + 1))               # store: rows written
+        pushed = Signal(9)
+        with m.If(at["SCHED0"]):
+            m.d.comb += work.pop.eq(1)
+            with m.If(~bfs):
+                m.d.sync += rem.eq(rem - 1)
+            goto("SCHED1")
+
+        head = work.head
+        h_r0 = named(m, "h_r0", head.r * t_r, w["row"] + 1)
+        h_c0 = named(m, "h_c0", head.c * t_c, w["col"] + 1)
+        h_first = named(m, "h_first", Mux(head.r == 0, 0, h_r0 - 1), w["row"])
+        h_last = named(m, "h_last", Mux(h_r0 + t_r >= H, H - 1, h_r0 + t_r), w["row"])
+        h_rows = named(m, "h_rows", h_last - h_first + 1, range(t_r + 3))
+        m.d.comb += [work.look_at.eq(Mux(at["SCHED1"], head, 0))]
+        with m.If(at["SCHED1"]):
+            m.d.comb += [work.look.eq(1), arr.clear.eq(1)]
+            m.d.sync += [
+                vt.eq(head), r0.eq(h_r0), win_first.eq(h_first),
+                rows_left.eq(h_rows), recv_left.eq(h_rows),
+                ld_row.eq(Mux(head.r == 0, 1, 0)),
+                own.eq(Mux(h_r0 + t_r > H, H - h_r0, t_r)),
+                col_present.eq(Cat(head.c != 0, *[h_c0 + (b - 1) < W for b in range(1, t_c + 2)])),
+                iters.eq(0), sj.eq(0), pushed.eq(0),
+            ]
+            goto("READ")
+
+        # READ: one window row per beat (the RAM answers one cycle later)
+        rd_row = Signal(w["row"])
+        with m.If(at["SCHED1"]):
+            m.d.sync += rd_row.eq(h_first)
+        with m.If(at["READ"]):
+            with m.If(mem.rd.valid & mem.rd.ready):
+                m.d.sync += [rd_row.eq(rd_row + 1), rows_left.eq(rows_left - 1)]
+            with m.If(mem.rd_data.valid):
+                m.d.comb += arr.ld_en.eq(1)
+                m.d.sync += [ld_row.eq(ld_row + 1), recv_left.eq(recv_left - 1)]
+                with m.If(recv_left == 1):
+                    goto("ITER")
+        m.d.comb += [arr.ld_row.eq(ld_row), arr.ld_present.eq(col_present),
+                     arr.ld_px.eq(Cat(mem.rd_data.payload.left, mem.rd_data.payload.word,
+                                      mem.rd_data.payload.right))]
+
+        # ITER: EDT one iteration; BFS until one changes nothing (counted)
+        with m.If(at["ITER"]):
+            m.d.comb += arr.step.eq(1)
+            m.d.sync += iters.eq(iters + 1)
+            with m.If(~bfs | ~arr.upd):
+                goto("STORE")
+
+        # STORE: tile rows back to RAM, one per beat; the marks, one enqueued tile per beat
+        near = Signal(9)
+        m.d.comb += near.eq(work.near & ~1)       # the tile itself was just popped
+        pend = Signal(9)
+        m.d.comb += pend.eq(arr.marks & ~near & ~pushed)
+        low = Signal(9)
+        m.d.comb += low.eq(pend & (~pend + 1))
+        mark_tile = Signal(tile_layout(w))
+        m.d.comb += mark_tile.eq(vt)
+        for i, (dr, dc) in OFFSETS.items():
+            with m.If(low[i]):
+                m.d.comb += [mark_tile.r.eq(vt.r + dr), mark_tile.c.eq(vt.c + dc)]
+        store_wr = named(m, "store_wr", at["STORE"] & (sj < own))
+        wr_fire = named(m, "wr_fire", store_wr & mem.wr.ready)
+        visit_end = named(m, "visit_end", at["STORE"] & ((sj + wr_fire) >= own) & ((pend & ~low) == 0))
+        all_marks = named(m, "all_marks", pushed | low)
+        with m.If(at["STORE"]):
+            m.d.comb += [push.eq(pend != 0), push_tile.eq(mark_tile)]
+            m.d.sync += pushed.eq(pushed | low)
+            with m.If(wr_fire):
+                m.d.sync += sj.eq(sj + 1)
+            with m.If(visit_end):
+                m.d.sync += [self.visit.valid.eq(1), self.visit.bfs.eq(bfs), self.visit.r.eq(vt.r),
+                             self.visit.c.eq(vt.c), self.visit.iterations.eq(iters),
+                             self.visit.marks.eq(sum(all_marks[i] for i in range(9))),
+                             self.tile_visits.eq(self.tile_visits + 1)]
+                with m.If(bfs):
+                    with m.If(queued_after):
+                        goto("SCHED0")
+                    with m.Else():
+                        after_bfs()
+                with m.Elif(rem != 0):
+                    goto("SCHED0")
+                with m.Elif(queued_after):
+                    goto("LEVEL")
+                with m.Else():
+                    after_edt()
+        with m.If(~visit_end):
+            m.d.sync += self.visit.valid.eq(0)
+        m.d.comb += arr.wb_row.eq(sj)
+
+        # -- GOAL0 / GOAL1: read the goal's word; write hop 0 and push its tile if it is in the cfr
+        g = Signal(goal_layout(w))
+        g_in = Signal()
+        g_j = Signal(range(t_c))
+        g_tile = Signal(tile_layout(w))
+        gp = self.g_stream.payload
+        g_wcol = named(m, "g_wcol", divmod_const(gp.col, t_c)[0], range(w["words"]))
+        g_jn = named(m, "g_j_next", divmod_const(gp.col, t_c)[1], range(t_c))
+        g_tr = named(m, "g_tile_row", divmod_const(gp.row, t_r)[0], range(w["tile_rows"]))
+        goal_fire = named(m, "goal_fire", at["GOAL0"] & self.g_stream.valid & mem.rd.ready)
+        m.d.comb += self.g_stream.ready.eq(at["GOAL0"] & mem.rd.ready)
+        with m.If(at["GOAL0"]):
+            m.d.comb += [work.look.eq(self.g_stream.valid), work.look_at.r.eq(g_tr), work.look_at.c.eq(g_wcol)]
+        with m.If(goal_fire):
+            inside = (gp.row < H) & (gp.col < W)
+            m.d.sync += [g.eq(gp), g_in.eq(inside), g_j.eq(g_jn), g_tile.r.eq(g_tr), g_tile.c.eq(g_wcol)]
+            with m.If(~inside):
+                m.d.sync += self.goal_err.eq(1)
+            goto("GOAL1")
+        gword = mem.rd_data.payload.word
+        gpx = named(m, "goal_px", gword[g_j], pixel_layout(w))
+        g_cfr = named(m, "goal_cfr", g_in & ((gpx.di == nonedi) | (gpx.di > dfar)))
+        goal_word = Signal(data.ArrayLayout(pixel_layout(w), t_c))
+        for j in range(t_c):
+            mine = g_j == j
+            m.d.comb += [goal_word[j].eq(gword[j]),
+                         goal_word[j].hop.eq(Mux(mine, 0, gword[j].hop)),
+                         goal_word[j].parent.eq(Mux(mine, 0, gword[j].parent))]
+        goal_done = named(m, "goal_done", at["GOAL1"] & mem.rd_data.valid & mem.wr.ready)
+        with m.If(goal_done):
+            m.d.comb += [push.eq(g_cfr & ~work.near[0]), push_tile.eq(g_tile)]
+            m.d.sync += goals_left.eq(goals_left - 1)
+            with m.If(goals_left == 1):
+                with m.If(queued_after):
+                    goto("SCHED0")
+                with m.Else():
+                    after_bfs()
+            with m.Else():
+                goto("GOAL0")
+
+        # -- PATH: from the start along the parents, one pixel per beat (Step 5)
+        cur_j = named(m, "cur_j", divmod_const(cur.col, t_c)[1], range(t_c))
+        path_px = named(m, "path_px", mem.rd_data.payload.word[cur_j], pixel_layout(w))
+        no_path = named(m, "no_path", p_first & (path_px.hop == nonehop))
+        beat_path = named(m, "beat_path", at["PATH"] & mem.rd_data.valid & ~no_path)
+        advance = named(m, "advance", beat_path & self.o_stream.ready & (path_px.parent != 0))
+        nxt = Signal(goal_layout(w))
+        m.d.comb += nxt.eq(cur)
+        for i, (dr, dc) in OFFSETS.items():
+            with m.If(path_px.parent == i):
+                m.d.comb += [nxt.row.eq(cur.row + dr), nxt.col.eq(cur.col + dc)]
+        with m.If(at["PATH"]):
+            with m.If(mem.rd.valid):
+                m.d.sync += p_need.eq(~mem.rd.ready)
+            with m.If(mem.rd_data.valid):
+                with m.If(no_path):
+                    after_path()
+                with m.Elif(self.o_stream.ready):
+                    m.d.sync += [self.path_found.eq(1), p_first.eq(0)]
+                    with m.If(path_px.parent == 0):
+                        after_path()
+                    with m.Else():
+                        m.d.sync += cur.eq(nxt)
+
+        # -- READOUT: every pixel, row-major, one per beat
+        ro_px = named(m, "ro_px", mem.rd_data.payload.word[ro_j], pixel_layout(w))
+        ro_last_w = named(m, "ro_last_w", ro_w == ncw - 1)
+        word_end = named(m, "word_end", Mux(ro_last_w, ro_j == last_px, ro_j == t_c - 1))
+        ro_final = named(m, "ro_final", word_end & ro_last_w & (ro_row == H - 1))
+        beat_ro = named(m, "beat_ro", at["READOUT"] & mem.rd_data.valid)
+        ro_next = named(m, "ro_next", beat_ro & self.o_stream.ready & word_end & ~ro_final)
+        ro_nrow = named(m, "ro_next_row", Mux(ro_last_w, ro_row + 1, ro_row), w["row"])
+        ro_nw = named(m, "ro_next_w", Mux(ro_last_w, 0, ro_w + 1), range(w["words"]))
+        with m.If(at["READOUT"]):
+            with m.If(mem.rd.valid):
+                m.d.sync += p_need.eq(~mem.rd.ready)
+            with m.If(beat_ro & self.o_stream.ready):
+                with m.If(ro_final):
+                    goto("IDLE")
+                with m.Elif(word_end):
+                    m.d.sync += [ro_row.eq(ro_nrow), ro_w.eq(ro_nw), ro_j.eq(0)]
+                with m.Else():
+                    m.d.sync += ro_j.eq(ro_j + 1)
+
+        # -- the RAM's ports
+        rd, wr = mem.rd.payload, mem.wr.payload
+        with m.If(at["READ"]):
+            m.d.comb += [mem.rd.valid.eq(rows_left != 0), rd.row.eq(rd_row), rd.wcol.eq(vt.c),
+                         mem.rd_data.ready.eq(1)]
+        with m.Elif(at["GOAL0"]):
+            m.d.comb += [mem.rd.valid.eq(self.g_stream.valid), rd.row.eq(gp.row), rd.wcol.eq(g_wcol)]
+        with m.Elif(at["GOAL1"]):
+            m.d.comb += mem.rd_data.ready.eq(mem.wr.ready)
+        with m.Elif(at["PATH"]):
+            pos = named(m, "path_pos", Mux(advance, nxt.as_value(), cur.as_value()), goal_layout(w))
+            m.d.comb += [mem.rd.valid.eq(p_need | advance), rd.row.eq(pos.row),
+                         rd.wcol.eq(divmod_const(pos.col, t_c)[0]),
+                         mem.rd_data.ready.eq(no_path | self.o_stream.ready)]
+        with m.Elif(at["READOUT"]):
+            m.d.comb += [mem.rd.valid.eq(p_need | ro_next), rd.row.eq(Mux(ro_next, ro_nrow, ro_row)),
+                         rd.wcol.eq(Mux(ro_next, ro_nw, ro_w)),
+                         mem.rd_data.ready.eq(self.o_stream.ready & word_end)]
+        with m.If(at["LOAD"]):
+            m.d.comb += [mem.wr.valid.eq(self.m_stream.valid), wr.row.eq(lr), wr.wcol.eq(lw),
+                         wr.edt.eq(1), wr.bfs.eq(1), wr.word.eq(init_word)]
+        with m.Elif(at["STORE"]):
+            m.d.comb += [mem.wr.valid.eq(store_wr), wr.row.eq(r0 + sj), wr.wcol.eq(vt.c),
+                         wr.edt.eq(~bfs), wr.bfs.eq(bfs), wr.word.eq(arr.wb)]
+        with m.Elif(at["GOAL1"]):
+            m.d.comb += [mem.wr.valid.eq(mem.rd_data.valid & g_cfr), wr.row.eq(g.row), wr.wcol.eq(g_tile.c),
+                         wr.bfs.eq(1), wr.word.eq(goal_word)]
+
+        # -- the result stream
+        o = self.o_stream.payload
+        px = Signal(pixel_layout(w))
+        m.d.comb += px.eq(Mux(at["PATH"], path_px.as_value(), ro_px.as_value()))
+        m.d.comb += [
+            self.o_stream.valid.eq(beat_path | beat_ro),
+            o.map.eq(at["READOUT"]),
+            o.row.eq(Mux(at["PATH"], cur.row, ro_row)),
+            o.col.eq(Mux(at["PATH"], cur.col, ro_w * t_c + ro_j)),
+            o.done.eq(px.di != nonedi), o.di.eq(px.di), o.dx.eq(px.dx), o.dy.eq(px.dy),
+            o.cfr.eq((px.di == nonedi) | (px.di > dfar)), o.visited.eq(px.hop != nonehop),
+            o.hop.eq(px.hop), o.parent.eq(px.parent),
+            o.last.eq(Mux(at["PATH"], (path_px.parent == 0) & ~want_readout, ro_final)),
+        ]
+        return m

@@ -1,0 +1,114 @@
+"""Widths and layouts of the EDT/BFS tile engine (issue 18), all derived from the largest map.
+
+One pixel's RAM state is :func:`models.edt_bfs_tiled.state_bits`' word: ``di``
+(NONE = all ones while not done), signed ``dx`` / ``dy`` (the NNT vector
+p - nearest obstacle), ``hop`` (NONE = all ones while not visited) and
+``parent`` (0..8).  done, visited, the cfr and the paper's delta are derived
+where a tile is loaded, so they cost no RAM bits.  The RAM holds
+``p = T_c`` pixels of a map row per word, and two *field groups* per word
+that are written separately: the EDT's (di, dx, dy) and the BFS's
+(hop, parent).
+"""
+
+from amaranth.hdl import Signal, Value, signed
+from amaranth.lib import data
+
+from navcores.models.edt_bfs import widths
+from navcores.models.edt_bfs_tiled import state_bits
+
+__all__ = ["named", "flat", "tile_widths", "pixel_layout", "edt_layout", "bfs_layout", "cell_layout", "nb_layout",
+           "EDT_FIELDS", "BFS_FIELDS"]
+
+EDT_FIELDS = ("di", "dx", "dy")
+BFS_FIELDS = ("hop", "parent")
+
+
+def _bits(n):
+    return max(1, int(n).bit_length())
+
+
+def tile_widths(t_r, t_c, max_h, max_w):
+    """Widths of a ``t_r`` x ``t_c`` engine whose RAM holds maps up to ``max_h`` x ``max_w``.
+
+    ``di``, ``dx``, ``dy``, ``hop``, ``parent``: the RAM fields
+    (:func:`models.edt_bfs_tiled.state_bits`); ``k``: the level counter
+    (1..k_di, :func:`models.edt_bfs.widths`); ``delta``: the paper's delta of
+    a done pixel entering level k, ``k(k-1) - dx^2 - dy^2`` in 0..k_max^2;
+    ``key``: the MAX tree's key, signed: the EDT's candidate delta_i (eq. 3,
+    ``widths``' ``cand``) or the BFS's complemented hop; ``val``: the cell
+    register holding delta (EDT) or hop (BFS).
+    """
+    w = widths(max_h, max_w)
+    f = state_bits(max_h, max_w)["fields"]
+    words = -(-max_w // t_c)
+    return {
+        "di": f["di"], "dx": f["dx"], "dy": f["dy"], "hop": f["hop"], "parent": f["parent"],
+        "bits": sum(f.values()),
+        "k": w["k"], "k_di": w["k_di"], "delta": w["delta"],
+        "key": max(w["cand"], f["hop"] + 1),
+        "val": max(w["delta"], f["hop"]),
+        "row": _bits(max_h - 1), "col": _bits(max_w - 1),
+        "height": _bits(max_h), "width": _bits(max_w),
+        "words": words,                                   # word columns of the widest map
+        "tile_rows": -(-max_h // t_r), "tile_cols": words,
+        "tr": _bits(-(-max_h // t_r) - 1), "tc": _bits(words - 1),
+        "iters": _bits(t_r * t_c + 1),                    # BFS iterations of one visit
+    }
+
+
+def pixel_layout(w):
+    """One pixel's RAM state (both field groups)."""
+    return data.StructLayout({"di": w["di"], "dx": signed(w["dx"]), "dy": signed(w["dy"]),
+                              "hop": w["hop"], "parent": w["parent"]})
+
+
+def edt_layout(w):
+    """The EDT's field group of a pixel."""
+    return data.StructLayout({"di": w["di"], "dx": signed(w["dx"]), "dy": signed(w["dy"])})
+
+
+def bfs_layout(w):
+    """The BFS's field group of a pixel."""
+    return data.StructLayout({"hop": w["hop"], "parent": w["parent"]})
+
+
+def cell_layout(w):
+    """A window cell's register (tile cells and halo cells alike).
+
+    ``present``: inside the map; ``flag``: done before this level (EDT,
+    di <= k-1) / visited (BFS, hop != NONE); ``fresh``: a halo pixel made done
+    earlier in this level (di = k); ``cfr``: in the collision-free region;
+    ``chg``: this visit made the pixel done (EDT) / lowered its hop, or it is
+    a root (BFS); ``val``: delta (EDT) / hop (BFS); ``dx``, ``dy``: the
+    vector; ``aux``: di (EDT) / parent (BFS).
+    """
+    return data.StructLayout({
+        "present": 1, "flag": 1, "fresh": 1, "cfr": 1, "chg": 1,
+        "val": w["val"], "dx": signed(w["dx"]), "dy": signed(w["dy"]),
+        "aux": max(w["di"], w["parent"]),
+    })
+
+
+def nb_layout(w):
+    """What a cell shows its neighbours: ``flag``, ``ram`` (done in RAM now: flag | fresh), ``val``, ``dx``, ``dy``."""
+    return data.StructLayout({"flag": 1, "ram": 1, "val": w["val"], "dx": signed(w["dx"]),
+                              "dy": signed(w["dy"])})
+
+
+def named(m, name, value, shape=None):
+    """``value`` as a combinational signal.  Amaranth emits an expression anew
+    wherever it is used; a signal is emitted once (and simulated once)."""
+    s = Signal(shape if shape is not None else Value.cast(value).shape(), name=name)
+    m.d.comb += s.eq(value)
+    return s
+
+
+def flat(layout, name):
+    """A signal of ``layout``'s width, and a view of it with ``layout``'s fields.
+
+    A signal whose shape is a layout makes Amaranth emit a named wire per
+    field; in an array of cells those are thousands of wires that only make
+    the Verilog, the Icarus netlist and Verilator's C++ larger.
+    """
+    s = Signal(layout.size, name=name)
+    return s, layout(s)

@@ -1,0 +1,150 @@
+"""The tile engine's scheduler state: a FIFO of tiles and a queued bit per tile."""
+
+from amaranth.hdl import Cat, Module, Mux, Signal
+from amaranth.lib import data, wiring
+from amaranth.lib.memory import Memory
+from amaranth.lib.wiring import In, Out
+
+from navcores.models.edt_bfs import OFFSETS
+
+from .tile_layouts import named
+
+__all__ = ["Worklist", "tile_layout"]
+
+
+def tile_layout(w):
+    """A tile's coordinates: tile row ``r`` and tile column ``c``."""
+    return data.StructLayout({"r": range(w["tile_rows"]), "c": range(w["tile_cols"])})
+
+
+class Worklist(wiring.Component):
+    """The worklist of :mod:`models.edt_bfs_tiled` (``_Fifo``): a FIFO of tiles, no duplicates.
+
+    The FIFO is a RAM of tiles_max entries (a tile is queued at most once, so
+    it never overflows; the EDT's two worklists W_k and W_{k+1} share it, W_k
+    at the head and W_{k+1} behind it, since no tile is in both).  The queued
+    bits live in nine RAM banks by (tile row mod 3, tile column mod 3), so
+    the bits of a tile's 3 x 3 tile neighbourhood are read in one cycle
+    (``look``): the engine marks only tiles not queued, and a mark costs a
+    beat only when it enqueues.
+
+    Ports
+    -----
+    init : In(1)
+        Empty the FIFO (a job's start; the queued bits are written by the scan).
+    pop : In(1)
+        Take the head: ``head`` shows it the next cycle (held until the next
+        pop), when its queued bit is cleared.  Not in the cycle after a
+        ``push`` or ``clear`` of the same tile.
+    head : Out(tile_layout)
+    count : Out
+        Tiles queued.
+    look : In(1), look_at : In(tile_layout)
+        Read the queued bits around ``look_at``; ``near`` shows them the
+        next cycle (held until the next look): bit 0 the tile itself, bit i
+        the tile in direction i (Fig. 1; don't-care outside the map).
+    near : Out(9)
+    push : In(1), push_tile : In(tile_layout)
+        Enqueue a tile that is not queued (the caller checked ``near``).
+    clear : In(1), clear_tile : In(tile_layout)
+        Clear a tile's queued bit (the scan's tiles without a frontier).
+
+    At most one of push, clear and the pop's clear per cycle.
+    """
+
+    def __init__(self, w):
+        self.w = w
+        self.depth = w["tile_rows"] * w["tile_cols"]
+        tl = tile_layout(w)
+        super().__init__({
+            "init": In(1), "pop": In(1), "head": Out(tl), "count": Out(range(self.depth + 1)),
+            "look": In(1), "look_at": In(tl), "near": Out(9),
+            "push": In(1), "push_tile": In(tl), "clear": In(1), "clear_tile": In(tl),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        w, depth = self.w, self.depth
+        tl = tile_layout(w)
+
+        # FIFO
+        m.submodules.fifo = fifo = Memory(shape=tl, depth=depth, init=[])
+        rp, wp = fifo.read_port(), fifo.write_port()
+        head = Signal(range(depth))
+        tail = Signal(range(depth))
+
+        def inc(p):
+            return Mux(p == depth - 1, 0, p + 1)
+
+        m.d.comb += [rp.addr.eq(head), rp.en.eq(self.pop), self.head.eq(rp.data),
+                     wp.addr.eq(tail), wp.data.eq(self.push_tile), wp.en.eq(self.push)]
+        with m.If(self.init):
+            m.d.sync += [head.eq(0), tail.eq(0), self.count.eq(0)]
+        with m.Else():
+            with m.If(self.pop):
+                m.d.sync += head.eq(inc(head))
+            with m.If(self.push):
+                m.d.sync += tail.eq(inc(tail))
+            m.d.sync += self.count.eq(self.count + self.push - self.pop)
+
+        # Queued bits: bank (r mod 3, c mod 3) holds tile (r, c) at (r // 3) * sc + c // 3,
+        # with one spare row and column of addresses for the neighbours past the last tile.
+        sr = -(-w["tile_rows"] // 3) + 1
+        sc = -(-w["tile_cols"] // 3) + 1
+        popped = Signal()
+        m.d.sync += popped.eq(self.pop)
+        wr_tile = Signal(tl)
+        wr_val = Signal()
+        wr_en = Signal()
+        with m.If(popped):
+            m.d.comb += [wr_tile.eq(rp.data), wr_en.eq(1)]
+        with m.Elif(self.push):
+            m.d.comb += [wr_tile.eq(self.push_tile), wr_val.eq(1), wr_en.eq(1)]
+        with m.Elif(self.clear):
+            m.d.comb += [wr_tile.eq(self.clear_tile), wr_en.eq(1)]
+        wq = [named(m, n, v, shape) for n, v, shape in (
+            ("wq_r", wr_tile.r // 3, range(sr)), ("wm_r", wr_tile.r % 3, 2),
+            ("wq_c", wr_tile.c // 3, range(sc)), ("wm_c", wr_tile.c % 3, 2))]
+        waddr = named(m, "waddr", wq[0] * sc + wq[2], range(sr * sc))
+
+        at = self.look_at
+        lr, lm = named(m, "lq_r", at.r // 3, range(sr)), named(m, "lm_r", at.r % 3, 2)
+        cq, cm = named(m, "lq_c", at.c // 3, range(sc)), named(m, "lm_c", at.c % 3, 2)
+        seen = Signal(4)               # (r mod 3, c mod 3) of the last look
+        with m.If(self.look):
+            m.d.sync += seen.eq(Cat(lm, cm))
+
+        def shifted(q, mod, k, name):
+            """(q, valid) of the neighbour coordinate that bank index k holds: (k - mod) mod 3 = 0, +1, -1."""
+            rel = named(m, f"rel_{name}", Mux(k >= mod, k - mod, k + 3 - mod), 2)
+            up = Mux(mod == 2, q + 1, q)
+            down = Mux(mod == 0, q - 1, q)
+            ok = named(m, f"ok_{name}", ~((rel == 2) & (mod == 0) & (q == 0)))
+            return named(m, f"q_{name}", Mux(rel == 0, q, Mux(rel == 1, up, down)), len(q) + 1), ok
+
+        bits = {}
+        rows = [shifted(lr, lm, a, f"r{a}") for a in range(3)]
+        cols = [shifted(cq, cm, b, f"c{b}") for b in range(3)]
+        for a in range(3):
+            qa, oka = rows[a]
+            for b in range(3):
+                qb, okb = cols[b]
+                mem = Memory(shape=1, depth=sr * sc, init=[])
+                m.submodules[f"queued{a}{b}"] = mem
+                qrp, qwp = mem.read_port(), mem.write_port()
+                m.d.comb += [qrp.addr.eq(Mux(oka & okb, qa * sc + qb, 0)), qrp.en.eq(self.look),
+                             qwp.addr.eq(waddr), qwp.data.eq(wr_val),
+                             qwp.en.eq(wr_en & (wq[1] == a) & (wq[3] == b))]
+                bits[a, b] = qrp.data
+
+        # near[i]: the bank of (r + dr, c + dc) mod 3, by the looked-at tile's residues.
+        seen_is = {(mr, mc): named(m, f"seen{mr}{mc}", seen == mr | (mc << 2)) for mr in range(3) for mc in range(3)}
+
+        def bank_bit(dr, dc):
+            out = 0
+            for (mr, mc), hit in seen_is.items():
+                out = Mux(hit, bits[(mr + dr) % 3, (mc + dc) % 3], out)
+            return out
+
+        m.d.comb += self.near.eq(Cat(bank_bit(0, 0), *[bank_bit(dr, dc) for dr, dc in OFFSETS.values()]))
+        return m

@@ -1,0 +1,42 @@
+"""cocotb job: one EDT/BFS job on the emitted tile engine (hdl/edt_bfs/tile_engine.py).
+
+Reads the job (map, goals, start, d_far and the engine's parameters t_r,
+t_c, max_h, max_w) from the JSON file named by $EDT_JOB, runs it through
+:class:`.edt_tile_driver.TileEngineDriver` (sources always valid, sink
+always ready: the model's cycle count) and writes the decoded results to
+$EDT_RESULT.  While it runs it rewrites $EDT_PROGRESS (if set) every 64 tile
+visits with ``visits cycle`` (the command shows them on a terminal).  It
+checks nothing itself: sim/edt.py compares the result with the golden
+model.
+"""
+
+import json
+import os
+from pathlib import Path
+
+import cocotb
+import numpy as np
+
+from .edt_tile_driver import TileEngineDriver
+
+
+@cocotb.test()
+async def edt_tile_job(dut):
+    job = json.loads(Path(os.environ["EDT_JOB"]).read_text())
+    drv = TileEngineDriver(dut, *(job[k] for k in ("t_r", "t_c", "max_h", "max_w")))
+    progress = os.environ.get("EDT_PROGRESS")
+    if progress:
+        def show(visits):
+            if visits % 64 == 0:
+                Path(progress).write_text(f"{visits} {drv.streams.cycle}\n")
+        drv.on_visit = show
+    await drv.start()
+    start = tuple(job["start"]) if job["start"] is not None else None
+    res = await drv.plan(np.array(job["obstacle"], dtype=bool), [tuple(g) for g in job["goals"]], start,
+                         job["dfar"])
+    out = {k: getattr(res, k) for k in ("distance", "nearest", "cfr", "parent", "visited", "path", "path_found",
+                                         "iterations_edt", "iterations_bfs", "cycles", "tile_visits")}
+    out = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in out.items()}
+    out["path"] = [list(p) for p in res.path]
+    out["trace"] = [list(t) for t in res.trace]
+    Path(os.environ["EDT_RESULT"]).write_text(json.dumps(out))

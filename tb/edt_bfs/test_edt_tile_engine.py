@@ -1,0 +1,275 @@
+"""The EDT/BFS tile engine (hdl/edt_bfs/tile_engine.py) against the tiled model, bit for bit and cycle for cycle.
+
+Every job's distances, vectors (NNT), nearest obstacles, cfr, visited
+flags, hop counts, parents, path, EDT levels, tile visits, the visit trace
+(phase, level, tile, iterations, tiles enqueued: visit by visit) and cycle
+count (source always valid, sink always ready) equal
+models.edt_bfs_tiled.plan_path_tiled's.  Cases: the bundled 64x64 maps
+and random maps of every family (full maps and maps whose last row and
+column of tiles are partial, 1 x n and n x 1 maps) with one to three goals;
+no obstacles, only obstacles, several goals, an unreachable goal, a goal on
+an obstacle, start = goal, the start outside the cfr, no start, no
+read-out, a d_far beyond every distance; a changed environment (a second
+and third map into the same engine, no reset); random idle cycles on the
+map and goal streams and back-pressure on the results (same results and
+trace, more cycles); a reset in the EDT, the BFS and the read-out, after
+which the engine is idle and the next job exact; refusals (a map larger
+than the RAM, an empty one: cmd_err; a start outside the map: start_err; a
+goal outside the map: goal_err, dropped).  Environment: TILE_PARAMS
+(t_r,t_c,max_h,max_w), TILE_JOBS (random jobs), TILE_MID (HxW of the maps
+of the edge cases, stalls, resets and changed environments), TILE_MAPS
+(the bundled maps to run, comma-separated), TILE_LARGE (1: random maps
+at the RAM's full size too).
+"""
+
+import os
+from pathlib import Path
+
+import cocotb
+import numpy as np
+import pytest
+from cocotb.triggers import ReadOnly, RisingEdge
+
+from images import FAMILIES, free_cells
+from navcores.models.edt_bfs_tiled import plan_path_tiled
+from navcores.models.maps import load_grid
+from navcores.sim.rtl.edt_tile_driver import TileEngineDriver, compare
+from navcores.sim.rtl.runner import run, seed_from_env
+
+T_R, T_C, MAX_H, MAX_W = (int(v) for v in os.environ.get("TILE_PARAMS", "8,8,64,64").split(","))
+JOBS = int(os.environ.get("TILE_JOBS", "6"))
+MID = tuple(int(v) for v in os.environ.get("TILE_MID", f"{MAX_H}x{MAX_W}").split("x"))
+BUNDLED = [n for n in os.environ.get("TILE_MAPS", "").split(",") if n]
+LARGE = os.environ.get("TILE_LARGE") == "1"
+MAPS = Path(__file__).resolve().parents[2] / "maps"
+
+
+async def _setup(dut):
+    drv = TileEngineDriver(dut, T_R, T_C, MAX_H, MAX_W)
+    await drv.start()
+    seed = seed_from_env()
+    dut._log.info(f"seed {seed} (replay with SEED={seed})")
+    return drv, np.random.default_rng(seed)
+
+
+def _model(img, goals, start, dfar, readout=True):
+    return plan_path_tiled(img, goals, start, dfar, array=(T_R, T_C), readout=readout)
+
+
+async def _check(drv, img, goals, start, dfar, readout=True, **kw):
+    """One job on the engine and the model; everything compared, the cycles
+    too (the model's plus what the stalls set by the caller cost)."""
+    model = _model(img, goals, start, dfar, readout)
+    raw = await drv.job(img, goals, start, dfar, readout=readout, **kw)
+    got = drv.decode(raw, img.shape, readout)
+    n = compare(got, model, readout=readout)
+    assert raw["cmd_err"] == raw["start_err"] == raw["goal_err"] == 0
+    return n, model, raw
+
+
+def _case(rng, shape, family=None):
+    family = family or list(FAMILIES)[int(rng.integers(len(FAMILIES)))]
+    img = FAMILIES[family](rng, *shape)
+    cells = free_cells(img, rng, 4)
+    if len(cells) < 2:
+        img[0, 0] = img[-1, -1] = False
+        cells = [(0, 0), (shape[0] - 1, shape[1] - 1)]
+    return img, cells[0], cells[1:1 + int(rng.integers(1, 4))]
+
+
+def _partial(lo, hi, t):
+    """A size in lo..hi that is not a multiple of t (when t > 1)."""
+    n = hi
+    while t > 1 and n % t == 0:
+        n -= 1
+    return max(lo, n)
+
+
+@cocotb.test()
+async def bundled_and_random(dut):
+    """The bundled 64x64 maps (when they fit), then random maps: full, partial last tiles, thin."""
+    drv, rng = await _setup(dut)
+    compared = visits = paths = partial = 0
+    for name in BUNDLED:
+        img = load_grid(MAPS / f"{name}.map")
+        cells = free_cells(img, rng, 4)
+        c, model, _ = await _check(drv, img, cells[1:], cells[0], 0)
+        compared, visits, paths = compared + c, visits + model.tile_visits, paths + model.path_found
+        dut._log.info(f"{name}: {model.tile_visits} visits, {model.cycles} cycles, path {len(model.path)}")
+    # the largest map and partial last tiles (TILE_LARGE: at the RAM's size, else at the mid size),
+    # thin maps along the RAM's full width and height, then random sizes up to the mid size
+    big = (MAX_H, MAX_W) if LARGE else MID
+    shapes = [(_partial(2, big[0], T_R), _partial(2, big[1] * 3 // 4, T_C)), (1, MAX_W), (MAX_H, 1)]
+    stalled = 0
+    for n in range(JOBS):
+        shape = shapes[n] if n < len(shapes) else tuple(int(v) for v in rng.integers(1, [MID[0] + 1, MID[1] + 1]))
+        img, start, goals = _case(rng, shape)
+        drv.set_stalls(rng, 0.3, 0.3) if n % 2 else drv.set_stalls()    # every other job stalled
+        c, model, raw = await _check(drv, img, goals, start, int(rng.integers(0, 2)))
+        compared, visits, paths = compared + c, visits + model.tile_visits, paths + model.path_found
+        partial += shape[0] % T_R != 0 and shape[1] % T_C != 0
+        stalled += raw["starved"] > 0 and raw["stalls"] > 0
+    drv.set_stalls()
+    dut._log.info(f"{compared} values compared, {visits} tile visits, {paths} paths, {partial} partial maps, "
+                  f"{stalled} jobs stalled")
+    assert visits > 5 * JOBS and paths >= 2 and partial >= 1 and stalled >= JOBS // 2 - 1
+
+
+@cocotb.test()
+async def edge_cases(dut):
+    drv, rng = await _setup(dut)
+    h, w = MID
+    img = np.zeros((h, w), dtype=bool)
+    # no obstacles: nothing done, everything in the cfr, no EDT visit; two goals at once
+    _, m, _ = await _check(drv, img, [(0, 0), (h - 1, w - 1)], (h // 2, w // 2), 2)
+    assert m.stats["visits_edt"] == 0 and m.path_found and (m.distance == -1).all()
+    # only obstacles: no free pixel, the goal dropped
+    _, m, _ = await _check(drv, ~img, [(0, 0)], (0, 0), 0)
+    assert not m.path_found and m.iterations_edt == 1
+    # a wall: an unreachable goal alone, then with a reachable one (several goals)
+    wall = img.copy()
+    wall[:, w // 2] = True
+    _, m, _ = await _check(drv, wall, [(h - 1, w - 1)], (0, 0), 0)
+    assert not m.path_found and m.visited[h - 1, w - 1]
+    _, m, _ = await _check(drv, wall, [(h - 1, w - 1), (h - 1, 0), (0, 1)], (0, 0), 0)
+    assert m.path_found
+    # a goal on an obstacle (dropped) beside a good one; start = goal; start outside the cfr
+    _, m, _ = await _check(drv, wall, [(0, w // 2), (1, 1)], (h - 1, 0), 0)
+    assert m.path[-1] == (1, 1)
+    _, m, _ = await _check(drv, wall, [(1, 1)], (1, 1), 0)
+    assert m.path == [(1, 1)]
+    _, m, _ = await _check(drv, wall, [(1, 1)], (0, w // 2 - 1), 1)
+    assert not m.cfr[0, w // 2 - 1] and not m.path_found
+    # no start; no read-out (the path only); no goal at all; a d_far beyond every distance
+    await _check(drv, wall, [(1, 1)], None, 0)
+    _, m, raw = await _check(drv, wall, [(1, 1)], (h - 1, 1), 0, readout=False)
+    assert m.path_found and len(raw["beats"]) == len(m.path)
+    _, m, _ = await _check(drv, wall, [], (0, 0), 0)
+    assert not m.visited.any()
+    _, m, _ = await _check(drv, wall, [(0, 0)], (0, 1), 10_000)
+    assert not m.cfr.any()
+    dut._log.info("11 edge-case jobs compared")
+
+
+@cocotb.test()
+async def changed_environment(dut):
+    """New maps into the same engine without a reset: nothing of the previous job survives."""
+    drv, rng = await _setup(dut)
+    h, w = MID
+    img = np.zeros((h, w), dtype=bool)
+    img[2:4, 2:w - 2] = True
+    goals, start = [(h - 1, w - 1)], (0, 0)
+    _, m1, _ = await _check(drv, img, goals, start, 1)
+    moved = np.zeros_like(img)
+    moved[h - 4:h - 2, 2:w - 2] = True
+    _, m2, _ = await _check(drv, moved, goals, start, 1)
+    assert not np.array_equal(m1.distance, m2.distance)
+    small = img[: h // 2, : w // 2]              # a smaller map: stale words around it
+    _, m3, _ = await _check(drv, small, [(h // 2 - 1, 0)], (0, w // 2 - 1), 0)
+
+
+@cocotb.test()
+async def back_pressure(dut):
+    """Random idle cycles on the map and goal streams, back-pressure on the results."""
+    drv, rng = await _setup(dut)
+    for n, (idle, bp) in enumerate(((0.4, 0.6), (0.0, 0.7), (0.7, 0.0))):
+        shape = (MID[0], MAX_W) if n == 1 else (MID[0] // 2 + 1, MID[1])
+        img, start, goals = _case(rng, shape, "random")
+        drv.set_stalls(rng, idle, bp)
+        _, model, raw = await _check(drv, img, goals, start, 0)
+        assert (raw["starved"] > 0) == (idle > 0) and (raw["stalls"] > 0) == (bp > 0)
+        assert raw["cycles"] == model.cycles + raw["starved"] + raw["stalls"] > model.cycles
+    drv.set_stalls()
+
+
+async def _idle_after_reset(drv):
+    d = drv.dut
+    await drv.reset()
+    await ReadOnly()
+    assert int(d.busy.value) == 0 and int(d.c_stream__ready.value) == 1
+    assert int(d.o_stream__valid.value) == 0 and int(d.m_stream__ready.value) == 0
+    assert int(d.g_stream__ready.value) == 0
+    await RisingEdge(d.clk)
+
+
+@cocotb.test()
+async def reset_mid_job(dut):
+    """A reset in the EDT, in the BFS and in the read-out; then the same job is exact."""
+    drv, rng = await _setup(dut)
+    img = FAMILIES["rooms"](rng, *MID)
+    img[0, 0] = img[-1, -1] = False
+    goals, start = [(MID[0] - 1, MID[1] - 1)], (0, 0)
+    m = _model(img, goals, start, 0)
+    c = m.stats["cycles"]
+    marks = {"EDT": c["load"] + c["scan"] + c["edt"] // 2,
+             "BFS": c["load"] + c["scan"] + c["edt"] + c["goals"] + c["bfs"] // 2,
+             "read-out": m.cycles - c["readout"] // 2}
+    for phase, at in marks.items():
+        assert await drv.job(img, goals, start, 0, abort_after=at) is None
+        await _idle_after_reset(drv)
+        await _check(drv, img, goals, start, 0)
+    dut._log.info(f"reset in {', '.join(marks)}: the next job exact")
+
+
+@cocotb.test()
+async def refusals(dut):
+    """Bad commands and points: the defined error responses."""
+    drv, rng = await _setup(dut)
+    img = FAMILIES["random"](rng, 4, 4, 0.2)
+    for h, w in ((MAX_H + 1, 4), (4, MAX_W + 1), (0, 4), (4, 0)):
+        if h >= 1 << drv.widths["height"] or w >= 1 << drv.widths["width"]:
+            continue                            # not expressible in the command's fields
+        raw = await drv.job(img, [], None, 0, height=h, width=w)
+        assert raw["cmd_err"] == 1 and raw["cycles"] == 0 and raw["words_sent"] == 0 and not raw["beats"]
+    img, start, goals = _case(rng, MID)
+    h, w = img.shape
+    # a start outside the map: no path, the rest as without a start
+    model = _model(img, goals, None, 0)
+    raw = await drv.job(img, goals, (h, 0), 0)
+    assert raw["start_err"] == 1
+    compare(drv.decode(raw, img.shape), model)
+    # a goal outside the map: dropped (goal_err), 2 cycles, the rest as without it
+    model = _model(img, goals, start, 0)
+    raw = await drv.job(img, goals + [(0, w)], start, 0)
+    assert raw["goal_err"] == 1 and raw["start_err"] == 0
+    got = drv.decode(raw, img.shape)
+    got["cycles"] -= 2
+    compare(got, model)
+    # and a good job clears the flags
+    _, _, raw = await _check(drv, img, goals, start, 0)
+
+
+def _params(p):
+    return dict(zip(("t_r", "t_c", "max_h", "max_w"), p))
+
+
+# One build per simulator and parameter set.  An 8x8 array on a 64x64 RAM on
+# both simulators; on Verilator the bundled room-64-64-8 (64x64) and a 63x47
+# map (the last row and column of tiles partial), on both thin maps along the
+# RAM's full width and height and the other cases on 13x21 maps (2 x 3
+# tiles, partial both ways).  Icarus simulates the 8x8 array slowly (every
+# loaded window row wakes the cells around it: about 5 ms a cycle on the
+# shared machine, against about 2 ms for Verilator's -O0 build, mostly
+# cocotb), so there it runs the sized cases on small maps; the controller
+# and stream cases run on Verilator at 8x8 and on Icarus with a non-square,
+# non-power-of-two 3x5 array on a 23x31 RAM (constant divisions, partial
+# tiles everywhere).
+# (sim, (t_r, t_c, max_h, max_w), random jobs, mid size, bundled maps, large, cocotb test filter or None)
+SIZED = "bundled_and_random|edge_cases"
+CASES = [
+    ("verilator", (8, 8, 64, 64), 4, "13x21", "room-64-64-8", 1, None),
+    ("icarus", (8, 8, 64, 64), 4, "13x21", "", 0, SIZED),
+    ("icarus", (3, 5, 23, 31), 4, "11x17", "", 1, None),
+]
+
+
+@pytest.mark.parametrize("sim, params, jobs, mid, maps, large, only", CASES,
+                         ids=[f"{s}-{p[0]}x{p[1]}-map{p[2]}x{p[3]}{'-sized' if o else ''}"
+                              for s, p, _, _, _, _, o in CASES])
+def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
+    env = {"TILE_PARAMS": ",".join(map(str, params)), "TILE_JOBS": jobs, "TILE_MID": mid, "TILE_MAPS": maps,
+           "TILE_LARGE": large}
+    if only:
+        env["COCOTB_TEST_FILTER"] = only
+    ran = run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env)
+    assert ran == (len(only.split("|")) if only else 6), f"{ran} cocotb tests ran"
