@@ -250,7 +250,9 @@ def test_manifest_and_lint(name, params, tmp_path):
     if name == "dflc_stream":
         assert t["initiation_interval_cycles"] == 1           # par=1
         c = config_for(ip_sz=10, op_sz=14, div="array")
-        assert t["latency_cycles"] == stream_latency(c, True, cpr9_no=3) == 1 + 8 + 2 + 1
+        # one clock of rules (par), then PIPE_DEFAULTS with cpr9_no=3: psr1 1, cpr3 1, the cpr5 / cpr2+psr2
+        # join 2, the psr4 / cpr6 join 3, cpr9 3; the core's 2 output stages and the stream's 1
+        assert t["latency_cycles"] == stream_latency(c, True, cpr9_no=3) == 1 + (1 + 1 + 2 + 3 + 3) + 2 + 1
         payload = next(p for p in man["ports"] if p["name"] == "i_stream__payload")
         assert [(f["lsb"], f["msb"]) for f in payload["fields"]] == [(0, 9), (10, 19)]
     elif name == "harmonic_cluster":
