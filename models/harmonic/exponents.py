@@ -29,14 +29,13 @@ import numpy as np
 
 from .grid import BlockGrid
 from .node import local_max
-from .ram import convert_mantissa
+from .ram import SHIFT_STEP, convert_mantissa
 from .schedule import run, visit_cycles
 
 __all__ = ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "shift_iterations", "ExponentGrid", "plan_exponents"]
 
 E_MAX = 255             # default exponent bound: an 8-bit exponent register per block
 REPICK_HEADROOM = 1     # default h: a re-pick leaves the top h mantissa bits empty
-SHIFT_STEP = 3          # the RTL's in-place rotation per iteration (rtl=True)
 
 # A block's four border rings (N, S, W, E): the neighbour block's offset and
 # where the ring sits in the visit's local (n+2) x (m+2) array.
@@ -47,9 +46,10 @@ _SIDES = (((-1, 0), (0, slice(1, -1))), ((1, 0), (-1, slice(1, -1))),
 def shift_iterations(d):
     """Iterations of the RTL's shift visit that rotates a block's words by d
     value positions (rtl=True): an iteration reads LSB first and writes each
-    bit three positions behind the read, so a rotation by at most 3 never
-    overwrites a bit before it is read; a rotation by d takes ceil(d/3)
-    iterations (3, 3, ..., the rest last: see hdl/harmonic/cluster.py)."""
+    bit rotated in place, at most :data:`SHIFT_STEP` (4) positions per
+    iteration (:func:`~models.harmonic.ram.pads`), so a rotation by d takes
+    ceil(d/4) iterations (4, 4, ..., the rest last: see
+    hdl/harmonic/cluster.py), each one pad cycle longer than an update's."""
     return max(1, -(-int(d) // SHIFT_STEP))
 
 
@@ -181,7 +181,9 @@ class ExponentGrid(BlockGrid):
             return 0
         self.res.repicks += 1
         level["repicks"] += 1
-        return visit_cycles(shift_iterations(min(d, self.p)) if self.rtl else 1, self.p)
+        if self.rtl:
+            return visit_cycles(shift_iterations(min(d, self.p)), self.p, shift=True)
+        return visit_cycles(1, self.p)
 
     def check(self, level):
         """The check pass: (local maxima, the RTL's clamp scans); records the
@@ -226,8 +228,9 @@ class ExponentGrid(BlockGrid):
         self.p = later[0]
         self.sat[...] = False
         # rtl: the right shift by δ is a left rotation by p+1-δ
-        return sum(visit_cycles(shift_iterations(self.p + 1 - delta) if self.rtl else 1, self.p)
-                   for delta in deltas)
+        if self.rtl:
+            return sum(visit_cycles(shift_iterations(self.p + 1 - delta), self.p, shift=True) for delta in deltas)
+        return len(deltas) * visit_cycles(1, self.p)
 
     def snapshot(self):
         return self.E.copy(), np.array(self.hv, dtype=object)

@@ -73,20 +73,24 @@ runs on precomputed views, or batches independent blocks) without touching
 the loop.
 
 Timing of the Control module (hdl/harmonic/controller.py), in clock cycles,
-measured on the RTL and asserted by tb/harmonic/test_planner.py.  A block
-visit running K iterations of p+2 cycles takes K*(p+2) + VISIT_OVERHEAD:
+measured on the RTL and asserted by tb/harmonic/test_planner.py.  An
+iteration takes L = :func:`~models.harmonic.ram.iteration_cycles` (p) = p+2
+cycles (p >= 4; 6 below, and a shift iteration of block exponents one
+more); a block visit running K iterations takes K*L + VISIT_OVERHEAD:
 
 ==================  ======================================================
 cycle of a visit    what happens
 ==================  ======================================================
 t                   VSTART: the clusters get ``run`` (start request)
-t+1                 the clusters' lead-in (first addresses presented)
-t+2 .. t+1+K(p+2)   K iterations (update, check or clear)
-+1, +2              cycles 0 and 1 of the stop iteration: the last
-                    iteration's top two bits are written (the write runs
-                    two bit positions behind the read, eq. 2's /4)
-t+4+K(p+2)          the last iteration's Stable / Maximum flags
-t+5+K(p+2)          VEND: next block, pass, precision or end decided
+t+1, t+2            the clusters' lead-in (first addresses presented; the
+                    RAM answers two cycles later: its output register)
+t+3 .. t+2+K*L      K iterations (update, check or clear)
++1 .. +3            cycles 0 .. 2 of the stop iteration: the last
+                    iteration's top two bits are computed and written (the
+                    write runs two bit positions behind the read, eq. 2's
+                    /4, and one cycle behind its computation)
+t+5+K*L             (cycle 2) the last iteration's Stable / Maximum flags
+t+6+K*L             VEND: next block, pass, precision or end decided
 ==================  ======================================================
 
 ==================  ======================================================
@@ -116,18 +120,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .node import one
+from .ram import iteration_cycles
 
 __all__ = ["VISIT_OVERHEAD", "RUN_OVERHEAD", "SET_OVERHEAD", "visit_cycles", "Timing", "PlanResult",
            "EveryBlock", "run"]
 
-VISIT_OVERHEAD = 6
+VISIT_OVERHEAD = 7
 RUN_OVERHEAD = 0
 SET_OVERHEAD = 0
 
 
-def visit_cycles(k, p):
-    """Cycles of one block visit running ``k`` iterations at precision ``p``."""
-    return k * (p + 2) + VISIT_OVERHEAD
+def visit_cycles(k, p, shift=False):
+    """Cycles of one block visit running ``k`` iterations at precision ``p``
+    (``shift``: a shift visit of block exponents, padded iterations)."""
+    return k * iteration_cycles(p, shift) + VISIT_OVERHEAD
 
 
 class Timing:

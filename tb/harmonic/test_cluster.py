@@ -8,8 +8,9 @@ with a goal and an obstacle set through Sel/Sat in mid-run and check iterations 
 one after stabilization).  Every iteration the drv rebuilds all 18 stored
 words from the ``h`` bus and compares them with the model; every ``done`` it
 compares the stable flags, after every check iteration the local-maximum
-flags.  Iteration k's flags must come exactly (k+1)(p+2) + 4 cycles after the
-start request (lead-in, then p+2 cycles per iteration).  At the end the RAM
+flags.  Iteration k's flags must come exactly (k+1)L + 5 cycles after the
+start request (two cycles of lead-in, then L = iteration_cycles(p) cycles per
+iteration: p+2 from p = 4 on, 6 for p = 2, 3).  At the end the RAM
 is read back through the host port and compared with the model's image.
 """
 
@@ -22,7 +23,7 @@ import pytest
 from cocotb.triggers import ClockCycles
 
 from navcores.hdl.harmonic.cluster import COLS, ROWS
-from navcores.models.harmonic import neighbours, one, ram_image, step
+from navcores.models.harmonic import iteration_cycles, neighbours, one, ram_image, step
 from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
 from tb.harmonic.cluster_driver import ClusterDriver, Command
@@ -31,7 +32,7 @@ from tb.harmonic.serial import next_cycle
 # Parameter sets of the regression: the cocotb side learns its set from the
 # environment the pytest side passes.
 SETS = {
-    "small": ({"depth": 64, "p_max": 62}, "2,8,13,32,62"),
+    "small": ({"depth": 64, "p_max": 62}, "2,3,4,8,13,32,62"),
     "paper": ({"depth": 1024}, "100"),            # the paper's 1Kx18 RAM, p_max 1022
 }
 DEPTH = int(os.environ.get("CLUSTER_DEPTH", "64"))
@@ -108,7 +109,7 @@ class ModelRun:
         if done.checked:
             assert (done.local_max == maximum).all(), f"p={p} iteration {k}: local_max\n{done.local_max}\nmodel\n{maximum}"
             assert done.any_max == maximum.any()
-        assert done.cycle == (k + 1) * (p + 2) + 4, f"iteration {k} done at cycle {done.cycle}"
+        assert done.cycle == (k + 1) * iteration_cycles(p) + 5, f"iteration {k} done at cycle {done.cycle}"
 
 
 @cocotb.test()
@@ -139,10 +140,10 @@ async def _run_and_check(dut, drv, model):
         words.append(k)
 
     dones = await drv.iterate(model.decide, on_words=on_words, on_done=model.check_done,
-                                max_cycles=MAX_ITER * (p + 2))
+                                max_cycles=MAX_ITER * iteration_cycles(p))
     assert model.settled is not None
     assert len(dones) == len(words) == len(model.states) - 1, (len(dones), len(words), len(model.states))
-    assert np.diff([d.cycle for d in dones]).tolist() == [p + 2] * (len(dones) - 1)
+    assert np.diff([d.cycle for d in dones]).tolist() == [iteration_cycles(p)] * (len(dones) - 1)
     await ClockCycles(dut.clk, 2)
     await next_cycle(dut)
     assert not bool(dut.busy.value)
