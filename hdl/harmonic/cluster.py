@@ -22,10 +22,10 @@ class Cluster(wiring.Component):
     RAM word ``a`` holds bit ``a`` of the stored words of all 18 nodes, node
     (row r, column c) in bit ``6*r + c``; a node's word is p+2 bits, flag first
     then value bits p..0 (:func:`models.harmonic.ram_image`).  Port A reads it
-    LSB first for the Update; port B writes the results two bit positions
-    behind in update iterations and reads MSB first for the Maximum in check
-    iterations, never both in the same cycle, so A and B map onto the two
-    ports of one true dual-port block RAM.  One iteration takes p+2 cycles.
+    LSB first for the Update and the Maximum (both compare LSB first, see
+    :class:`~hdl.harmonic.node.Node`); port B writes the results two bit
+    positions behind in update iterations: one read and one write port, a
+    simple dual-port block RAM.  One iteration takes p+2 cycles.
 
     Operation: load the words through the host port while idle, raise ``run``
     with a precision ``p``.  After a one-cycle lead-in the cluster iterates.
@@ -37,7 +37,12 @@ class Cluster(wiring.Component):
     the cluster once the previous iteration's writes are over (its flags
     still come with ``done``); the iteration whose command was "stop" only
     read.  Iteration k's flags come (k+1)(p+2) + 4 cycles after the cycle
-    in which an idle cluster saw ``run``.
+    in which an idle cluster saw ``run``.  ``abort`` with a ``done`` stops
+    the cluster at once (busy low from the next cycle): the iteration then
+    in progress has written only its flag bit (cycle 2), so this is exact
+    when that iteration writes what is stored anyway, i.e. when the
+    iteration whose flags ``done`` shows was stable (the Control module's
+    early stop without a confirmation iteration).
 
     Parameters
     ----------
@@ -73,17 +78,17 @@ class Cluster(wiring.Component):
     w_addr : Out(range(depth)); w_data : Out(18); w_en : Out(1)
         The RAM write port (address, the nodes' ``w`` bits, enable), for the
         border storage that mirrors the block's edge nodes.
+    abort : In(1)
+        With ``done``: stop now (see above).
     h_N_in, h_S_in : In(6); h_E_in, h_W_in : In(3)
         Neighbours' words outside the cluster, LSB first (same timing as
         ``h``: bit of address ``cntR`` one cycle later).
-    m_N_in, m_S_in : In(6); m_E_in, m_W_in : In(3)
-        The same neighbours MSB first (bit of address ``r_cnt`` one cycle
-        later).
-    h, hm : Out(18)
-        RAM port A / port B read data: every node's serial streams, for the
+    h : Out(18)
+        RAM port A read data: every node's serial stream, for the
         neighbouring clusters and the decision module.
     cntR, r_cnt : Out(address width)
-        Port A / port B read addresses, for border nodes.
+        The LSB-first read address and the MSB-first (reverse) counter, for
+        the border nodes (block exponents read their MSB first).
     take, done, checked : Out(1)
         Command sampling strobe; flags-valid strobe; ``done`` after a check
         iteration (``local_max`` meaningful).
@@ -141,16 +146,14 @@ class Cluster(wiring.Component):
             "Sel": In(NODES),
             "Sat": In(1),
             "clear": In(1),
+            "abort": In(1),
             "base": In(range(depth)),
             "w_addr": Out(range(depth)),
             "w_data": Out(NODES),
             "w_en": Out(1),
             "h_N_in": In(COLS), "h_S_in": In(COLS),
             "h_E_in": In(ROWS), "h_W_in": In(ROWS),
-            "m_N_in": In(COLS), "m_S_in": In(COLS),
-            "m_E_in": In(ROWS), "m_W_in": In(ROWS),
             "h": Out(NODES),
-            "hm": Out(NODES),
             "cntR": Out(addr),
             "r_cnt": Out(addr),
             "take": Out(1),
@@ -178,7 +181,6 @@ class Cluster(wiring.Component):
         m.submodules.counters = cnt = Counters(self.p_max)
         m.submodules.ram = ram = Memory(shape=NODES, depth=self.depth, init=[])
         port_a = ram.read_port()
-        port_b = ram.read_port()
         port_w = ram.write_port()
 
         running = Signal()
@@ -224,36 +226,34 @@ class Cluster(wiring.Component):
                 m.d.sync += shf.eq(self.run & self.shift)
             with m.If(~self.run):
                 m.d.sync += running.eq(0)
+        with m.If(self.abort & self.done):
+            m.d.sync += running.eq(0)
 
         # RAM ports: counters while iterating, host port while idle.
         write = win & (upd | shf) if self.exponents else win & upd
         m.d.comb += [
             port_a.addr.eq(self.host_addr),
-            port_b.addr.eq(self.host_addr),
-            port_w.addr.eq(port_b.addr),     # one address: one physical port
+            port_w.addr.eq(self.host_addr),
             port_w.data.eq(self.host_wdata),
             port_w.en.eq(self.host_we),
             self.h.eq(port_a.data),
-            self.hm.eq(port_b.data),
             self.host_rdata.eq(port_a.data),
         ]
         with m.If(running):
             m.d.comb += [
                 port_a.addr.eq(self.base + cnt.cntR),
-                port_b.addr.eq(self.base + cnt.r_cnt),
+                port_w.addr.eq(self.base + cnt.cntW),
                 port_w.en.eq(write),
             ]
-            with m.If(write):
-                m.d.comb += port_b.addr.eq(self.base + cnt.cntW)
-                if self.exponents:
-                    t = Signal(signed(len(cnt.cntW) + 3))
-                    rot = Signal(len(cnt.cntW))
-                    p1 = p_r + 1
-                    m.d.comb += t.eq(cnt.cntW - 1 - self.shift_d)
-                    m.d.comb += rot.eq(Mux(cnt.cntW == 0, 0,
-                                           Mux(t < 0, t + p1, Mux(t >= p1, t - p1, t)) + 1))
-                    with m.If(shf):
-                        m.d.comb += port_b.addr.eq(self.base + rot)
+            if self.exponents:
+                t = Signal(signed(len(cnt.cntW) + 3))
+                rot = Signal(len(cnt.cntW))
+                p1 = p_r + 1
+                m.d.comb += t.eq(cnt.cntW - 1 - self.shift_d)
+                m.d.comb += rot.eq(Mux(cnt.cntW == 0, 0,
+                                       Mux(t < 0, t + p1, Mux(t >= p1, t - p1, t)) + 1))
+                with m.If(shf):
+                    m.d.comb += port_w.addr.eq(self.base + rot)
         m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(port_w.en)]
 
         # Clear iteration: mask the adders' inputs from bit 0 (cycle 1, the
@@ -272,7 +272,6 @@ class Cluster(wiring.Component):
                 m.submodules[f"node_{r}_{c}"] = node
                 m.d.comb += [
                     node.h.eq(port_a.data[i]),
-                    node.hm.eq(port_b.data[i]),
                     node.ph0.eq(mask),
                     node.ph1.eq(cnt.ph1),
                     node.ph2.eq(cnt.ph2),
@@ -282,17 +281,14 @@ class Cluster(wiring.Component):
                     self.stable[i].eq(node.stable),
                     self.local_max[i].eq(node.local_max),
                 ]
-                for name, dr, dc, h_edge, m_edge, k in (
-                        ("N", -1, 0, self.h_N_in, self.m_N_in, c),
-                        ("S", 1, 0, self.h_S_in, self.m_S_in, c),
-                        ("E", 0, 1, self.h_E_in, self.m_E_in, r),
-                        ("W", 0, -1, self.h_W_in, self.m_W_in, r)):
+                for name, dr, dc, h_edge, k in (
+                        ("N", -1, 0, self.h_N_in, c),
+                        ("S", 1, 0, self.h_S_in, c),
+                        ("E", 0, 1, self.h_E_in, r),
+                        ("W", 0, -1, self.h_W_in, r)):
                     rr, cc = r + dr, c + dc
                     inside = 0 <= rr < ROWS and 0 <= cc < COLS
-                    m.d.comb += [
-                        getattr(node, f"h_{name}").eq(nodes[rr][cc].to if inside else h_edge[k]),
-                        getattr(node, f"m_{name}").eq(nodes[rr][cc].to_m if inside else m_edge[k]),
-                    ]
+                    m.d.comb += getattr(node, f"h_{name}").eq(nodes[rr][cc].to if inside else h_edge[k])
         w_bits = [nodes[r][c].w for r in range(ROWS) for c in range(COLS)]
         with m.If(running):
             m.d.comb += port_w.data.eq(Cat(*w_bits))

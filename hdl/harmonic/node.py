@@ -42,9 +42,17 @@ class Node(wiring.Component):
     runs from its cycle 2 to cycle 1 of the next one.
 
     In an iteration with ``enable`` low ("check" iteration) nothing changes:
-    ``w`` is the stored bit, and the second RAM port streams the stored
-    values MSB first on ``hm`` / ``m_*`` (stored bit p at cycle 3 down to bit 0
-    at cycle 1 of the next iteration) for the Maximum comparison.
+    ``w`` is the stored bit.
+
+    The Maximum compares the node's value with each neighbour's on the very
+    LSB-first streams the adder reads (bit k at cycle k+1): per neighbour one
+    flip-flop holds "mine >= its so far", and a higher bit that differs
+    overrides it, so after bit p it is the comparison of the whole values.
+    (The paper reads a second, MSB-first stream through the RAM's other port
+    for this, 3.2.1; port B writes in update iterations, so that comparison
+    exists only in check iterations.  LSB first it comes with every update
+    iteration, which folds the check pass into the visits: see
+    :mod:`models.harmonic.schedule`.)
 
     Ports
     -----
@@ -52,10 +60,6 @@ class Node(wiring.Component):
         Own stored word, from RAM port A (LSB first, flag first).
     h_N, h_E, h_W, h_S : In(1)
         The four neighbours' words, same timing as ``h``.
-    hm : In(1)
-        Own value MSB first, from RAM port B (check iterations).
-    m_N, m_E, m_W, m_S : In(1)
-        The four neighbours' values MSB first, same timing as ``hm``.
     ph0, ph1, ph2 : In(1)
         Cycle strobes from the Counters unit (c = 0, 1, 2).
     enable : In(1)
@@ -68,8 +72,6 @@ class Node(wiring.Component):
     to : Out(1)
         The node's value, LSB first, for its four neighbours (the paper's
         to_N, to_E, to_W, to_S are this one signal) and the decision module.
-    to_m : Out(1)
-        The node's value MSB first, for its neighbours' Maximum modules.
     w : Out(1)
         Bit to write to RAM port B (Mem multiplexer): the update, the stored
         bit (constant node or check iteration) or the saturation constant.
@@ -77,8 +79,9 @@ class Node(wiring.Component):
         The word written in the previous iteration equals the stored one.
         Valid when ``ph2`` is high.
     local_max : Out(1)
-        Free node whose value is >= its four neighbours' (MSB-first values of
-        the previous iteration).  Valid when ``ph2`` is high.
+        Free node whose value is >= its four neighbours' (the values the
+        previous iteration read, update or check).  Valid when ``ph2`` is
+        high.
     """
 
     h: In(1)
@@ -86,11 +89,6 @@ class Node(wiring.Component):
     h_E: In(1)
     h_W: In(1)
     h_S: In(1)
-    hm: In(1)
-    m_N: In(1)
-    m_E: In(1)
-    m_W: In(1)
-    m_S: In(1)
     ph0: In(1)
     ph1: In(1)
     ph2: In(1)
@@ -98,7 +96,6 @@ class Node(wiring.Component):
     Sel: In(1)
     Sat: In(1)
     to: Out(1)
-    to_m: Out(1)
     w: Out(1)
     stable: Out(1)
     local_max: Out(1)
@@ -112,7 +109,7 @@ class Node(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         # Mem: the stored word is the node's value as its neighbours see it.
-        m.d.comb += [self.to.eq(self.h), self.to_m.eq(self.hm)]
+        m.d.comb += self.to.eq(self.h)
 
         # Update: one serial adder of the four neighbours, (N + S + E + W)
         # LSB first, whose carry k (0 .. 3: at most (4 + 3) // 2) takes two
@@ -161,16 +158,23 @@ class Node(wiring.Component):
         m.d.sync += diff.eq(changed | (diff & ~self.ph2))
         m.d.comb += self.stable.eq(~diff)
 
-        # Maximum: MSB-first compare against each neighbour.  eq[n] says the
-        # values agree so far; lt records a neighbour found greater at the
-        # first differing bit.  Reset at ph2 (the flag slot of the stream).
-        lt = Signal()
-        found_lt = 0
-        for nb in (self.m_N, self.m_E, self.m_W, self.m_S):
-            eq = Signal(init=1)
-            found_lt = found_lt | (eq & ~self.hm & nb)
-            m.d.sync += eq.eq(self.ph2 | (eq & ~(self.hm ^ nb)))
-        m.d.sync += lt.eq(~self.ph2 & (lt | found_lt))
-        m.d.comb += self.local_max.eq(~lt & ~const)
+        # Maximum: LSB-first compare against each neighbour.  ge[n] says
+        # "mine >= neighbour n" over the bits seen so far: bit 0 (ph1)
+        # starts it, a higher bit that differs decides anew, the flag slot
+        # (ph0) holds it.  So during ph1 it holds the previous iteration's
+        # comparison of whole values: latched then, shown at ph2.
+        mx = Signal()
+        ge_all = 1
+        for nb in (self.h_N, self.h_E, self.h_W, self.h_S):
+            ge = Signal()
+            ge_all = ge_all & ge
+            first = self.h | ~nb
+            with m.If(self.ph1):
+                m.d.sync += ge.eq(first)
+            with m.Elif(~self.ph0):
+                m.d.sync += ge.eq((self.h & ~nb) | (~(self.h ^ nb) & ge))
+        with m.If(self.ph1):
+            m.d.sync += mx.eq(ge_all)
+        m.d.comb += self.local_max.eq(mx & ~const)
 
         return m

@@ -8,10 +8,10 @@ compounds into the following iterations.  The neighbours' values are chosen
 at random for every iteration (held, random, all goals, equal to the node,
 zero; their constant flags at random, which the node must ignore), the node
 is saturated through Sel/Sat in mid-run, and about one iteration in seven is
-a check iteration.  The MSB-first streams come from the words as they were at
-the start of the iteration, as a RAM not being written gives them.  After
-every iteration the node's stored word and its stable / local-max flags are
-compared with ``models.harmonic.step``.
+a check iteration.  After every iteration the node's stored word and its
+stable / local-max flags (the Maximum compares the LSB-first streams, in
+update and check iterations alike) are compared with
+``models.harmonic.step``.
 """
 
 import os
@@ -44,14 +44,12 @@ def _next_neighbours(rng, p, own, prev):
     return {d: (value[mode](), rng.random() < 0.5) for d in DIRS}, mode
 
 
-def _drive(dut, own, nbrs, msb_src, window, c, p):
+def _drive(dut, own, nbrs, window, c, p):
     """Drive cycle c's inputs."""
-    a, b = read_offsets(c, p)
+    a, _ = read_offsets(c, p)
     dut.h.value = own.bits[a]
-    dut.hm.value = msb_src["own"][b]
     for d in DIRS:
         getattr(dut, f"h_{d}").value = nbrs[d].bits[a]
-        getattr(dut, f"m_{d}").value = msb_src[d][b]
     dut.ph0.value = int(c == 0)
     dut.ph1.value = int(c == 1)
     dut.ph2.value = int(c == 2)
@@ -69,7 +67,6 @@ async def _episode(dut, p, rng, seen):
     nbrs = {d: SerialWord(v, f, p) for d, (v, f) in nbr_vals.items()}
     sel_at = {rng.randrange(3, WINDOWS // 2): 1,
               rng.randrange(WINDOWS // 2, WINDOWS - 2): rng.randint(0, 1)}
-    msb_src = {"own": list(own.bits), **{d: list(nbrs[d].bits) for d in DIRS}}
     window = None
     for it in range(WINDOWS + 1):
         for c in range(p + 2):
@@ -109,8 +106,7 @@ async def _episode(dut, p, rng, seen):
                 seen["sel"] |= sel
                 seen["check"] |= not enable
                 nbr_vals = new_vals
-                msb_src = {"own": list(own.bits), **{d: list(nbrs[d].bits) for d in DIRS}}
-            _drive(dut, own, nbrs, msb_src, window, c, p)
+            _drive(dut, own, nbrs, window, c, p)
             if window is not None and window["enable"]:
                 # Port B writes the node's output, two bit positions behind;
                 # the neighbours' words take their next values likewise.

@@ -53,6 +53,7 @@ RUNS = {
 }
 PARAMS = json.loads(os.environ.get("PLANNER_PARAMS", json.dumps(SETS["b3x6"])))
 SET_NAME = os.environ.get("PLANNER_SET", "b3x6")
+PAPER = bool(PARAMS.get("paper_schedule", 0))
 
 
 def _driver(dut):
@@ -74,7 +75,8 @@ def _padded(ob, goals):
 async def _run(drv, ob, goals, sched, iters, events=()):
     """Model and RTL on one map; compare everything; return the model result."""
     P = PARAMS
-    res = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched, events=events)
+    res = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched, events=events,
+               paper_schedule=PAPER)
     st, h, const = await run_map(drv, ob | res.unreachable, _padded(ob, goals), arithmetic(sched),
                                  iters, events)
     bad = np.argwhere((h != res.padded_h) | (const != res.padded_const))
@@ -162,7 +164,7 @@ async def planner_dynamic(dut):
     # a map whose runs converge at p = 16 on the b3x6 set (~20K cycles each)
     sched, iters = ((8, 16) if P["p_max"] >= 16 else (6, 12)), 3
     ob, goals = random_map(rows, cols, 3, density=0.1)
-    base = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched)
+    base = plan(ob, goals, block=(P["n"], P["m"]), iters=iters, schedule=sched, paper_schedule=PAPER)
     free = np.argwhere(~ob & ~base.unreachable & ~_padded(ob, goals))
     passes = base.sweeps + base.check_iterations // (P["br"] * P["bc"])
     s = min(3, passes - 1)
@@ -226,7 +228,7 @@ async def planner_bad_commands(dut):
     rows, cols = _shape()
     ob, goals = random_map(rows, cols, 3)
     sched, iters = (4, 8), 2
-    res = plan(ob, goals, block=(n, m), iters=iters, schedule=sched)
+    res = plan(ob, goals, block=(n, m), iters=iters, schedule=sched, paper_schedule=PAPER)
     await drv.load_map(ob | res.unreachable, _padded(ob, goals))
     for f in ({"p1": 1, "step": 1, "p_last": 8}, {"p1": 4, "step": 4, "p_last": p_max + 1},
               {"p1": 8, "step": 4, "p_last": 4}, {"p1": 4, "step": 0, "p_last": 8}):
