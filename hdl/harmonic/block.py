@@ -1,11 +1,11 @@
 """An n x m block of 3x6 clusters with its border nodes (paper 000, 5.1, 5.4)."""
 
 from amaranth.hdl import Cat, Module, Mux, Signal, signed
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
-from .border import Border, BorderExponentsSignature
+from ..params import Constraint, Param, check, checked_init
+from .border import SIDES, Border, BorderExponentsSignature
 from .cluster import COLS, NODES, ROWS, Cluster
 from .limits import (BLOCKS_WHY, CLUSTERS_WHY, DEPTH_WHY, E_WHY, MAX_BLOCKS_SIDE, MAX_CLUSTERS, MAX_DEPTH, MAX_E,
                      MAX_WORDS, WORDS_WHY)
@@ -50,12 +50,20 @@ class BlockControlSignature(wiring.Signature):
         sel_col) of the block becomes constant Sat (0 obstacle, 1 goal).
     br, bc : Out
         The block being visited, b = br*BC + bc (held during the visit).
+    abort : Out(1)
+        With ``done``: stop the clusters now (the early stop after a stable
+        iteration, :class:`~hdl.harmonic.cluster.Cluster`).
     take, done, checked, busy : In(1)
         The clusters' strobes (all in lockstep): command sampled; flags
         valid; ``done`` of a check iteration; iterating (RAMs in use).
     all_stable, any_max : In(1)
         With ``done``: the Early module (AND of every node's Stable) and Cvg
-        (OR of the Maximum flags).
+        (OR of the Maximum flags; update iterations have them too).
+    edge_changed : In(StructLayout N, S, W, E of 1)
+        With ``done``: a node of the block's top row (N), bottom row (S),
+        left column (W), right column (E) changed its word in that
+        iteration (not Stable): the edge the neighbour block on that side
+        reads as its border.
     shift : Out(1); shift_d : Out(signed) (exponents)
         A shift iteration (with ``run``, ``enable`` low) rotating every word
         by ``shift_d`` value positions.
@@ -73,9 +81,10 @@ class BlockControlSignature(wiring.Signature):
         members = {
             "run": Out(1), "p": Out(range(p_max + 1)), "enable": Out(1), "clear": Out(1),
             "Sat": Out(1), "sel": Out(1), "sel_row": Out(range(n)), "sel_col": Out(range(m)),
-            "br": Out(range(max(BR, 2))), "bc": Out(range(max(BC, 2))),
+            "br": Out(range(max(BR, 2))), "bc": Out(range(max(BC, 2))), "abort": Out(1),
             "take": In(1), "done": In(1), "checked": In(1), "busy": In(1),
             "all_stable": In(1), "any_max": In(1),
+            "edge_changed": In(data.StructLayout({side: 1 for side in SIDES})),
         }
         if self.exponents:
             stride = p_max + 2
@@ -153,10 +162,11 @@ class Block(wiring.Component):
     -----
     control : In(:class:`BlockControlSignature`)
         The Control module's commands (run, p, enable, clear, Sel/Sat, the
-        block br, bc) and the clusters' strobes and flags (take, done,
-        checked, busy: cluster 0's, all clusters are in lockstep;
-        all_stable, any_max: Early and Cvg); with ``exponents`` also the
-        shift iteration, the border conversion and the re-pick's inputs.
+        block br, bc, abort) and the clusters' strobes and flags (take,
+        done, checked, busy: cluster 0's, all clusters are in lockstep;
+        all_stable, any_max: Early and Cvg; edge_changed: the Stable flags
+        of each edge); with ``exponents`` also the shift iteration, the
+        border conversion and the re-pick's inputs.
     host : In(:class:`BlockHostSignature`)
         Idle RAM access to cluster ``host.cluster`` (read data one cycle
         later); a write also updates the border storage of the edge nodes.
@@ -205,6 +215,7 @@ class Block(wiring.Component):
                               "w": (p["n"] // ROWS) * (p["m"] // COLS) * p["depth"]}, why=WORDS_WHY),
     )
 
+    @checked_init
     def __init__(self, n, m, blocks=(1, 1), p_max=30, depth=1024, exponents=False, e_max=255):
         BR, BC = blocks
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=BR, bc=BC, p_max=p_max, depth=depth,
@@ -258,6 +269,7 @@ class Block(wiring.Component):
                 m.d.comb += [
                     c.run.eq(ctl.run), c.p.eq(ctl.p), c.enable.eq(ctl.enable),
                     c.clear.eq(ctl.clear), c.Sat.eq(ctl.Sat), c.Sel.eq(sel), c.base.eq(base),
+                    c.abort.eq(ctl.abort),
                     c.host_addr.eq(host.addr), c.host_wdata.eq(host.wdata),
                     c.host_we.eq(host.we & (host.cluster == k)),
                 ]
@@ -266,27 +278,30 @@ class Block(wiring.Component):
                 stables.append(c.all_stable)
                 maxes.append(c.any_max)
                 # Neighbours: the adjacent cluster's edge nodes, or the border.
-                for stream, src in (("h", "h"), ("m", "hm")):
-                    north = (Cat(getattr(cl[i - 1][j], src)[bit(ROWS - 1, q)] for q in range(COLS)) if i
-                             else getattr(border, f"{stream}_N")[COLS * j:COLS * (j + 1)])
-                    south = (Cat(getattr(cl[i + 1][j], src)[bit(0, q)] for q in range(COLS)) if i < CR - 1
-                             else getattr(border, f"{stream}_S")[COLS * j:COLS * (j + 1)])
-                    west = (Cat(getattr(cl[i][j - 1], src)[bit(r, COLS - 1)] for r in range(ROWS)) if j
-                            else getattr(border, f"{stream}_W")[ROWS * i:ROWS * (i + 1)])
-                    east = (Cat(getattr(cl[i][j + 1], src)[bit(r, 0)] for r in range(ROWS)) if j < CC - 1
-                            else getattr(border, f"{stream}_E")[ROWS * i:ROWS * (i + 1)])
-                    m.d.comb += [
-                        getattr(c, f"{stream}_N_in").eq(north), getattr(c, f"{stream}_S_in").eq(south),
-                        getattr(c, f"{stream}_W_in").eq(west), getattr(c, f"{stream}_E_in").eq(east),
-                    ]
+                north = (Cat(cl[i - 1][j].h[bit(ROWS - 1, q)] for q in range(COLS)) if i
+                         else border.h_N[COLS * j:COLS * (j + 1)])
+                south = (Cat(cl[i + 1][j].h[bit(0, q)] for q in range(COLS)) if i < CR - 1
+                         else border.h_S[COLS * j:COLS * (j + 1)])
+                west = (Cat(cl[i][j - 1].h[bit(r, COLS - 1)] for r in range(ROWS)) if j
+                        else border.h_W[ROWS * i:ROWS * (i + 1)])
+                east = (Cat(cl[i][j + 1].h[bit(r, 0)] for r in range(ROWS)) if j < CC - 1
+                        else border.h_E[ROWS * i:ROWS * (i + 1)])
+                m.d.comb += [c.h_N_in.eq(north), c.h_S_in.eq(south), c.h_W_in.eq(west), c.h_E_in.eq(east)]
 
         c0 = cl[0][0]
+        # Each edge's Stable flags (the still-block schedule's dirty bits).
+        edges = {"N": [(cl[0][j], [bit(0, q) for q in range(COLS)]) for j in range(CC)],
+                 "S": [(cl[CR - 1][j], [bit(ROWS - 1, q) for q in range(COLS)]) for j in range(CC)],
+                 "W": [(cl[i][0], [bit(r, 0) for r in range(ROWS)]) for i in range(CR)],
+                 "E": [(cl[i][CC - 1], [bit(r, COLS - 1) for r in range(ROWS)]) for i in range(CR)]}
+        for side, parts in edges.items():
+            m.d.comb += ctl.edge_changed[side].eq(~Cat(c.stable[b] for c, bits in parts for b in bits).all())
         m.d.comb += [
             ctl.take.eq(c0.take), ctl.done.eq(c0.done), ctl.checked.eq(c0.checked),
             ctl.busy.eq(c0.busy),
             ctl.all_stable.eq(Cat(*stables).all()), ctl.any_max.eq(Cat(*maxes).any()),
             border.br.eq(ctl.br), border.bc.eq(ctl.bc),
-            border.cntR.eq(c0.cntR), border.r_cnt.eq(c0.r_cnt),
+            border.cntR.eq(c0.cntR),
         ]
 
         # Border storage writes, whole edge words (every lane of the four
@@ -331,7 +346,7 @@ class Block(wiring.Component):
         whether every node is constant (``all_const``)."""
         ctl = self.control
         wiring.connect(m, wiring.flipped(ctl.border), border.conversion)
-        m.d.comb += border.p.eq(ctl.p)
+        m.d.comb += [border.p.eq(ctl.p), border.r_cnt.eq(clusters[0].r_cnt)]
         for c in clusters:
             m.d.comb += [c.shift.eq(ctl.shift), c.shift_d.eq(ctl.shift_d)]
         c0 = clusters[0]

@@ -5,7 +5,7 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .counters import Counters
 from .limits import DEPTH_WHY, MAX_DEPTH
 from .node import Node
@@ -42,20 +42,15 @@ class Cluster(wiring.Component):
     ``take`` stops the cluster once the previous iteration's writes are
     over, after its ``done`` (the iteration whose command was "stop" only
     read).  Iteration k's flags come (k+1)L + 5 cycles after the cycle in
-    which an idle cluster saw ``run``.
+    which an idle cluster saw ``run``.  ``abort`` with a ``done`` stops the
+    cluster at once (busy low from the next cycle): the iteration whose
+    flags ``done`` shows has then written its last bit (cycle 2) and the
+    iteration in progress nothing yet (its window starts at cycle S+2, its
+    first bit is written at S+3), so the RAM holds exactly what the
+    iteration of the flags wrote (the Control module's early stop after a
+    stable iteration, without a confirmation iteration).
 
-    =========================  =============================================
-    cycle (iteration i)        what happens
-    =========================  =============================================
-    0                          ``take``: iteration i's command sampled
-    1                          the command moves to the write window's
-                               registers; result bit p of i-1 computed
-    2                          ``done``: flags of iteration i-1; its last
-                               bit written
-    S+1 .. L-1                 bits 0 .. p in the adders
-    S+2 .. L+1 (+1 written)    iteration i's write window
-    =========================  =============================================
-
+    =========================  ======================================
     Parameters
     ----------
     depth : int
@@ -79,7 +74,7 @@ class Cluster(wiring.Component):
         update iterations.  Sampled at ``take``.
     clear : In(1)
         Clear iteration (with ``enable``): the nodes' adders see 0 from the
-        iteration's bit 0 on (the nodes' ``mask`` held over the whole
+        iteration's bit 0 on (the nodes' ``clear`` held over the whole
         iteration), so every free node writes 0, constants keep their words
         and Sel/Sat still apply.  Sampled at ``take``.  The block's Control
         module restarts the free nodes from 0 this way after a dynamic order.
@@ -89,6 +84,8 @@ class Cluster(wiring.Component):
     w_addr : Out(range(depth)); w_data : Out(18); w_en : Out(1)
         The RAM write port (address, the nodes' ``w`` bits, enable), for the
         border storage that mirrors the block's edge nodes.
+    abort : In(1)
+        With ``done``: stop now (see above).
     h_N_in, h_S_in : In(6); h_E_in, h_W_in : In(3)
         Neighbours' words outside the cluster, LSB first (same timing as
         ``h``: bit of address ``cntR`` two cycles later).
@@ -96,7 +93,8 @@ class Cluster(wiring.Component):
         The RAM's registered read data: every node's serial stream, for the
         neighbouring clusters and the decision module.
     cntR, r_cnt : Out(address width)
-        LSB-first / MSB-first read address offsets, for border nodes.
+        The LSB-first read address and the MSB-first (reverse) counter, for
+        the border nodes (block exponents read their MSB first).
     take, done, checked : Out(1)
         Command sampling strobe; flags-valid strobe; ``done`` after a check
         iteration (``local_max`` meaningful).
@@ -128,6 +126,7 @@ class Cluster(wiring.Component):
                    lambda p: {"w": p["p_max"] + 2}),
     )
 
+    @checked_init
     def __init__(self, depth=1024, p_max=None, exponents=False):
         check(self.PARAMS, depth=depth)
         if p_max is None:
@@ -155,6 +154,7 @@ class Cluster(wiring.Component):
             "Sel": In(NODES),
             "Sat": In(1),
             "clear": In(1),
+            "abort": In(1),
             "base": In(range(depth)),
             "w_addr": Out(range(depth)),
             "w_data": Out(NODES),
@@ -250,6 +250,8 @@ class Cluster(wiring.Component):
                          last_win.eq(win_b), last_upd.eq(upd_b)]
         with m.If(running & stopping & cnt.fl):
             m.d.sync += running.eq(0)
+        with m.If(self.abort & self.done):
+            m.d.sync += running.eq(0)
 
         # The write port writes the nodes' registered bits: the bit computed
         # in cycle u (a writing cycle of a writing iteration) one cycle later,
@@ -284,10 +286,10 @@ class Cluster(wiring.Component):
         ]
         m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(port_w.en)]
 
-        # The nodes' strobes: the clear mask over the bits of a clear
-        # iteration (cycles 1 .. L-1; cycle 0 and the pads are masked
-        # anyway); enable low in the non-writing cycles of a padded iteration.
-        mask = cnt.mask | clr_a
+        # The nodes' strobes: clr_a masks the adders over the bits of a
+        # clear iteration (cycles 1 .. L-1 and 0 of the next: cycle 0 and the
+        # pads are masked anyway); enable low in the non-writing cycles of a
+        # padded iteration.
         enable = upd_b & cnt.wcyc
 
         # The 3x6 node grid: each node streams its word from the RAM and
@@ -300,7 +302,8 @@ class Cluster(wiring.Component):
                 m.submodules[f"node_{r}_{c}"] = node
                 m.d.comb += [
                     node.h.eq(data[i]),
-                    node.mask.eq(mask),
+                    node.mask.eq(cnt.mask),
+                    node.clear.eq(clr_a),
                     node.z.eq(cnt.z),
                     node.ph1.eq(cnt.ph1),
                     node.ph2.eq(cnt.ph2),

@@ -92,10 +92,11 @@ class Controller(wiring.Component):
         The link to the :class:`~hdl.harmonic.block.Block` (its ``control``).
     """
 
-    def __init__(self, blocks, n, m, p_max, exponents=False, e_max=255, headroom=1):
+    def __init__(self, blocks, n, m, p_max, exponents=False, e_max=255, headroom=1, paper_schedule=False):
         BR, BC = blocks
         self.BR, self.BC, self.n, self.m, self.p_max = BR, BC, n, m, p_max
         self.exponents, self.e_max, self.headroom = bool(exponents), e_max, headroom
+        self.paper = bool(paper_schedule)
         P = range(p_max + 1)
         extra = {}
         if self.exponents:
@@ -146,6 +147,9 @@ class Controller(wiring.Component):
             self._exp_signals(m, locals())
             rep, crs, scanned, scan_j, need_scan = (self._x[k] for k in ("rep", "crs", "scanned", "scan_j",
                                                                           "need_scan"))
+        upd_visit = Signal()            # this visit is an update visit (not a shift visit)
+        m.d.comb += upd_visit.eq(((mode == Mode.UPDATE) & ~rep) if X else (mode == Mode.UPDATE))
+        still = None if self.paper else self._still_signals(m)
 
         def latch_order():
             m.d.sync += [act_br.eq(pend_br), act_bc.eq(pend_bc), act_row.eq(pend_row),
@@ -169,6 +173,8 @@ class Controller(wiring.Component):
                         m.d.sync += [rep.eq(0), crs.eq(0), scanned.eq(0), self._x["sat"].eq(0),
                                      self.repicks.eq(0)]
                         m.d.sync += [e.eq(0) for e in self._x["E"]]
+                    if not self.paper:
+                        m.d.sync += [still["dirty"].eq(still["all"]), still["cur"].eq(1)]
                     m.d.sync += [
                         self.p.eq(self.p1), step.eq(self.step), p_last.eq(self.p_last),
                         iters.eq(self.iters), self.running.eq(1), self.busy.eq(1),
@@ -182,8 +188,12 @@ class Controller(wiring.Component):
                     latch_order()
                     m.d.sync += [mode.eq(Mode.CLEAR), idle_clear.eq(1), self.busy.eq(1),
                                  br.eq(0), bc.eq(0)]
+                    if not self.paper:
+                        m.d.sync += still["cur"].eq(1)
                     m.next = "VSTART"
             with m.State("VSTART"):
+                if not self.paper:
+                    m.d.sync += still["acc"].eq(0)
                 if X:
                     with m.If(need_scan):
                         m.d.sync += scan_j.eq(1)
@@ -207,11 +217,19 @@ class Controller(wiring.Component):
                     m.d.sync += first.eq(0)
                     with m.If(first):
                         m.d.sync += first_ok.eq(blk.all_stable)
-                    with m.If(((mode == Mode.UPDATE) & ~rep) if X else (mode == Mode.UPDATE)):
+                    with m.If(upd_visit):
                         with m.If(~seen):
                             m.d.sync += self.block_iterations.eq(self.block_iterations + 1)
                         with m.If(blk.all_stable):
                             m.d.sync += seen.eq(1)
+                        if not self.paper:
+                            # Still blocks: the edges this visit changed, and
+                            # the Maximum flags of its stable iteration; the
+                            # clusters stop at once (no confirmation iteration).
+                            m.d.sync += still["acc"].eq(still["acc"] | blk.edge_changed.as_value())
+                            with m.If(blk.all_stable):
+                                m.d.sync += still["mx_cur"].eq(blk.any_max)
+                                m.next = "VEND"
                     with m.If(mode == Mode.CHECK):
                         m.d.sync += self.check_iterations.eq(self.check_iterations + 1)
                         with m.If(blk.any_max):
@@ -220,12 +238,13 @@ class Controller(wiring.Component):
                         m.next = "VEND"
             with m.State("VEND"):
                 m.next = "VSTART"
+                vend = self._vend if self.paper else self._vend_still
                 if X:
                     m.d.sync += scanned.eq(0)
                     with self._vend_exponents(m, locals()):
-                        self._vend(m, locals())
+                        vend(m, locals())
                 else:
-                    self._vend(m, locals())
+                    vend(m, locals())
         self._tail(m, locals())
         return m
 
@@ -236,43 +255,147 @@ class Controller(wiring.Component):
             "mode", "first_ok", "changed", "br", "bc", "anymax", "pend"))
         idle_clear, step, p_last, latch_order = v["idle_clear"], v["step"], v["p_last"], v["latch_order"]
         BR, BC, X = self.BR, self.BC, self.exponents
-        if True:
-            if True:
-                with m.If((mode == Mode.UPDATE) & ~first_ok):
-                    m.d.sync += changed.eq(1)
-                with m.If(bc != BC - 1):
-                    m.d.sync += bc.eq(bc + 1)
-                with m.Elif(br != BR - 1):
-                    m.d.sync += [br.eq(br + 1), bc.eq(0)]
-                with m.Else():                              # the end of a pass
-                    m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
-                    with m.If(mode == Mode.UPDATE):
-                        m.d.sync += self.sweeps.eq(self.sweeps + 1)
-                    with m.If((mode == Mode.CLEAR) & self.running):
-                        m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
-                    with m.If(pend):
-                        latch_order()
-                        m.d.sync += mode.eq(Mode.CLEAR)
-                    with m.Elif(idle_clear):
-                        m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
-                        m.next = "IDLE"
-                    with m.Elif(mode == Mode.UPDATE):
-                        with m.If(~changed & first_ok):
-                            m.d.sync += mode.eq(Mode.CHECK)
-                    with m.Elif(mode == Mode.CLEAR):
-                        m.d.sync += mode.eq(Mode.UPDATE)
-                    with m.Else():                          # the end of a check pass
-                        m.d.sync += mode.eq(Mode.UPDATE)
-                        with m.If(~anymax):
-                            m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
-                            m.next = "IDLE"
-                        with m.Elif((step != 0) & (self.p + step <= p_last)):
-                            m.d.sync += self.p.eq(self.p + step)
-                            if X:
-                                self._rise(m, v)
-                        with m.Else():
-                            m.d.sync += [self.running.eq(0), self.busy.eq(0)]
-                            m.next = "IDLE"
+        with m.If((mode == Mode.UPDATE) & ~first_ok):
+            m.d.sync += changed.eq(1)
+        with m.If(bc != BC - 1):
+            m.d.sync += bc.eq(bc + 1)
+        with m.Elif(br != BR - 1):
+            m.d.sync += [br.eq(br + 1), bc.eq(0)]
+        with m.Else():                              # the end of a pass
+            m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
+            with m.If(mode == Mode.UPDATE):
+                m.d.sync += self.sweeps.eq(self.sweeps + 1)
+            with m.If((mode == Mode.CLEAR) & self.running):
+                m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
+            with m.If(pend):
+                latch_order()
+                m.d.sync += mode.eq(Mode.CLEAR)
+            with m.Elif(idle_clear):
+                m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
+            with m.Elif(mode == Mode.UPDATE):
+                with m.If(~changed & first_ok):
+                    m.d.sync += mode.eq(Mode.CHECK)
+            with m.Elif(mode == Mode.CLEAR):
+                m.d.sync += mode.eq(Mode.UPDATE)
+            with m.Else():                          # the end of a check pass
+                m.d.sync += mode.eq(Mode.UPDATE)
+                with m.If(~anymax):
+                    m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
+                    m.next = "IDLE"
+                with m.Elif((step != 0) & (self.p + step <= p_last)):
+                    m.d.sync += self.p.eq(self.p + step)
+                    if X:
+                        self._rise(m, v)
+                with m.Else():
+                    m.d.sync += [self.running.eq(0), self.busy.eq(0)]
+                    m.next = "IDLE"
+
+    # The default schedule: still blocks (models.harmonic.schedule, StillBlocks
+    # and StillTiming).  Not elaborated with paper_schedule.
+
+    def _still_signals(self, m):
+        """The dirty bits, the per-block Maximum flags, the current block as
+        one-hot ``cur`` (beside br, bc) and the visit's edge changes."""
+        B = self.BR * self.BC
+        x = {
+            "all": (1 << B) - 1,
+            "dirty": Signal(B, name="dirty"),     # blocks to visit in this level
+            "mx": Signal(B, name="mx"),           # Maximum flags of each block's last stable visit
+            "cur": Signal(B, name="cur", init=1),  # the current block, one-hot
+            "acc": Signal(4, name="edges"),       # N, S, W, E edges changed in this visit
+            "mx_cur": Signal(name="mx_cur"),      # the Maximum flags of this visit's stable iteration
+        }
+        return x
+
+    def _still_next(self, m, v, own):
+        """(dirty, mx) after the visit that ends now: the block's bit set
+        again if ``own`` (not stable, or its words moved), else cleared;
+        its flag from its stable iteration; the bits of the neighbours whose
+        facing edge changed (one-hot shifts of ``cur``)."""
+        x = v["still"]
+        BC, B = self.BC, self.BR * self.BC
+        cur, acc, seen = x["cur"], x["acc"], v["seen"]
+        all_ = x["all"]
+        not_first_col = sum(1 << i for i in range(B) if i % BC != 0)
+        not_last_col = sum(1 << i for i in range(B) if i % BC != BC - 1)
+        nbr = ((Mux(acc[0], cur >> BC, 0))                                   # N edge: block b-BC
+               | (Mux(acc[1], cur << BC, 0) & all_)                          # S edge: block b+BC
+               | (Mux(acc[2], cur >> 1, 0) & not_last_col)                   # W edge: block b-1
+               | (Mux(acc[3], cur << 1, 0) & all_ & not_first_col))          # E edge: block b+1
+        dirty_n, mx_n = Signal(B, name="dirty_n"), Signal(B, name="mx_n")
+        m.d.comb += [
+            dirty_n.eq((x["dirty"] & ~cur) | Mux(own, cur, 0) | nbr),
+            mx_n.eq(Mux(seen, (x["mx"] & ~cur) | Mux(x["mx_cur"], cur, 0), x["mx"])),
+        ]
+        return dirty_n, mx_n
+
+    def _goto(self, m, v, onehot):
+        """Visit block ``onehot`` next (br, bc and ``cur`` together)."""
+        BC, B = self.BC, self.BR * self.BC
+        if isinstance(onehot, int):
+            i = onehot.bit_length() - 1
+            br_n, bc_n = i // BC, i % BC
+        else:
+            br_n = bc_n = 0
+            for i in range(B):
+                br_n = br_n | Mux(onehot[i], i // BC, 0)
+                bc_n = bc_n | Mux(onehot[i], i % BC, 0)
+        m.d.sync += [v["br"].eq(br_n), v["bc"].eq(bc_n), v["still"]["cur"].eq(onehot)]
+
+    def _vend_still(self, m, v):
+        """The end of a visit with still blocks: the dirty bits, the next
+        dirty block after this one (the priority of a one-hot: x & -x), the
+        end of a sweep (an order waits: a clear pass; a block dirty: the
+        next sweep from the first one), the end of a level (the folded
+        check: the OR of the blocks' Maximum flags)."""
+        x = v["still"]
+        mode, seen, pend, idle_clear = v["mode"], v["seen"], v["pend"], v["idle_clear"]
+        step, p_last, latch_order = v["step"], v["p_last"], v["latch_order"]
+        B = self.BR * self.BC
+        cur = x["cur"]
+        dirty_n, mx_n = self._still_next(m, v, ~seen)
+        above = Signal(B, name="above")             # blocks after the current one
+        m.d.comb += above.eq(~(cur | (cur - 1)))
+        cand, first = Signal(B, name="cand"), Signal(B, name="first_dirty")
+        pool = Signal(B, name="pool")
+        m.d.comb += [
+            pool.eq(Mux(mode == Mode.UPDATE, dirty_n, x["all"]) & above),
+            cand.eq(pool & (~pool + 1)),
+            first.eq(dirty_n & (~dirty_n + 1)),
+        ]
+        with m.If(mode == Mode.UPDATE):
+            m.d.sync += [x["dirty"].eq(dirty_n), x["mx"].eq(mx_n)]
+        with m.If(cand != 0):
+            self._goto(m, v, cand)
+        with m.Else():                                  # the end of a pass
+            with m.If(mode == Mode.UPDATE):
+                m.d.sync += self.sweeps.eq(self.sweeps + 1)
+            with m.If((mode == Mode.CLEAR) & self.running):
+                m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
+            with m.If(pend):
+                latch_order()
+                m.d.sync += mode.eq(Mode.CLEAR)
+                self._goto(m, v, 1)
+            with m.Elif(idle_clear):
+                m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
+            with m.Elif(mode == Mode.CLEAR):            # every free node is 0 again
+                m.d.sync += [mode.eq(Mode.UPDATE), x["dirty"].eq(x["all"])]
+                self._goto(m, v, 1)
+            with m.Elif(dirty_n != 0):                  # the next sweep
+                self._goto(m, v, first)
+            with m.Elif(mx_n == 0):                     # no local maximum: converged
+                m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
+            with m.Elif((step != 0) & (self.p + step <= p_last)):
+                m.d.sync += [self.p.eq(self.p + step), x["dirty"].eq(x["all"])]
+                self._goto(m, v, 1)
+                if self.exponents:
+                    self._rise(m, v)
+            with m.Else():
+                m.d.sync += [self.running.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
 
     def _tail(self, m, v):
         # The clusters' run: start request in VSTART, then the command at each
@@ -281,6 +404,8 @@ class Controller(wiring.Component):
         mode, iters, fsm, k, seen = (v[x] for x in ("mode", "iters", "fsm", "k", "seen"))
         limit = Signal(9)
         blk = self.block
+        if not self.paper:
+            m.d.comb += blk.abort.eq(fsm.ongoing("VRUN") & blk.done & blk.all_stable & v["upd_visit"])
         if self.exponents:
             rep = v["rep"]
             x = self._x
@@ -307,7 +432,7 @@ class Controller(wiring.Component):
 
     def _exp_signals(self, m, v):
         BR, BC, B, p_max, e_max, h = self.BR, self.BC, self.BR * self.BC, self.p_max, self.e_max, self.headroom
-        br, bc, mode, fsm_state = v["br"], v["bc"], v["mode"], None
+        br, bc, mode = v["br"], v["bc"], v["mode"]
         x = self._x = {}
         x["E"] = E = [Signal(range(e_max + 1), name=f"E_{i}") for i in range(B)]
         Ea = Array(E)
@@ -326,7 +451,7 @@ class Controller(wiring.Component):
         with m.If(fsm_take := Signal(name="rep_take")):
             m.d.sync += [shd.eq(Mux(rem > 3, 3, rem)), rem.eq(rem - Mux(rem > 3, 3, rem))]
         x["rep_take"] = fsm_take
-        x["need_scan"] = need_scan = Signal(name="need_scan")
+        x["need_scan"] = Signal(name="need_scan")
         b = x["b"] = Signal(range(max(B, 2)), name="b_cur")
         m.d.comb += b.eq(br * BC + bc)
         e = x["e"] = Signal(range(e_max + 1), name="e_cur")
@@ -373,7 +498,7 @@ class Controller(wiring.Component):
         context of the ordinary VEND (update/check/clear visits without a
         re-pick, and a re-pick's shift visit, which then moves on)."""
         x = self._x
-        mode, rep, crs, d, b, shd = v["mode"], x["rep"], x["crs"], x["d"], x["b"], x["shd"]
+        mode, rep, crs, d, b = v["mode"], x["rep"], x["crs"], x["d"], x["b"]
         E, sat = x["E"], x["sat"]
         Ea = Array(E)
         with m.If(crs):                               # a coarsening visit ended
@@ -385,6 +510,11 @@ class Controller(wiring.Component):
             with m.If(d != 0):                        # re-pick: shift visit of this block
                 m.d.sync += [Ea[b].eq(Ea[b] + d), rep.eq(1), v["changed"].eq(1),
                              x["rem"].eq(Mux(d > self.p, self.p, d)), self.repicks.eq(self.repicks + 1)]
+                if not self.paper:
+                    # Still blocks: the visit's dirty bits, the block's own
+                    # set (its ring is read finer after the shift).
+                    dirty_n, mx_n = self._still_next(m, v, 1)
+                    m.d.sync += [v["still"]["dirty"].eq(dirty_n), v["still"]["mx"].eq(mx_n)]
         with m.If(rep & ~crs):
             m.d.sync += rep.eq(0)
         return m.If(~crs & ~((mode == Mode.UPDATE) & ~rep & (d != 0)))
@@ -403,8 +533,12 @@ class Controller(wiring.Component):
                 m.d.sync += [v["br"].eq(i // BC), v["bc"].eq(i % BC), x["rem"].eq(p_new + 1 - dl),
                              E[i].eq(E[i] - dl),
                              x["crs_pend"].eq(mask & ~(1 << i)), x["rep"].eq(1), x["crs"].eq(1)]
+                if not self.paper:
+                    m.d.sync += v["still"]["cur"].eq(1 << i)
         with m.Else():
             m.d.sync += [x["rep"].eq(0), x["crs"].eq(0), v["br"].eq(0), v["bc"].eq(0)]
+            if not self.paper:
+                m.d.sync += v["still"]["cur"].eq(1)
 
     def _rise(self, m, v):
         """A precision rise: blocks saturated in the ending level with e_b > 0

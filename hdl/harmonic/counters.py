@@ -1,11 +1,11 @@
 """Counters unit shared by the 18 nodes of a cluster (paper 000, section 5.2)."""
 
-from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
+from amaranth.hdl import Module, Mux, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from ...models.harmonic.ram import P_MIN, READ_LATENCY, WRITE_LATENCY
-from ..params import Param, check
+from ..params import Param, check, checked_init
 from .limits import MAX_DEPTH
 
 __all__ = ["Counters"]
@@ -64,6 +64,7 @@ class Counters(wiring.Component):
                     message="p_max must be an integer in 2..{hi} (a word of p_max + 2 bits fills at most a "
                             "2**20-word RAM), not {value!r}"),)
 
+    @checked_init
     def __init__(self, p_max):
         check(self.PARAMS, p_max=p_max)
         self.p_max = p_max

@@ -47,11 +47,18 @@ class Node(wiring.Component):
     the cluster writes it.
 
     In an iteration with ``enable`` low ("check" iteration) nothing changes:
-    ``w`` is the stored bit.  The Maximum compares the node's value with its
-    four neighbours' on the same LSB-first streams (a comparison LSB first
-    keeps, per neighbour, "greater or equal so far": the last differing bit
-    decides), so the cluster's RAM needs no MSB-first read (the paper's
-    Maximum reads MSB first through a second port).
+    ``w`` is the stored bit.
+
+    The Maximum compares the node's value with each neighbour's on the very
+    LSB-first streams the adder reads (value bit k at cycle S+1+k): per
+    neighbour one flip-flop holds "mine >= its so far", and a higher bit that
+    differs overrides it, so after bit p it is the comparison of the whole
+    values.  (The paper reads a second, MSB-first stream through the RAM's
+    other port for this, 3.2.1; port B writes in update iterations, so that
+    comparison exists only in check iterations.  LSB first it needs no
+    second read port and comes with every iteration, update, check or clear,
+    which folds the check pass into the visits: see
+    :mod:`models.harmonic.schedule`.)
 
     Flags: ``stable`` and ``local_max`` of an iteration are valid in cycle 2
     of the next one (``local_max`` from cycle 1, ``stable`` once the last
@@ -65,8 +72,11 @@ class Node(wiring.Component):
     h_N, h_E, h_W, h_S : In(1)
         The four neighbours' words, same timing as ``h``.
     mask : In(1)
-        The adder's inputs are masked (0): pad and flag cycles (u <= S), and
-        every cycle of a clear iteration's bits.
+        Pad and flag cycles (u <= S): the adder's inputs are masked (0) and
+        the Maximum restarts.
+    clear : In(1)
+        Clear iteration: the adder's inputs are masked over its bits too
+        (the Maximum still compares the values read).
     z, ph1, ph2 : In(1)
         Cycle strobes from the Counters unit (u = 0, u = 1, u = S+2).
     enable : In(1)
@@ -86,8 +96,8 @@ class Node(wiring.Component):
     stable : Out(1)
         The word written in the previous iteration equals the stored one.
     local_max : Out(1)
-        Free node whose value is >= its four neighbours' (the values read by
-        the previous iteration).
+        Free node whose value is >= its four neighbours' (the values the
+        previous iteration read, update, check or clear).
     """
 
     h: In(1)
@@ -96,6 +106,7 @@ class Node(wiring.Component):
     h_W: In(1)
     h_S: In(1)
     mask: In(1)
+    clear: In(1)
     z: In(1)
     ph1: In(1)
     ph2: In(1)
@@ -126,7 +137,7 @@ class Node(wiring.Component):
         # masked the carry flushes: sum bit p+1 (result bit p-1) is written
         # at u = 0, sum bit p+2 is k[0] at u = 1 (result bit p), and the
         # adder starts afresh there (kin masked; k[1] is 0 by then).
-        live = ~self.mask
+        live = ~(self.mask | self.clear)
         a, b = self.h_N & live, self.h_S & live
         c, d = self.h_E & live, self.h_W & live
         k = Signal(2)

@@ -7,7 +7,7 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .block import Block
 from .cluster import COLS, ROWS
 from .controller import Controller
@@ -148,6 +148,12 @@ class Planner(wiring.Component):
         With ``block_exponents``: the largest e_b (1 ..) and the re-pick's
         headroom h (0 .. p_max), ``plan_exponents``' ``e_max`` and
         ``headroom`` (defaults 255 and 1, the model's).
+    paper_schedule : bool
+        False (default): still blocks, :func:`models.harmonic.plan`'s
+        default (a sweep visits only the blocks a change can reach, no
+        confirmation iteration, no check pass; ``check_iterations`` stays
+        0).  True: the paper's schedule, ``plan(..., paper_schedule=True)``.
+        Both give the same field (see :mod:`models.harmonic.schedule`).
     """
 
     # Block's parameters (it checks them), at the planner's defaults, and the
@@ -158,16 +164,22 @@ class Planner(wiring.Component):
                     message="block_exponents={value!r}: must be True or False"),
               Param("headroom", int, 1, lo=0, hi=MAX_DEPTH - 2,
                     doc="top mantissa bits a re-pick leaves empty (with block_exponents; headroom <= p_max)",
-                    message="headroom={value!r}: must be an integer in 0..{hi} (headroom <= p_max)"))
+                    message="headroom={value!r}: must be an integer in 0..{hi} (headroom <= p_max)"),
+              Param("paper_schedule", bool, False,
+                    doc="the paper's schedule (every block in every sweep, a confirmation iteration, a "
+                        "check pass) instead of the default still blocks",
+                    message="paper_schedule={value!r}: must be True or False"))
     CONSTRAINTS = (*Block.CONSTRAINTS,
                    Constraint("headroom <= p_max", lambda p: p["headroom"] <= p["p_max"],
                               "headroom={headroom!r}: leaves no mantissa bit at p_max={p_max}"))
 
+    @checked_init
     def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False, e_max=255,
-                 headroom=1):
+                 headroom=1, paper_schedule=False):
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=blocks[0], bc=blocks[1], p_max=p_max, depth=depth,
-              block_exponents=block_exponents, e_max=e_max, headroom=headroom)
+              block_exponents=block_exponents, e_max=e_max, headroom=headroom, paper_schedule=paper_schedule)
         self.exponents = bool(block_exponents)
+        self.paper = bool(paper_schedule)
         self.e_max, self.headroom = e_max, headroom
         ekw = {"exponents": True, "e_max": e_max} if self.exponents else {}
         self.block = Block(n, m, blocks, p_max, depth, **ekw)
@@ -183,6 +195,7 @@ class Planner(wiring.Component):
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest (see Controller's table)."""
         return {"iteration_cycles": "p+2", "block_visit_cycles": "K*(p+2)+6 for K iterations",
+                "schedule": "paper's" if self.paper else "still blocks",
                 "response": "one o_stream beat per i_stream command, in order",
                 "direction_latency": "7p+26 cycles (a node with 4 neighbours in the map; "
                                      "p+3 fewer per neighbour outside it: direction_latency())",
@@ -196,7 +209,7 @@ class Planner(wiring.Component):
         m.submodules.block = blk = self.block
         X = self.exponents
         xkw = {"exponents": True, "e_max": self.e_max, "headroom": self.headroom} if X else {}
-        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, **xkw)
+        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, paper_schedule=self.paper, **xkw)
         m.submodules.decision = dec = Decision(p_max)
         wiring.connect(m, ctl.block, blk.control)
         host = blk.host             # the LOAD / READ / DIRECTION path to the RAMs

@@ -30,7 +30,7 @@ import numpy as np
 from .grid import BlockGrid
 from .node import local_max
 from .ram import SHIFT_STEP, convert_mantissa
-from .schedule import run, visit_cycles
+from .schedule import control, run, visit_cycles
 
 __all__ = ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "shift_iterations", "ExponentGrid", "plan_exponents"]
 
@@ -327,7 +327,7 @@ class ExponentGrid(BlockGrid):
 
 def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
                    e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False, events=(),
-                   progress=None):
+                   progress=None, paper_schedule=False):
     """The block-synchronous planner (:func:`~models.harmonic.plan`) with one exponent per block.
 
     Number format: block b's node with stored mantissa v (p+1 bits, the word
@@ -419,4 +419,6 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     re-picked every block and changed nothing; asserted here).
     """
     grid = ExponentGrid(obstacle, goals, block, iters, schedule, headroom, e_max, repick, ceiling, rtl)
-    return run(grid, events=events, trace=trace, progress=progress)
+    grid.res.paper_schedule = bool(paper_schedule)
+    visits, timing = control(grid, paper_schedule)
+    return run(grid, events=events, visits=visits, timing=timing, trace=trace, progress=progress)

@@ -56,7 +56,7 @@ class ClusterDriver:
             "W": [SerialWord(ring[r + 1, 0], True, p) for r in range(ROWS)],
             "E": [SerialWord(ring[r + 1, COLS + 1], True, p) for r in range(ROWS)],
         }
-        for port in ("run", "enable", "Sel", "Sat", "host_we", "p", "clear", "base"):
+        for port in ("run", "enable", "Sel", "Sat", "host_we", "p", "clear", "base", "abort"):
             getattr(dut, port).value = 0
 
     async def host_write(self, words, base=0):
@@ -84,14 +84,15 @@ class ClusterDriver:
             h = sum(w.bits[addr] << i for i, w in enumerate(words)) if addr is not None else 0
             getattr(self.dut, f"h_{side}_in").value = h
 
-    async def iterate(self, decide, on_words=None, on_done=None, max_cycles=10**6):
+    async def iterate(self, decide, on_words=None, on_done=None, max_cycles=10**6, abort=None):
         """Start the cluster at precision p and iterate until it stops.
 
         ``decide(k)`` gives the :class:`Command` of iteration k (a command with
         ``run`` false stops the cluster); ``on_words(k, h, const)`` receives
         the 18 words the cluster read in iteration k, rebuilt from the ``h``
-        bus; ``on_done(k, done)`` the flags of iteration k.  Returns the list
-        of :class:`Done`.
+        bus; ``on_done(k, done)`` the flags of iteration k; ``abort(k,
+        done)`` true: raise ``abort`` with that ``done`` (the cluster must be
+        idle in the next cycle).  Returns the list of :class:`Done`.
         """
         dut, p = self.dut, self.p
         dut.p.value = p
@@ -126,6 +127,13 @@ class ClusterDriver:
                 if on_done:
                     on_done(len(dones), done)
                 dones.append(done)
+                if abort is not None and abort(len(dones) - 1, done):
+                    dut.abort.value = 1
+                    dut.run.value = 0               # (run high while idle would start it again)
+                    await next_cycle(dut)
+                    dut.abort.value = 0
+                    assert not bool(dut.busy.value), "busy after abort"
+                    return dones
                 if not commands[len(dones)].run:
                     return dones
             # The h bus carries the words at the address presented READ_LATENCY

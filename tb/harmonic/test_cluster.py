@@ -1,4 +1,3 @@
-# amaranth: UnusedElaboratable=no
 """3x6 cluster against models.harmonic, bit-exact, every iteration.
 
 A 3x6 region with a fixed boundary ring is loaded through the host port and
@@ -7,11 +6,14 @@ the period-2 oscillation that lowering values by a new obstacle can cause),
 with a goal and an obstacle set through Sel/Sat in mid-run and check iterations along the way (one early,
 one after stabilization).  Every iteration the drv rebuilds all 18 stored
 words from the ``h`` bus and compares them with the model; every ``done`` it
-compares the stable flags, after every check iteration the local-maximum
-flags.  Iteration k's flags must come exactly (k+1)L + 5 cycles after the
-start request (two cycles of lead-in, then L = iteration_cycles(p) cycles per
-iteration: p+2 from p = 4 on, 6 for p = 2, 3).  At the end the RAM
-is read back through the host port and compared with the model's image.
+compares the stable and local-maximum flags (the Maximum compares LSB
+first, so update iterations have it too).  Iteration k's flags must come
+exactly (k+1)L + 5 cycles after the start request (two cycles of lead-in,
+then L = iteration_cycles(p) cycles per iteration: p+2 from p = 4 on, 6 for
+p = 2, 3).  At the end the RAM is read back through the host port and
+compared with the model's image.  ``abort`` at the flags of the first stable
+iteration (the Control module's early stop) leaves the RAM as that iteration
+wrote it, and the cluster idle in the next cycle.
 """
 
 import os
@@ -23,6 +25,7 @@ import pytest
 from cocotb.triggers import ClockCycles
 
 from navcores.hdl.harmonic.cluster import COLS, ROWS
+from navcores.hdl.params import unelaborated
 from navcores.models.harmonic import iteration_cycles, neighbours, one, ram_image, step
 from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
@@ -106,9 +109,8 @@ class ModelRun:
         assert (done.stable == stable).all(), f"p={p} iteration {k}: stable\n{done.stable}\nmodel\n{stable}"
         assert done.all_stable == stable.all()
         assert done.checked == (not self.commands[k].enable)
-        if done.checked:
-            assert (done.local_max == maximum).all(), f"p={p} iteration {k}: local_max\n{done.local_max}\nmodel\n{maximum}"
-            assert done.any_max == maximum.any()
+        assert (done.local_max == maximum).all(), f"p={p} iteration {k}: local_max\n{done.local_max}\nmodel\n{maximum}"
+        assert done.any_max == maximum.any()
         assert done.cycle == (k + 1) * iteration_cycles(p) + 5, f"iteration {k} done at cycle {done.cycle}"
 
 
@@ -151,6 +153,33 @@ async def _run_and_check(dut, drv, model):
 
 
 @cocotb.test()
+async def cluster_abort_after_stable(dut):
+    """The early stop without a confirmation iteration: ``abort`` with the
+    flags of the first stable update iteration (the next one has started):
+    the cluster is idle in the next cycle and its RAM holds the stable
+    words; the maxima came with the update iterations."""
+    p = PRECISIONS[-1]
+    rng = random.Random(cocotb.RANDOM_SEED * 31 + p)
+    await start(dut)
+    h, const, ring = _initial(rng, p)
+    drv = ClusterDriver(dut, p, ring)
+    model = ModelRun(p, h, const, ring)
+    await drv.host_write(ram_image(h, const, p))
+    seen_max = set()
+
+    def stop_here(k, done):
+        seen_max.add(done.any_max)
+        return done.all_stable and not done.checked
+
+    dones = await drv.iterate(model.decide, on_done=model.check_done, abort=stop_here,
+                              max_cycles=MAX_ITER * iteration_cycles(p))
+    assert model.outcome == "stable" and len(dones) == model.settled + 1
+    assert await drv.host_read(p + 2) == ram_image(*model.states[model.settled + 1], p), "RAM after abort"
+    assert True in seen_max, "the update iterations must show the starting plateau's maxima"
+    dut._log.info(f"p={p}: aborted after stable iteration {model.settled}, RAM equal")
+
+
+@cocotb.test()
 async def cluster_increasing_precision(dut):
     """Stable at p1, then the same words continue at p2 > p1 (section 3.3.2):
     the layout keeps every stored bit in place, the new LSB addresses only
@@ -178,7 +207,7 @@ async def cluster_increasing_precision(dut):
 async def cluster_refuses_bad_precision(dut):
     """p < 2 or p > p_max: no start, p_err raised; a good p starts and clears it."""
     await start(dut)
-    for port in ("enable", "Sel", "Sat", "host_we", "clear", "base"):
+    for port in ("enable", "Sel", "Sat", "host_we", "clear", "base", "abort"):
         getattr(dut, port).value = 0
     too_big = [(P_MAX + 1, False)] if P_MAX + 1 < 1 << P_MAX.bit_length() else []
     for p, ok in [(1, False), (0, False), *too_big, (P_MAX, True), (2, True)]:
@@ -215,5 +244,5 @@ def test_elaboration_refuses(kwargs, message):
 
 def test_elaboration_limits_accepted():
     from navcores.hdl.harmonic.cluster import Cluster
-    assert Cluster(depth=64, p_max=62).p_max == 62
-    assert Cluster().p_max == 1022                  # the paper's 1Kx18 RAM, one block
+    assert unelaborated(Cluster(depth=64, p_max=62)).p_max == 62
+    assert unelaborated(Cluster()).p_max == 1022    # the paper's 1Kx18 RAM, one block

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dirichlet import dirichlet
 from harmonic_small_maps import corridor, spiral
 from planner_maps import random_map
 from navcores.models.harmonic import (
@@ -141,7 +142,7 @@ def test_termination_invariant(case):
             assert E[b] == 0
         val = _scaled(mant, E, p, n, m, F)
         if prev is not None:
-            pev, pp, pE, pval = prev
+            _, pp, pE, pval = prev
             if event == "raise":
                 coarsened += int((E < pE).sum())
             assert (val >= pval).all(), f"a value fell at {event}"
@@ -152,7 +153,7 @@ def test_termination_invariant(case):
                 levels_seen += 1
             compared += val.size
         prev = (event, p, E, val)
-    assert compared > 0 and trace[-1][0] == "check"
+    assert compared > 0 and levels_seen > 0 and trace[-1][0] == "check"     # across a precision rise too
     # the run ended at a fixed point of the update with conversions
     bad, checked = _fixed_point_violations(res, res.p)
     assert bad == 0 and checked > 0
@@ -166,38 +167,25 @@ def test_termination_invariant(case):
 
 def test_below_dirichlet_solution():
     """Sub-solution: every exact value is at most the exact harmonic solution."""
-    from scipy.sparse import lil_matrix
-    from scipy.sparse.linalg import spsolve
-
     for seed in (4, 5):
         ob, goals = _random_map(12, 18, seed)
         res = plan(ob, goals, block=(3, 6), iters=3, schedule=(8, 16, 24), block_exponents=True)
-        const = res.const
-        free = np.argwhere(~const)
-        index = {tuple(rc): i for i, rc in enumerate(free)}
-        A = lil_matrix((len(free), len(free)))
-        rhs = np.zeros(len(free))
-        for i, (r, c) in enumerate(free):
-            A[i, i] = 1.0
-            for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
-                if 0 <= rr < ob.shape[0] and 0 <= cc < ob.shape[1]:
-                    if (rr, cc) in index:
-                        A[i, index[(rr, cc)]] = -0.25
-                    elif (rr, cc) in goals:
-                        rhs[i] += 0.25
-        x = spsolve(A.tocsr(), rhs)
+        goal = np.zeros(ob.shape, dtype=bool)
+        goal[tuple(np.array(goals).T)] = True
+        free, _, x, _ = dirichlet(goal, res.const)
         unit = 1 << res.frac_bits
         got = np.array([int(res.h[r, c]) / unit for r, c in free])
         assert (got <= x * (1 + 1e-9) + 1e-300).all()
         assert (got > 0).sum() == len(free) - int((~reachable(ob, goals) & ~ob).sum())
 
 
-def test_cycles_follow_timing_model():
+@pytest.mark.parametrize("paper", [False, True])
+def test_cycles_follow_timing_model(paper):
     ob, goals = _random_map(12, 15, 7)
     trace = []
     iters = 3
     res = plan(ob, goals, block=(3, 5), iters=iters, schedule=(6, 10, 14), block_exponents=True,
-               trace=trace)
+               trace=trace, paper_schedule=paper)
     B = res.blocks[0] * res.blocks[1]
     counted = {"visit": 0, "repick": 0, "check": 0, "raise": 0}
     for (_, _, pE, _, pc), (event, p, E, _, c) in zip(trace, trace[1:]):
@@ -209,8 +197,8 @@ def test_cycles_follow_timing_model():
         elif event in ("repick", "raise"):
             assert delta == moved * visit_cycles(1, p)
             assert event == "raise" or moved > 0
-        else:
-            assert delta == B * visit_cycles(1, p)
+        else:           # the check pass (the default schedule folds it in: no cycles)
+            assert delta == (B * visit_cycles(1, p) if paper else 0)
         counted[event] += 1
     assert trace[-1][4] == res.cycles
     assert counted["visit"] > 0 and counted["check"] > 0 and counted["repick"] > 0
@@ -355,18 +343,22 @@ def test_decision_exponents_against_exact():
     assert seen["aware"] >= 0.9 * seen["mixed"] and seen["raw"] <= 0.8 * seen["mixed"], seen
 
 
+@pytest.mark.parametrize("paper", [False, True])
 @pytest.mark.parametrize("rtl", [False, True])
-def test_orders_restart_exponents(rtl):
+def test_orders_restart_exponents(rtl, paper):
     ob, goals = random_map(9, 18, 1)
-    kw = dict(block=(3, 6), iters=3, block_exponents=True, rtl=rtl)
+    kw = dict(block=(3, 6), iters=3, block_exponents=True, rtl=rtl, paper_schedule=paper)
     sched = (6, 10, 14)
+    base = plan(ob, goals, schedule=sched, **kw)
+    passes = base.sweeps + base.check_iterations // (base.blocks[0] * base.blocks[1])
+    at = (3, 19, 36) if paper else (3, passes // 2, passes - 2)
     cell = (4, 14)                       # free; as an obstacle it cuts no cell off
     ob2 = ob.copy()
     ob2[cell] = True
     assert not ob[cell] and cell not in goals
     assert (reachable(ob2, goals) | ob2).sum() == (reachable(ob, goals) | ob).sum()
     raised = 0
-    for s in (3, 19, 36):
+    for s in at:
         trace = []
         res = plan(ob, goals, schedule=sched, events=[(s, cell, "obstacle")], trace=trace, **kw)
         i = next(k for k, t in enumerate(trace) if t[0] == "clear")
