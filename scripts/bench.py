@@ -522,15 +522,7 @@ def study_sections():
     """The harmonic schedule study and the block-exponent comparison, as markdown."""
     import bench_harmonic
     out = []
-    lines = []
-    parts = []
-    for name in ("maze-32-32-2.map", "random-32-32-10.map"):
-        part, summary = bench_harmonic.cycles_section(name)
-        lines += part
-        parts.append(summary)
-    lines += ["Summary: " + "; ".join(
-        f"{s['map']}: the paper's algorithm {s['paper']:.2f}x, best variation {s['best']:.2f}x ({s['best_what']})"
-        for s in parts), ""]
+    lines, _ = bench_harmonic.study_lines()
     bits, _ = bench_harmonic.bits_section()
     out.append(("Harmonic planner: block-synchronous schedule against one block (paper 4.5.2)", "\n".join(lines)))
     out.append(("Harmonic planner: bits of precision against the longest distance (paper 3.2.2)", "\n".join(bits)))
