@@ -4,6 +4,7 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
+from ...models.harmonic.ram import READ_LATENCY
 from ..params import Constraint, Param, check, checked_init
 from .border import SIDES, Border, BorderExponentsSignature
 from .cluster import COLS, NODES, ROWS, Cluster
@@ -112,11 +113,12 @@ class BlockHostSignature(wiring.Signature):
         Word address and cluster (k = i*CC + j for cluster (i, j)).
     wdata : Out(18); we : Out(1)
         Write the cluster's word (18 nodes' bits); a write also updates the
-        border storage of the block's edge nodes, one cycle later (keep the
-        clusters from writing in that cycle: a run writes from its
-        iteration's cycle 2 on).
+        border storage of the block's edge nodes, two cycles later (keep the
+        clusters from writing in those cycles: a run writes from its first
+        iteration's cycle S+3 on, at least six cycles after it saw ``run``).
     rdata : In(18)
-        The addressed cluster's word, one cycle after the address.
+        The addressed cluster's word, two cycles after the address (the
+        registered RAM read).
     """
 
     def __init__(self, depth, clusters):
@@ -168,7 +170,7 @@ class Block(wiring.Component):
         of each edge); with ``exponents`` also the shift iteration, the
         border conversion and the re-pick's inputs.
     host : In(:class:`BlockHostSignature`)
-        Idle RAM access to cluster ``host.cluster`` (read data one cycle
+        Idle RAM access to cluster ``host.cluster`` (read data two cycles
         later); a write also updates the border storage of the edge nodes.
     """
 
@@ -301,22 +303,27 @@ class Block(wiring.Component):
             ctl.busy.eq(c0.busy),
             ctl.all_stable.eq(Cat(*stables).all()), ctl.any_max.eq(Cat(*maxes).any()),
             border.br.eq(ctl.br), border.bc.eq(ctl.bc),
-            border.cntR.eq(c0.cntR),
+            border.cntR.eq(c0.cntR), border.addr.eq(c0.r_addr),
         ]
 
         # Border storage writes, whole edge words (every lane of the four
         # edges): while iterating, the edge nodes' bits of the clusters'
         # write port (all clusters write the same address); after a host
-        # write, one cycle later, the edge words at its address: every
-        # cluster's port A read that address in the write's cycle (the host
-        # port's read while idle), the written cluster's word is the host's.
+        # write, READ_LATENCY cycles later, the edge words at its address:
+        # every cluster's read port read that address in the write's cycle
+        # (the host port's read while idle), the written cluster's word is
+        # the host's.
         # So LOAD, one cluster at a time, keeps the lane words whole.
-        fill = Signal()
-        fill_addr, fill_k = Signal.like(host.addr), Signal.like(host.cluster)
-        fill_data = Signal.like(host.wdata)
-        m.d.sync += fill.eq(~c0.busy & host.we)
-        with m.If(~c0.busy & host.we):
-            m.d.sync += [fill_addr.eq(host.addr), fill_k.eq(host.cluster), fill_data.eq(host.wdata)]
+        # The clusters' read data come READ_LATENCY cycles after the address:
+        # the host write's address, cluster and data wait as long.
+        fills = [(Signal(name=f"fill_{i}"), Signal.like(host.addr, name=f"fill_addr_{i}"),
+                  Signal.like(host.cluster, name=f"fill_k_{i}"), Signal.like(host.wdata, name=f"fill_data_{i}"))
+                 for i in range(READ_LATENCY)]
+        m.d.sync += [fills[0][0].eq(~c0.busy & host.we), fills[0][1].eq(host.addr),
+                     fills[0][2].eq(host.cluster), fills[0][3].eq(host.wdata)]
+        for a, b in zip(fills, fills[1:]):
+            m.d.sync += [y.eq(x) for x, y in zip(a, b)]
+        fill, fill_addr, fill_k, fill_data = fills[-1]
         m.d.comb += [border.w_addr.eq(Mux(fill, fill_addr, c0.w_addr)),
                      border.w_en.eq(fill | (c0.busy & c0.w_en))]
         # The border nodes by cluster edge segment: each cluster edge that
@@ -357,8 +364,8 @@ class Block(wiring.Component):
             m.d.sync += ctl.lead_own.eq(self.stride)
         with m.Elif(c0.busy & c0.w_en & written & (off >= 1) & (off < ctl.lead_own)):
             m.d.sync += ctl.lead_own.eq(off)
-        # The flags stream at cycle 0; the next cycle is the take.
-        flags_all = Signal()
-        m.d.sync += flags_all.eq(Cat(*[c.h.all() for c in clusters]).all())
-        with m.If(c0.take):
-            m.d.sync += ctl.all_const.eq(flags_all)
+        # The flags stream at cycle S (h); two registers later is ph2.
+        flags_all, flags_all_r = Signal(), Signal()
+        m.d.sync += [flags_all.eq(Cat(*[c.h.all() for c in clusters]).all()), flags_all_r.eq(flags_all)]
+        with m.If(c0.ph2):
+            m.d.sync += ctl.all_const.eq(flags_all_r)

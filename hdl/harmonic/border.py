@@ -80,7 +80,8 @@ class Border(wiring.Component):
     that holds those nodes is computed, and the whole edge words the
     :class:`~hdl.harmonic.block.Block` assembles after a host write.  While
     block b = br*BC + bc is computed, the border nodes stream, with the
-    clusters' read addresses and one cycle of RAM latency like them:
+    clusters' read addresses and their two cycles of RAM latency (a
+    registered read: the block RAM's output register):
 
     ==========  ==========================================  ===============
     border      the edge it reads                           block address
@@ -158,6 +159,8 @@ class Border(wiring.Component):
         Row and column of the block being computed (held during the visit).
     cntR : In
         The clusters' read address offset (relative to a block base).
+    addr : In(range(depth))
+        The clusters' absolute read address (base + cntR).
     w_addr : In(range(depth)); w_en : In(1)
     w_top, w_bottom : In(m); w_left, w_right : In(n)
         Edge write: absolute address, enable, every edge node's bit.
@@ -194,7 +197,7 @@ class Border(wiring.Component):
                      "conversion": In(BorderExponentsSignature(stride, e_max))}
         super().__init__({
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
-            "cntR": In(range(stride)),
+            "cntR": In(range(stride)), "addr": In(range(self.depth)),
             "w_addr": In(range(self.depth)), "w_en": In(1),
             "w_top": In(m), "w_bottom": In(m), "w_left": In(n), "w_right": In(n),
             "h_N": Out(m), "h_S": Out(m), "h_W": Out(n), "h_E": Out(n),
@@ -215,12 +218,21 @@ class Border(wiring.Component):
         )
         for name, width, wdata, side, offset, valid in sides:
             src = Signal(range(self.depth), name=f"src_{side}")
-            m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
-            # The validity of the data follows its address by one cycle.
-            ok = Signal(name=f"ok_{side}")
-            m.d.sync += ok.eq(valid)
             if self.exponents:
-                conv = self._shift(m, side, width, ok, valid)
+                m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
+            else:
+                # The clusters' absolute read address plus the constant
+                # distance to the neighbour block: no multiplier and one
+                # adder before the RAM (outside the map the address is
+                # anything: the data are masked).
+                m.d.comb += src.eq(self.addr + offset * S)
+            # The validity of the data follows its address by one cycle (the
+            # MSB-first port) and by READ_LATENCY cycles (the registered
+            # LSB-first streams, in step with the clusters' reads).
+            ok, ok2 = Signal(name=f"ok_{side}"), Signal(name=f"ok2_{side}")
+            m.d.sync += [ok.eq(valid), ok2.eq(ok)]
+            if self.exponents:
+                conv = self._shift(m, side, width, ok, ok2, valid)
             for k in range(-(-width // LANE)):
                 sl = slice(k * LANE, min((k + 1) * LANE, width))
                 ram = Memory(shape=sl.stop - sl.start, depth=self.depth, init=[])
@@ -228,15 +240,19 @@ class Border(wiring.Component):
                 lsb = ram.read_port()
                 wp = ram.write_port()
                 m.d.comb += [wp.data.eq(wdata[sl]), wp.en.eq(self.w_en), wp.addr.eq(self.w_addr)]
+                # The LSB-first read data register (the block RAM's output
+                # register, as in the cluster: read latency 2).
+                lsb_data = Signal(sl.stop - sl.start, name=f"lsb_{name}_{k}", reset_less=True)
+                m.d.sync += lsb_data.eq(lsb.data)
                 if not self.exponents:
                     m.d.comb += [
-                        lsb.addr.eq(src + self.cntR),
-                        getattr(self, f"h_{side}")[sl].eq(Mux(ok, lsb.data, 0)),
+                        lsb.addr.eq(src),
+                        getattr(self, f"h_{side}")[sl].eq(Mux(ok2, lsb_data, 0)),
                     ]
                 else:
                     # The scan and the raw reads: a second read port, MSB
                     # first, also while the block writes (yosys doubles the RAM).
-                    conv(src, sl, lsb, ram.read_port())
+                    conv(src, sl, lsb, lsb_data, ram.read_port())
         if self.exponents:
             self._scan_control(m)
         return m
@@ -271,7 +287,7 @@ class Border(wiring.Component):
         with m.If(self._pres):
             m.d.sync += [j.eq(self._jcur + 1), busy.eq(self._jcur + 1 < x.scan_len)]
 
-    def _shift(self, m, side, width, ok, valid):
+    def _shift(self, m, side, width, ok, ok2, valid):
         """One side's converted stream: read offset cntR + s, 0 outside
         offsets 1..p+1, the flag unshifted, all ones where clamped; the
         MSB-first port for the scan and the raw reads."""
@@ -294,19 +310,20 @@ class Border(wiring.Component):
         off = Signal(signed(max(self.stride, self.e_max).bit_length() + 3), name=f"off_{side}")
         flag, inr = Signal(name=f"flag_{side}"), Signal(name=f"inr_{side}")
         flag_r, inr_r = Signal(name=f"flag_{side}_r"), Signal(name=f"inr_{side}_r")
+        flag_rr, inr_rr = Signal(name=f"flag_{side}_rr"), Signal(name=f"inr_{side}_rr")
         m.d.comb += [off.eq(self.cntR + s), flag.eq(self.cntR == 0), inr.eq((off >= 1) & (off <= top))]
-        m.d.sync += [flag_r.eq(flag), inr_r.eq(inr)]
+        m.d.sync += [flag_r.eq(flag), inr_r.eq(inr), flag_rr.eq(flag_r), inr_rr.eq(inr_r)]
         addr = Signal(range(self.stride), name=f"addr_{side}")
         m.d.comb += addr.eq(Mux(flag | ~inr, 0, off[:len(addr)]))
         # The scan's accumulation: the data of offset 1+jr arrives now.
         sel_s = Signal(name=f"scan_sel_{side}")
         m.d.comb += sel_s.eq(self._pres_r & ok & (self._jr < s))
 
-        def conv(src, sl, lsb, msb):
+        def conv(src, sl, lsb, lsb_data, msb):
             m.d.comb += [lsb.addr.eq(src + addr),
                          msb.addr.eq(Mux(self._pres, src + 1 + self._jcur, src + self.r_cnt))]
-            out = Mux(flag_r, lsb.data, Mux(inr_r, lsb.data, 0) | over[sl])
-            m.d.comb += getattr(self, f"h_{side}")[sl].eq(Mux(ok, out, 0))
+            out = Mux(flag_rr, lsb_data, Mux(inr_rr, lsb_data, 0) | over[sl])
+            m.d.comb += getattr(self, f"h_{side}")[sl].eq(Mux(ok2, out, 0))
             with m.If(sel_s):
                 m.d.sync += over[sl].eq(over[sl] | msb.data)
             # The ring lead: a raw read of offset r_cnt (registered) with a 1.

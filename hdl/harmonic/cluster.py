@@ -95,9 +95,14 @@ class Cluster(wiring.Component):
     cntR, r_cnt : Out(address width)
         The LSB-first read address and the MSB-first (reverse) counter, for
         the border nodes (block exponents read their MSB first).
+    r_addr : Out(range(depth))
+        The absolute read address while busy, ``base + cntR`` (a register).
     take, done, checked : Out(1)
         Command sampling strobe; flags-valid strobe; ``done`` after a check
         iteration (``local_max`` meaningful).
+    ph2 : Out(1)
+        Cycle S+2 of an iteration while busy: ``h`` carried the words'
+        constant flags two cycles earlier (cycle S).
     stable, local_max : Out(18); all_stable, any_max : Out(1)
         Per-node flags and their AND (Early) / OR (Cvg), valid with ``done``.
     busy : Out(1)
@@ -163,8 +168,10 @@ class Cluster(wiring.Component):
             "h_E_in": In(ROWS), "h_W_in": In(ROWS),
             "h": Out(NODES),
             "cntR": Out(addr),
+            "r_addr": Out(range(depth)),
             "r_cnt": Out(addr),
             "take": Out(1),
+            "ph2": Out(1),
             "done": Out(1),
             "checked": Out(1),
             "stable": Out(NODES),
@@ -187,7 +194,7 @@ class Cluster(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        m.submodules.counters = cnt = Counters(self.p_max)
+        m.submodules.counters = cnt = Counters(self.p_max, self.depth)
         # A read and a write never meet on one address in one cycle (the
         # pipeline's order: models/harmonic/ram.py), so yosys need not
         # emulate any collision behaviour (no logic after the RAM's output).
@@ -223,11 +230,14 @@ class Cluster(wiring.Component):
 
         m.d.comb += [
             cnt.p.eq(self.p),                       # read at start
+            cnt.base.eq(self.base),
             cnt.start.eq(start),
             cnt.advance.eq(running),
             self.take.eq(running & cnt.z & ~stopping),
+            self.ph2.eq(running & cnt.ph2),
             self.busy.eq(running),
             self.cntR.eq(cnt.cntR),
+            self.r_addr.eq(cnt.addrR),
             self.r_cnt.eq(cnt.r_cnt),
         ]
         if self.exponents:
@@ -259,8 +269,8 @@ class Cluster(wiring.Component):
         # rotates it).
         write = Signal()
         m.d.sync += write.eq(running & cnt.wcyc & win_b & (upd_b | shf_b))
-        w_off = Signal.like(cnt.cntW)
-        m.d.comb += w_off.eq(cnt.cntW)
+        w_addr = Signal.like(cnt.addrW)
+        m.d.comb += w_addr.eq(cnt.addrW)
         if self.exponents:
             # The rotation of the bit on the write port: shift_d of its iteration.
             shd_b, shd_w = Signal.like(self.shift_d), Signal.like(self.shift_d)
@@ -273,12 +283,12 @@ class Cluster(wiring.Component):
             p1 = p_r + 1
             m.d.comb += tt.eq(cnt.cntW - 1 - shd_w)
             with m.If(shf_w & (cnt.cntW != 0)):
-                m.d.comb += w_off.eq(Mux(tt < 0, tt + p1, Mux(tt >= p1, tt - p1, tt)) + 1)
+                m.d.comb += w_addr.eq(self.base + Mux(tt < 0, tt + p1, Mux(tt >= p1, tt - p1, tt)) + 1)
 
         # RAM ports: counters while iterating, host port while idle.
         m.d.comb += [
-            port_r.addr.eq(Mux(running, self.base + cnt.cntR, self.host_addr)),
-            port_w.addr.eq(Mux(running, self.base + w_off, self.host_addr)),
+            port_r.addr.eq(Mux(running, cnt.addrR, self.host_addr)),
+            port_w.addr.eq(Mux(running, w_addr, self.host_addr)),
             port_w.data.eq(self.host_wdata),
             port_w.en.eq(Mux(running, write, self.host_we)),
             self.h.eq(data),

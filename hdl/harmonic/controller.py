@@ -48,19 +48,21 @@ class Controller(wiring.Component):
       run continues with a sweep at the same precision.
 
     Timing (cycles, see the table in :mod:`models.harmonic.schedule`): a visit of K
-    iterations takes K*(p+2) + 6 cycles:
+    iterations of L = iteration_cycles(p) cycles (p+2 from p = 4 on) takes
+    K*L + 7 cycles:
 
     =========  ============================================================
     cycle      state
     =========  ============================================================
     t          VSTART: ``run`` requested, the clusters start
-    t+1        lead-in (the clusters present the first addresses)
-    t+2 ...    K iterations of p+2 cycles; at the take of iteration k
-               (its cycle 1) the command is: run while k < I and no
+    t+1, t+2   lead-in (the clusters present the first addresses; the RAM
+               answers two cycles later)
+    t+3 ...    K iterations of L cycles; at the take of iteration k
+               (its cycle 0) the command is: run while k < I and no
                earlier iteration was stable (flags of k-2 are known)
-    +2         cycles 0, 1 of the stop iteration: last writes (top bits)
-    t+K(p+2)+4 the last iteration's flags; the clusters are idle
-    t+K(p+2)+5 VEND: next block / pass / level decided
+    +3         cycles 0 .. 2 of the stop iteration: last writes (top bits)
+    t+K*L+5    the last iteration's flags; the clusters are idle
+    t+K*L+6    VEND: next block / pass / level decided
     =========  ============================================================
 
     Parameters

@@ -5,8 +5,8 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from ...models.harmonic.ram import P_MIN, READ_LATENCY, WRITE_LATENCY
-from ..params import Param, check, checked_init
-from .limits import MAX_DEPTH
+from ..params import Constraint, Param, check, checked_init
+from .limits import DEPTH_WHY, MAX_DEPTH
 
 __all__ = ["Counters"]
 
@@ -41,6 +41,8 @@ class Counters(wiring.Component):
     ----------
     p_max : int
         Largest precision; sets the counter widths.
+    depth : int
+        RAM depth in words (default p_max + 2): the absolute addresses' width.
 
     Ports
     -----
@@ -55,6 +57,11 @@ class Counters(wiring.Component):
         Step to the next cycle.
     cntR, r_cnt, cntW : Out(address width)
         The three RAM address offsets.
+    base : In(range(depth)); addrR, addrW : Out(range(depth))
+        The word base of the block (read at ``start``) and the absolute
+        read / write addresses ``base + cntR`` and ``base + cntW``, counted
+        in registers beside the offsets, so that the block RAM's address
+        pins see a flip-flop and no adder (the clock's critical path).
     mask, z, ph1, fl, ph2, wcyc : Out(1)
         The nodes' cycle strobes (held while ``advance`` is low).
     """
@@ -62,14 +69,26 @@ class Counters(wiring.Component):
     PARAMS = (Param("p_max", int, lo=2, hi=MAX_DEPTH - 2,
                     doc="largest precision; sets the counter widths (p_max + 2 <= the RAM depth <= 2**20)",
                     message="p_max must be an integer in 2..{hi} (a word of p_max + 2 bits fills at most a "
-                            "2**20-word RAM), not {value!r}"),)
+                            "2**20-word RAM), not {value!r}"),
+              Param("depth", int, None, lo=4, hi=MAX_DEPTH,
+                    doc="RAM depth in words, the absolute addresses' range (default p_max + 2)",
+                    message=f"RAM depth must be an integer in 4..{MAX_DEPTH}, not {{value!r}} ({DEPTH_WHY})"))
+    CONSTRAINTS = (
+        Constraint("p_max + 2 <= depth", lambda p: p["depth"] is None or p["p_max"] + 2 <= p["depth"],
+                   "precision p_max={p_max} needs words of p_max+2 bits, one per RAM address, "
+                   "but the RAM depth is {depth}"),
+    )
 
     @checked_init
-    def __init__(self, p_max):
-        check(self.PARAMS, p_max=p_max)
+    def __init__(self, p_max, depth=None):
+        check(self.PARAMS, self.CONSTRAINTS, p_max=p_max, depth=depth)
         self.p_max = p_max
+        self.depth = depth = p_max + 2 if depth is None else depth
         addr = unsigned((p_max + 1).bit_length())
         super().__init__({
+            "base": In(range(depth)),
+            "addrR": Out(range(depth)),
+            "addrW": Out(range(depth)),
             "p": In(range(p_max + 1)),
             "shift": In(1),
             "start": In(1),
@@ -94,20 +113,24 @@ class Counters(wiring.Component):
         pad_max = P_MIN - 2                             # S <= 2
         assert pad_max < 4
 
-        def phase(value, q):
+        base_p1 = Signal.like(self.base, name="base_plus_p_plus_1")    # the absolute reload value
+
+        def phase(value, q, absolute):
             """One read-slot counter: value p+1 .. 1, then 0 for S+1 cycles
-            (q counts them); returns (slot is 0, slot is the flag)."""
+            (q counts them), and base + value beside it; returns (slot is 0,
+            slot is the flag)."""
             zero = Signal(name=f"{value.name}_zero")
             m.d.comb += zero.eq(value == 0)
             reload = zero & (q == S)
             with m.If(self.advance & ~self.start):
                 m.d.sync += [value.eq(Mux(reload, p1, Mux(zero, 0, value - 1))),
+                             absolute.eq(Mux(reload, base_p1, Mux(zero, absolute, absolute - 1))),
                              q.eq(Mux(zero & ~reload, q + 1, 0))]
             return zero, reload
 
         qR, qW = Signal(2), Signal(2)
-        zR, reloadR = phase(self.cntR, qR)
-        phase(self.cntW, qW)
+        zR, reloadR = phase(self.cntR, qR, self.addrR)
+        phase(self.cntW, qW, self.addrW)
         one = Signal()
         m.d.comb += one.eq(self.cntR == 1)
         with m.If(self.advance & ~self.start):
@@ -136,9 +159,10 @@ class Counters(wiring.Component):
         s_new = Signal(2)
         m.d.comb += s_new.eq(Mux(self.p < P_MIN, P_MIN - self.p, self.shift))
         with m.If(self.start):
-            m.d.sync += [S.eq(s_new), p1.eq(self.p + 1), self.cntR.eq(0), qR.eq(0), self.r_cnt.eq(0)]
+            m.d.sync += [S.eq(s_new), p1.eq(self.p + 1), self.cntR.eq(0), qR.eq(0), self.r_cnt.eq(0),
+                         base_p1.eq(self.base + self.p + 1), self.addrR.eq(self.base)]
             with m.If(self.p < P_MIN):
-                m.d.sync += [self.cntW.eq(0), qW.eq(self.p + s_new - 3)]
+                m.d.sync += [self.cntW.eq(0), qW.eq(self.p + s_new - 3), self.addrW.eq(self.base)]
             with m.Else():
-                m.d.sync += [self.cntW.eq(lag), qW.eq(0)]
+                m.d.sync += [self.cntW.eq(lag), qW.eq(0), self.addrW.eq(self.base + lag)]
         return m

@@ -7,6 +7,7 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ...models.harmonic.ram import READ_LATENCY
 from ..params import Constraint, Param, check, checked_init
 from .block import Block
 from .cluster import COLS, ROWS
@@ -40,12 +41,13 @@ def direction_latency(p, inside=4):
     """DIRECTION's response latency at precision ``p`` (fixed point), in
     cycles from the clock edge that takes the command to the one that
     raises ``o_stream.valid``: the node and its ``inside`` neighbours in the
-    map are read serially (p+4 cycles each: the flag and p+1 value bits
-    through the host port, one cycle to start the read), a neighbour
+    map are read serially (p+3+READ_LATENCY = p+5 cycles each: the flag and
+    p+1 value bits through the host port, whose data come READ_LATENCY
+    cycles after the address, one cycle to start the read), a neighbour
     outside the map costs 1 cycle, then 1 cycle starts the Decision, whose
     2p+5 cycles (two serial passes) end with the response.  With block
     exponents each value read adds its conversion: 1 + the shift cycles."""
-    return (1 + inside) * (p + 4) + (4 - inside) + 1 + (2 * p + 5)
+    return (1 + inside) * (p + 3 + READ_LATENCY) + (4 - inside) + 1 + (2 * p + 5)
 
 
 def _pw(p_max):
@@ -111,7 +113,7 @@ class Planner(wiring.Component):
                gradient (g_row, g_col) of :func:`models.harmonic.decision`
                (block exponents: of :func:`models.harmonic.decision_exponents`,
                in the centre's units; ``exponent`` = its e_b).  Response
-               after :func:`direction_latency` cycles (7p+26 inside the map).
+               after :func:`direction_latency` cycles (7p+31 inside the map).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
@@ -194,11 +196,12 @@ class Planner(wiring.Component):
 
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest (see Controller's table)."""
-        return {"iteration_cycles": "p+2", "block_visit_cycles": "K*(p+2)+6 for K iterations",
+        return {"iteration_cycles": "L = p+2 (p >= 4; 6 below; a shift iteration one more: iteration_cycles())",
+                "block_visit_cycles": "K*L+7 for K iterations",
                 "schedule": "paper's" if self.paper else "still blocks",
                 "response": "one o_stream beat per i_stream command, in order",
-                "direction_latency": "7p+26 cycles (a node with 4 neighbours in the map; "
-                                     "p+3 fewer per neighbour outside it: direction_latency())",
+                "direction_latency": "7p+31 cycles (a node with 4 neighbours in the map; "
+                                     "p+4 fewer per neighbour outside it: direction_latency())",
                 "run_cycles": "reported by STATUS (cycles field)"}
 
     def elaborate(self, platform):
@@ -248,7 +251,7 @@ class Planner(wiring.Component):
             m.d.sync += self.o_stream.valid.eq(0)
 
         # Serial read of one node word through the host port (p+2 addresses,
-        # data one cycle after its address): flag, then value MSB first.
+        # data READ_LATENCY cycles after its address): flag, then value MSB first.
         rd_go, rd_done = Signal(), Signal()
         rd_base = Signal(range(self.depth))
         rd_ci, rd_bit = Signal.like(c_ci), Signal.like(c_bit)
@@ -261,11 +264,11 @@ class Planner(wiring.Component):
             m.d.comb += [host.addr.eq(rd_base + rd_j), host.cluster.eq(rd_ci)]
             m.d.sync += rd_j.eq(rd_j + 1)
             got = host.rdata.bit_select(rd_bit, 1)
-            with m.If(rd_j == 1):
+            with m.If(rd_j == READ_LATENCY):
                 m.d.sync += rd_const.eq(got)
-            with m.Elif(rd_j > 1):
+            with m.Elif(rd_j > READ_LATENCY):
                 m.d.sync += rd_val.eq(Cat(got, rd_val[:-1]))
-            with m.If(rd_j == ctl.p + 2):
+            with m.If(rd_j == ctl.p + 1 + READ_LATENCY):
                 m.d.sync += rd_busy.eq(0)
                 m.d.comb += rd_done.eq(1)
 

@@ -19,6 +19,7 @@ from navcores.sim.rtl.runner import SIMULATORS, run
 from tb.harmonic.serial import next_cycle
 
 P_MAX = 40
+DEPTH = 200
 STROBES = ("mask", "z", "ph1", "fl", "ph2", "wcyc")
 
 
@@ -32,9 +33,12 @@ async def counters_follow_model(dut):
     for p, shift in runs:
         dut.p.value = p
         dut.shift.value = int(shift)
+        base = rng.randrange(DEPTH - p - 1)
+        dut.base.value = base
         dut.start.value = 1
         await next_cycle(dut)
         dut.start.value = 0
+        dut.base.value = rng.randrange(DEPTH)            # read at start only
         L = iteration_cycles(p, shift)
         n = 0                                        # advancing cycles since start: slot x = n mod L
         for _ in range(rng.randint(2, 5) * L):
@@ -42,6 +46,8 @@ async def counters_follow_model(dut):
             want = counters(x, p, shift)
             got = (int(dut.cntR.value), int(dut.r_cnt.value), int(dut.cntW.value))
             assert got == want, f"p={p} shift={shift} slot {x}: (cntR, r_cnt, cntW) = {got}, model {want}"
+            absolute = (int(dut.addrR.value), int(dut.addrW.value))
+            assert absolute == (base + want[0], base + want[2]), f"p={p} slot {x}: (addrR, addrW) = {absolute}"
             if n >= 2:
                 s = strobes((x - 2) % L, p, shift)
                 got_s = {k: bool(getattr(dut, k).value) for k in STROBES}
@@ -55,4 +61,4 @@ async def counters_follow_model(dut):
 
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_counters(sim):
-    run("harmonic_counters", {"p_max": P_MAX}, sim, "test_counters")
+    run("harmonic_counters", {"p_max": P_MAX, "depth": DEPTH}, sim, "test_counters")
