@@ -325,7 +325,7 @@ class Block(wiring.Component):
             m.d.sync += [y.eq(x) for x, y in zip(a, b)]
         fill, fill_addr, fill_k, fill_data = fills[-1]
         m.d.comb += [border.w_addr.eq(Mux(fill, fill_addr, c0.w_addr)),
-                     border.w_en.eq(fill | (c0.busy & c0.w_en))]
+                     border.w_en.eq(fill | c0.w_en)]
         # The border nodes by cluster edge segment: each cluster edge that
         # faces another block, with the word bits of its nodes (top/bottom
         # rows, left/right columns of the block).
@@ -362,7 +362,7 @@ class Block(wiring.Component):
         written = Cat(*[c.w_data.any() for c in clusters]).any()
         with m.If(ctl.border.scan):
             m.d.sync += ctl.lead_own.eq(self.stride)
-        with m.Elif(c0.busy & c0.w_en & written & (off >= 1) & (off < ctl.lead_own)):
+        with m.Elif(c0.w_en & written & (off >= 1) & (off < ctl.lead_own)):
             m.d.sync += ctl.lead_own.eq(off)
         # The flags stream at cycle S (h); two registers later is ph2.
         flags_all, flags_all_r = Signal(), Signal()

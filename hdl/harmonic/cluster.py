@@ -82,8 +82,9 @@ class Cluster(wiring.Component):
         Word base of the block being computed (block b at b*(p_max+2)): added
         to the address counters while iterating.  Hold it while busy.
     w_addr : Out(range(depth)); w_data : Out(18); w_en : Out(1)
-        The RAM write port (address, the nodes' ``w`` bits, enable), for the
-        border storage that mirrors the block's edge nodes.
+        The RAM write port (address, the nodes' ``w`` bits) and the enable
+        of the iterations' writes (not the host's), for the border storage
+        that mirrors the block's edge nodes.
     abort : In(1)
         With ``done``: stop now (see above).
     h_N_in, h_S_in : In(6); h_E_in, h_W_in : In(3)
@@ -106,7 +107,9 @@ class Cluster(wiring.Component):
     stable, local_max : Out(18); all_stable, any_max : Out(1)
         Per-node flags and their AND (Early) / OR (Cvg), valid with ``done``.
     busy : Out(1)
-        Iterating (the host port is ignored).
+        Iterating (the host port is ignored); low from the cycle of the
+        stop's ``done`` on (the last write happens in that cycle, the host
+        port is served from the next one).
     p_err : Out(1)
         The last start request had an unsupported precision.
     host_addr : In(range(depth)); host_wdata : In(18); host_we : In(1)
@@ -235,7 +238,7 @@ class Cluster(wiring.Component):
             cnt.advance.eq(running),
             self.take.eq(running & cnt.z & ~stopping),
             self.ph2.eq(running & cnt.ph2),
-            self.busy.eq(running),
+            self.busy.eq(running & ~(stopping & cnt.fl)),
             self.cntR.eq(cnt.cntR),
             self.r_addr.eq(cnt.addrR),
             self.r_cnt.eq(cnt.r_cnt),
@@ -294,7 +297,7 @@ class Cluster(wiring.Component):
             self.h.eq(data),
             self.host_rdata.eq(data),
         ]
-        m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(port_w.en)]
+        m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(running & write)]
 
         # The nodes' strobes: clr_a masks the adders over the bits of a
         # clear iteration (cycles 1 .. L-1 and 0 of the next: cycle 0 and the
