@@ -6,6 +6,7 @@ from amaranth.hdl import Array, Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ...models.harmonic.ram import SHIFT_STEP
 from .block import BlockControlSignature
 
 __all__ = ["Controller", "Mode", "order_layout"]
@@ -446,12 +447,14 @@ class Controller(wiring.Component):
         x["scan_j"] = Signal(range(p_max + 4), name="scan_j")
         x["shd"] = shd = Signal.like(self.block.shift_d, name="shd")   # this iteration's rotation
         x["rem"] = rem = Signal(range(p_max + 2), name="rem")         # rotation still to do
-        # A shift visit rotates by at most 3 per iteration (reads LSB first,
-        # writes three positions behind: never a bit before it is read; the
-        # rotation by 3 also leaves the next iteration's first reads
-        # written), the rest in the last iteration: set at each take.
+        # A shift visit rotates by at most SHIFT_STEP (4) per iteration (the
+        # cluster's padded shift iteration never overwrites a bit before it
+        # is read and leaves the next iteration's first reads written:
+        # models.harmonic.ram.pads), the rest in the last iteration: set at
+        # each take.
         with m.If(fsm_take := Signal(name="rep_take")):
-            m.d.sync += [shd.eq(Mux(rem > 3, 3, rem)), rem.eq(rem - Mux(rem > 3, 3, rem))]
+            m.d.sync += [shd.eq(Mux(rem > SHIFT_STEP, SHIFT_STEP, rem)),
+                         rem.eq(rem - Mux(rem > SHIFT_STEP, SHIFT_STEP, rem))]
         x["rep_take"] = fsm_take
         x["need_scan"] = Signal(name="need_scan")
         b = x["b"] = Signal(range(max(B, 2)), name="b_cur")

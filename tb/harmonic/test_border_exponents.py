@@ -25,6 +25,7 @@ import pytest
 from cocotb.triggers import FallingEdge, ReadOnly
 
 from navcores.models.harmonic import convert_mantissa
+from navcores.models.harmonic.ram import READ_LATENCY
 from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
 
@@ -141,13 +142,15 @@ async def border_exponents_against_model(dut):
         assert int(dut.conversion__clamped.value) == clamp_any, (
             f"trial {trial} block ({br}, {bc}) p={p} s={ss}: clamped {int(dut.conversion__clamped.value)}, model {clamp_any}")
         await _tick(dut)
-        # Every offset through the stream (data one cycle after its address).
+        # Every offset through the stream (data READ_LATENCY cycles after its
+        # address: the registered read).
         for port, out in (("cntR", "h"),):
             got = {side: [0] * width for side, _, width, _ in SIDES}
             flag = {side: 0 for side, _, _, _ in SIDES}
             for off in range(p + 2):
                 getattr(dut, port).value = off
-                await _tick(dut)
+                for _ in range(READ_LATENCY):
+                    await _tick(dut)
                 await ReadOnly()
                 for side, _, width, _ in SIDES:
                     word = int(getattr(dut, f"{out}_{side}").value)
