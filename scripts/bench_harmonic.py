@@ -2,7 +2,8 @@
 
 All numbers come from the golden model (models.harmonic: plan, plan_explore),
 whose cycle counts follow the planner RTL's timing table (a block visit of K
-iterations at precision p costs K*(p+2) + VISIT_OVERHEAD cycles, a check pass
+iterations at precision p costs K*L + VISIT_OVERHEAD cycles, L =
+iteration_cycles(p) = p+2 from p = 4 on, a check pass
 one iteration per block; the default schedule: no confirmation iteration,
 no check pass, still blocks skipped).
 

@@ -235,7 +235,12 @@ class Border(wiring.Component):
                 conv = self._shift(m, side, width, ok, ok2, valid)
             for k in range(-(-width // LANE)):
                 sl = slice(k * LANE, min((k + 1) * LANE, width))
-                ram = Memory(shape=sl.stop - sl.start, depth=self.depth, init=[])
+                # Reads hit the neighbour blocks' words, writes the computed
+                # block's own (or, while idle, the host's, when no read is
+                # used): never one address in one cycle, so yosys need not
+                # emulate collisions (no logic between the RAM and its
+                # output register).
+                ram = Memory(shape=sl.stop - sl.start, depth=self.depth, init=[], attrs={"no_rw_check": 1})
                 m.submodules[f"ram_{name}_{k}"] = ram
                 lsb = ram.read_port()
                 wp = ram.write_port()

@@ -383,7 +383,8 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     exponents in bounds, the end a fixed point of F).
 
     Cycles: the timing model of :func:`~models.harmonic.plan` at word
-    precision p (a visit of K iterations is K*(p+2) + VISIT_OVERHEAD; a check
+    precision p (a visit of K iterations is K*L + VISIT_OVERHEAD, L =
+    iteration_cycles(p); a check
     pass is B visits of K = 1).  A re-pick that changes e_b costs one shift
     visit of K = 1 (one iteration reads the block's words and writes them d
     positions earlier: the write counter's offset; the leading-one positions

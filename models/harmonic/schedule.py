@@ -145,8 +145,8 @@ exact values, converted: a re-pick keeps the exact values).
   Maximum of the final field.
 
 Cycles of the default schedule (:class:`StillTiming`): an update visit
-stable at its i-th iteration K = i (else K = I) iterations, K*(p+2) +
-VISIT_OVERHEAD; a skipped block 0; no check pass; clear visits as in the
+stable at its i-th iteration K = i (else K = I) iterations, K*L +
+VISIT_OVERHEAD (L = iteration_cycles(p)); a skipped block 0; no check pass; clear visits as in the
 paper's (K = 1).  ``check_iterations`` stays 0 and passes (for the dynamic
 orders) are the sweeps.
 
