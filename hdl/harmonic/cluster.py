@@ -74,7 +74,7 @@ class Cluster(wiring.Component):
         update iterations.  Sampled at ``take``.
     clear : In(1)
         Clear iteration (with ``enable``): the nodes' adders see 0 from the
-        iteration's bit 0 on (the nodes' ``clear`` held over the whole
+        iteration's bit 0 on (the nodes' ``zero`` held over the whole
         iteration), so every free node writes 0, constants keep their words
         and Sel/Sat still apply.  Sampled at ``take``.  The block's Control
         module restarts the free nodes from 0 this way after a dynamic order.
@@ -225,16 +225,21 @@ class Cluster(wiring.Component):
         p_ok = self.p >= 2
         if (1 << len(self.p)) - 1 > self.p_max:     # p's port can exceed p_max
             p_ok &= self.p <= self.p_max
-        start = ~running & self.run & p_ok
-        with m.If(~running & self.run):
-            m.d.sync += self.p_err.eq(~p_ok)
+        # A start request loads the counters and the command registers
+        # whether or not p is supported (harmless while idle): only
+        # ``running`` waits for the range check, so the wide loads do not
+        # hang behind p's comparators.
+        load = ~running & self.run
+        start = load & p_ok
+        with m.If(load):
+            m.d.sync += [self.p_err.eq(~p_ok), stopping.eq(0), p_r.eq(self.p)]
         with m.If(start):
-            m.d.sync += [running.eq(1), stopping.eq(0), p_r.eq(self.p)]
+            m.d.sync += running.eq(1)
 
         m.d.comb += [
             cnt.p.eq(self.p),                       # read at start
             cnt.base.eq(self.base),
-            cnt.start.eq(start),
+            cnt.start.eq(load),
             cnt.advance.eq(running),
             self.take.eq(running & cnt.z & ~stopping),
             self.ph2.eq(running & cnt.ph2),
@@ -245,7 +250,7 @@ class Cluster(wiring.Component):
         ]
         if self.exponents:
             m.d.comb += cnt.shift.eq(self.shift)    # a shift visit's iterations have a pad cycle
-        with m.If(start):
+        with m.If(load):
             m.d.sync += [win_a.eq(0), upd_a.eq(0), clr_a.eq(0), shf_a.eq(0),
                          win_b.eq(0), upd_b.eq(0), shf_b.eq(0), last_win.eq(0), last_upd.eq(0)]
         with m.Elif(self.take):
@@ -316,7 +321,7 @@ class Cluster(wiring.Component):
                 m.d.comb += [
                     node.h.eq(data[i]),
                     node.mask.eq(cnt.mask),
-                    node.clear.eq(clr_a),
+                    node.zero.eq(cnt.mask | clr_a),
                     node.z.eq(cnt.z),
                     node.ph1.eq(cnt.ph1),
                     node.ph2.eq(cnt.ph2),

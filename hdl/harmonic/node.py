@@ -72,11 +72,11 @@ class Node(wiring.Component):
     h_N, h_E, h_W, h_S : In(1)
         The four neighbours' words, same timing as ``h``.
     mask : In(1)
-        Pad and flag cycles (u <= S): the adder's inputs are masked (0) and
-        the Maximum restarts.
-    clear : In(1)
-        Clear iteration: the adder's inputs are masked over its bits too
-        (the Maximum still compares the values read).
+        Pad and flag cycles (u <= S): the Maximum restarts.
+    zero : In(1)
+        The adder's inputs are masked (0): ``mask``, and the bits of a
+        clear iteration (the Maximum still compares the values read).  One
+        input, so that the sum's parity and its mask take one LUT level.
     z, ph1, ph2 : In(1)
         Cycle strobes from the Counters unit (u = 0, u = 1, u = S+2).
     enable : In(1)
@@ -106,7 +106,7 @@ class Node(wiring.Component):
     h_W: In(1)
     h_S: In(1)
     mask: In(1)
-    clear: In(1)
+    zero: In(1)
     z: In(1)
     ph1: In(1)
     ph2: In(1)
@@ -137,7 +137,7 @@ class Node(wiring.Component):
         # masked the carry flushes: sum bit p+1 (result bit p-1) is written
         # at u = 0, sum bit p+2 is k[0] at u = 1 (result bit p), and the
         # adder starts afresh there (kin masked; k[1] is 0 by then).
-        live = ~(self.mask | self.clear)
+        live = ~self.zero
         a, b = self.h_N & live, self.h_S & live
         c, d = self.h_E & live, self.h_W & live
         k = Signal(2)

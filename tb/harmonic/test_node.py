@@ -57,7 +57,7 @@ def _drive(dut, bits, window, u, p):
     st = strobes(u, p)
     for name in ("mask", "z", "ph1", "ph2"):
         getattr(dut, name).value = int(st[name])
-    dut.clear.value = 0
+    dut.zero.value = int(st["mask"])                 # no clear iteration here
     writes = window is not None and window["enable"] and st["wcyc"]
     dut.enable.value = int(writes)
     dut.Sel.value = int(window is not None and window["sel"])
