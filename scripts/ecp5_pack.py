@@ -9,7 +9,7 @@ clock-to-out on speed 6) instead of its output register (about 1.1 ns).
 :func:`pack` does that mapping on yosys' JSON netlist, before nextpnr:
 
 for each DP16KD port (A, B) whose ``REGMODE`` is ``NOREG`` and whose every
-connected ``DO`` bit drives exactly one cell, a ``TRELLIS_FF`` ``DI`` of the
+used ``DO`` bit (unused bits of a narrower lane are skipped) drives exactly one cell, a ``TRELLIS_FF`` ``DI`` of the
 core (its name starts with ``prefix``: the harness' capture registers never
 move into a RAM) clocked by the port's clock on the same edge, with no
 set/reset (``LSR`` tied 0) and one clock enable shared by the port's
@@ -74,6 +74,8 @@ def pack(netlist, prefix="core."):
                 plan, enables = {}, set()
                 for port, bit in outs.items():
                     s = sinks.get(bit, [])
+                    if not s and bit not in ports:
+                        continue                # an unused bit (a lane narrower than the RAM)
                     if bit in ports or len(s) != 1 or s[0][1] != "DI":
                         break
                     ff_name = s[0][0]

@@ -192,7 +192,7 @@ class Cluster(wiring.Component):
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest."""
         return {"iteration_cycles": "p+2 (p >= 4; max(p, 4)+2 below)",
-                "flags_latency": "iteration k's flags (done) (k+1)(p+2)+5 cycles after run seen idle",
+                "flags_latency": "iteration k's flags (done) (k+1)L+5 cycles after run seen idle (L: iteration_cycles)",
                 "host_read_latency": "2 cycles"}
 
     def elaborate(self, platform):
