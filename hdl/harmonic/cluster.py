@@ -304,6 +304,12 @@ class Cluster(wiring.Component):
         ]
         m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(running & write)]
 
+        # The nodes' adder mask, a register (one LUT level less before the
+        # nodes' sum): mask | clr_a of the next cycle.
+        zero = Signal()
+        clr_next = Mux(self.take, self.run & self.enable & self.clear, clr_a)
+        m.d.sync += zero.eq(Mux(load, 0, cnt.mask_next | clr_next))
+
         # The nodes' strobes: clr_a masks the adders over the bits of a
         # clear iteration (cycles 1 .. L-1 and 0 of the next: cycle 0 and the
         # pads are masked anyway); enable low in the non-writing cycles of a
@@ -321,7 +327,7 @@ class Cluster(wiring.Component):
                 m.d.comb += [
                     node.h.eq(data[i]),
                     node.mask.eq(cnt.mask),
-                    node.zero.eq(cnt.mask | clr_a),
+                    node.zero.eq(zero),
                     node.z.eq(cnt.z),
                     node.ph1.eq(cnt.ph1),
                     node.ph2.eq(cnt.ph2),

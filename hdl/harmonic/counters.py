@@ -64,6 +64,9 @@ class Counters(wiring.Component):
         pins see a flip-flop and no adder (the clock's critical path).
     mask, z, ph1, fl, ph2, wcyc : Out(1)
         The nodes' cycle strobes (held while ``advance`` is low).
+    mask_next : Out(1)
+        ``mask`` of the next advancing cycle (a register: the cluster
+        registers the nodes' adder mask from it).
     """
 
     PARAMS = (Param("p_max", int, lo=2, hi=MAX_DEPTH - 2,
@@ -96,6 +99,7 @@ class Counters(wiring.Component):
             "cntR": Out(addr),
             "r_cnt": Out(addr),
             "cntW": Out(addr),
+            "mask_next": Out(1),
             "mask": Out(1), "z": Out(1), "ph1": Out(1), "fl": Out(1), "ph2": Out(1), "wcyc": Out(1, init=1),
         })
 
@@ -148,7 +152,7 @@ class Counters(wiring.Component):
                 m.d.sync += [regs[0].eq(src), *(b.eq(a) for a, b in zip(regs, regs[1:]))]
             chain[name] = regs
         m.d.comb += [
-            self.mask.eq(chain["mask"][1]),
+            self.mask.eq(chain["mask"][1]), self.mask_next.eq(chain["mask"][0]),
             self.z.eq(chain["zc"][1]), self.ph1.eq(chain["zc"][2]), self.fl.eq(chain["zc"][3]),
             self.ph2.eq(chain["ph2"][3]), self.wcyc.eq(~chain["pad"][3]),
         ]

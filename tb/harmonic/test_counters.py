@@ -20,7 +20,7 @@ from tb.harmonic.serial import next_cycle
 
 P_MAX = 40
 DEPTH = 200
-STROBES = ("mask", "z", "ph1", "fl", "ph2", "wcyc")
+STROBES = ("mask", "z", "ph1", "fl", "ph2", "wcyc")             # and mask_next, one cycle ahead
 
 
 @cocotb.test()
@@ -48,6 +48,9 @@ async def counters_follow_model(dut):
             assert got == want, f"p={p} shift={shift} slot {x}: (cntR, r_cnt, cntW) = {got}, model {want}"
             absolute = (int(dut.addrR.value), int(dut.addrW.value))
             assert absolute == (base + want[0], base + want[2]), f"p={p} slot {x}: (addrR, addrW) = {absolute}"
+            if n >= 1:
+                want_next = strobes((x - 1) % L, p, shift)["mask"]
+                assert bool(dut.mask_next.value) == want_next, f"p={p} shift={shift} slot {x}: mask_next"
             if n >= 2:
                 s = strobes((x - 2) % L, p, shift)
                 got_s = {k: bool(getattr(dut, k).value) for k in STROBES}
