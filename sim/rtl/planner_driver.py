@@ -15,7 +15,6 @@ command line (``python -m sim harmonic --engine icarus|verilator``).
 """
 
 import json
-import os
 import tempfile
 from pathlib import Path
 
@@ -219,6 +218,3 @@ def exponent_params(params):
     """The emitted Planner's parameters with its block-exponent option on."""
     return {**params, "block_exponents": 1}
 
-
-def job_env():
-    return os.environ.get("PLANNER_JOB"), os.environ.get("PLANNER_RESULT")
