@@ -74,7 +74,8 @@ TOPS = {
     "harmonic_block": lambda n, m, br=1, bc=1, p_max=30, depth=1024, exponents=0, e_max=255: Block(
         n, m, (br, bc), p_max, depth, bool(exponents), e_max),
     "harmonic_planner": lambda n=6, m=12, br=2, bc=2, p_max=30, depth=1024, block_exponents=0, e_max=255,
-    headroom=1: Planner(n, m, (br, bc), p_max, depth, bool(block_exponents), e_max, headroom),
+    headroom=1, paper_schedule=0: Planner(n, m, (br, bc), p_max, depth, bool(block_exponents), e_max, headroom,
+                                          bool(paper_schedule)),
     # DFLC: fll = a .fll path or the stem of a shipped one (models/dflc_<fll>.fll),
     # widths ip_sz, dy_ip, mf_op_sz, op_sz, div (lut/array), op (sel_op), par (1 = parallel),
     # psr1_no .. psr4_no, cpr1_no .. cpr9_no (Table 2 pipeline registers)

@@ -2,7 +2,8 @@
 
 All runs are the golden model (models.harmonic.plan), whose cycle counts
 follow the planner RTL's timing table (a block visit of K iterations at word
-precision p costs K*(p+2) + VISIT_OVERHEAD, a check pass one iteration per
+precision p costs K*L + VISIT_OVERHEAD, L = iteration_cycles(p), a check
+pass one iteration per
 block); the block-exponent runs add the re-picks' shift visits, as its
 docstring (plan_exponents) states.  Same block (6x12, the
 RTL's 2x2-cluster block and plan()'s default), I = 6, the goal of each map's

@@ -18,7 +18,8 @@ registers, ``s0*``: output capture registers).
 Flow (:func:`fit`): yosys ``synth_ecp5`` / ``synth_ice40`` of the core and
 the harness, the core kept as its own module (``keep_hierarchy``) so that its
 cell counts are its own (the LUT4 / FF / BRAM / DSP figures exclude the
-harness), then flattened for nextpnr; nextpnr places and routes it once per
+harness), then flattened for nextpnr (on ECP5, a block RAM's registered
+read moves into the DP16KD output register: scripts/ecp5_pack.py); nextpnr places and routes it once per
 seed (timing-driven, ``--freq`` = the part's target: it steers the placer;
 the reached frequency is reported whether or not it meets the target).  A
 design larger than the part does not fit: nextpnr's utilisation says which
@@ -36,6 +37,7 @@ from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
+import ecp5_pack
 import toolchain
 
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
@@ -47,7 +49,7 @@ from navcores.hdl.params import parse  # noqa: E402,F401
 ROOT = toolchain.ROOT
 
 __all__ = ["Part", "PARTS", "part", "ports", "harness", "RESOURCES", "resources", "synthesize", "FlowError",
-           "utilisation", "critical_path", "place", "fit",
+           "utilisation", "critical_path", "place", "pack_ecp5", "fit",
            # the project's code, for fit.py, synth.py and bench.py
            "TOPS", "emit", "manifest", "params_of", "parse", "top_name"]
 
@@ -263,6 +265,20 @@ def place(netlist, prt, seed, progress=None):
     return out
 
 
+def pack_ecp5(netlist, work):
+    """yosys' ECP5 netlist with the block RAMs' read-data registers in their
+    output registers (:func:`ecp5_pack.pack`), written to ``work`` (rewritten
+    only when it changes, so the place-and-route cache holds): (path, the
+    number of flip-flops moved)."""
+    data = json.loads(Path(netlist).read_text())
+    moved = ecp5_pack.pack(data)
+    out = Path(work) / "netlist_packed.json"
+    text = json.dumps(data)
+    if not out.exists() or out.read_text() != text:
+        out.write_text(text)
+    return out, moved
+
+
 def _took(run):
     """' (cached)' or ' (12 s)' for a progress line (a Run or a place() dict)."""
     cached, seconds = (run["cached"], run["seconds"]) if isinstance(run, dict) else (run.cached, run.seconds)
@@ -282,6 +298,15 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None):
                  f"{_took(syn)}; "
                  f"nextpnr on {prt.name}, seed{'s' * (len(seeds) > 1)} {', '.join(map(str, seeds))}")
     netlist = syn.dir / "netlist.json"
+    packed = 0
+    if prt.family == "ecp5":
+        # Registered block-RAM reads into the DP16KD output registers (yosys
+        # leaves them in the fabric: scripts/ecp5_pack.py).
+        netlist, packed = pack_ecp5(netlist, work)
+        cells = {**cells, "TRELLIS_FF": cells.get("TRELLIS_FF", 0) - packed}
+        res = resources(prt.family, cells)
+        if progress and packed:
+            progress(f"{module}: {packed} read-data flip-flops packed into DP16KD output registers")
 
     def one(seed):
         if progress:
@@ -317,7 +342,8 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None):
         "cells": dict(sorted(cells.items())),
         "utilisation": first["utilisation"],
         "harness": "registered: inputs from a shift register, outputs into capture registers (scripts/fmax.py)",
-        "synthesis": prt.synth,
+        "synthesis": prt.synth + (f" (+ {packed} read registers packed into DP16KD OUTREG: scripts/ecp5_pack.py)"
+                                   if packed else ""),
         "tools": {"yosys": syn.version, "nextpnr": first["version"]},
         "seconds": {"synthesis": syn.seconds, "place_and_route": [r["seconds"] for r in runs],
                     "cached": syn.cached and all(r["cached"] for r in runs)},

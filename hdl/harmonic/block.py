@@ -1,11 +1,12 @@
 """An n x m block of 3x6 clusters with its border nodes (paper 000, 5.1, 5.4)."""
 
 from amaranth.hdl import Cat, Module, Mux, Signal, signed
-from amaranth.lib import wiring
+from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
+from ...models.harmonic.ram import READ_LATENCY
 from ..params import Constraint, Param, check, checked_init
-from .border import Border, BorderExponentsSignature
+from .border import SIDES, Border, BorderExponentsSignature
 from .cluster import COLS, NODES, ROWS, Cluster
 from .limits import (BLOCKS_WHY, CLUSTERS_WHY, DEPTH_WHY, E_WHY, MAX_BLOCKS_SIDE, MAX_CLUSTERS, MAX_DEPTH, MAX_E,
                      MAX_WORDS, WORDS_WHY)
@@ -50,12 +51,20 @@ class BlockControlSignature(wiring.Signature):
         sel_col) of the block becomes constant Sat (0 obstacle, 1 goal).
     br, bc : Out
         The block being visited, b = br*BC + bc (held during the visit).
+    abort : Out(1)
+        With ``done``: stop the clusters now (the early stop after a stable
+        iteration, :class:`~hdl.harmonic.cluster.Cluster`).
     take, done, checked, busy : In(1)
         The clusters' strobes (all in lockstep): command sampled; flags
         valid; ``done`` of a check iteration; iterating (RAMs in use).
     all_stable, any_max : In(1)
         With ``done``: the Early module (AND of every node's Stable) and Cvg
-        (OR of the Maximum flags).
+        (OR of the Maximum flags; update iterations have them too).
+    edge_changed : In(StructLayout N, S, W, E of 1)
+        With ``done``: a node of the block's top row (N), bottom row (S),
+        left column (W), right column (E) changed its word in that
+        iteration (not Stable): the edge the neighbour block on that side
+        reads as its border.
     shift : Out(1); shift_d : Out(signed) (exponents)
         A shift iteration (with ``run``, ``enable`` low) rotating every word
         by ``shift_d`` value positions.
@@ -73,9 +82,10 @@ class BlockControlSignature(wiring.Signature):
         members = {
             "run": Out(1), "p": Out(range(p_max + 1)), "enable": Out(1), "clear": Out(1),
             "Sat": Out(1), "sel": Out(1), "sel_row": Out(range(n)), "sel_col": Out(range(m)),
-            "br": Out(range(max(BR, 2))), "bc": Out(range(max(BC, 2))),
+            "br": Out(range(max(BR, 2))), "bc": Out(range(max(BC, 2))), "abort": Out(1),
             "take": In(1), "done": In(1), "checked": In(1), "busy": In(1),
             "all_stable": In(1), "any_max": In(1),
+            "edge_changed": In(data.StructLayout({side: 1 for side in SIDES})),
         }
         if self.exponents:
             stride = p_max + 2
@@ -103,11 +113,12 @@ class BlockHostSignature(wiring.Signature):
         Word address and cluster (k = i*CC + j for cluster (i, j)).
     wdata : Out(18); we : Out(1)
         Write the cluster's word (18 nodes' bits); a write also updates the
-        border storage of the block's edge nodes, one cycle later (keep the
-        clusters from writing in that cycle: a run writes from its
-        iteration's cycle 2 on).
+        border storage of the block's edge nodes, two cycles later (keep the
+        clusters from writing in those cycles: a run writes from its first
+        iteration's cycle S+3 on, at least six cycles after it saw ``run``).
     rdata : In(18)
-        The addressed cluster's word, one cycle after the address.
+        The addressed cluster's word, two cycles after the address (the
+        registered RAM read).
     """
 
     def __init__(self, depth, clusters):
@@ -153,12 +164,13 @@ class Block(wiring.Component):
     -----
     control : In(:class:`BlockControlSignature`)
         The Control module's commands (run, p, enable, clear, Sel/Sat, the
-        block br, bc) and the clusters' strobes and flags (take, done,
-        checked, busy: cluster 0's, all clusters are in lockstep;
-        all_stable, any_max: Early and Cvg); with ``exponents`` also the
-        shift iteration, the border conversion and the re-pick's inputs.
+        block br, bc, abort) and the clusters' strobes and flags (take,
+        done, checked, busy: cluster 0's, all clusters are in lockstep;
+        all_stable, any_max: Early and Cvg; edge_changed: the Stable flags
+        of each edge); with ``exponents`` also the shift iteration, the
+        border conversion and the re-pick's inputs.
     host : In(:class:`BlockHostSignature`)
-        Idle RAM access to cluster ``host.cluster`` (read data one cycle
+        Idle RAM access to cluster ``host.cluster`` (read data two cycles
         later); a write also updates the border storage of the edge nodes.
     """
 
@@ -259,6 +271,7 @@ class Block(wiring.Component):
                 m.d.comb += [
                     c.run.eq(ctl.run), c.p.eq(ctl.p), c.enable.eq(ctl.enable),
                     c.clear.eq(ctl.clear), c.Sat.eq(ctl.Sat), c.Sel.eq(sel), c.base.eq(base),
+                    c.abort.eq(ctl.abort),
                     c.host_addr.eq(host.addr), c.host_wdata.eq(host.wdata),
                     c.host_we.eq(host.we & (host.cluster == k)),
                 ]
@@ -267,44 +280,52 @@ class Block(wiring.Component):
                 stables.append(c.all_stable)
                 maxes.append(c.any_max)
                 # Neighbours: the adjacent cluster's edge nodes, or the border.
-                for stream, src in (("h", "h"), ("m", "hm")):
-                    north = (Cat(getattr(cl[i - 1][j], src)[bit(ROWS - 1, q)] for q in range(COLS)) if i
-                             else getattr(border, f"{stream}_N")[COLS * j:COLS * (j + 1)])
-                    south = (Cat(getattr(cl[i + 1][j], src)[bit(0, q)] for q in range(COLS)) if i < CR - 1
-                             else getattr(border, f"{stream}_S")[COLS * j:COLS * (j + 1)])
-                    west = (Cat(getattr(cl[i][j - 1], src)[bit(r, COLS - 1)] for r in range(ROWS)) if j
-                            else getattr(border, f"{stream}_W")[ROWS * i:ROWS * (i + 1)])
-                    east = (Cat(getattr(cl[i][j + 1], src)[bit(r, 0)] for r in range(ROWS)) if j < CC - 1
-                            else getattr(border, f"{stream}_E")[ROWS * i:ROWS * (i + 1)])
-                    m.d.comb += [
-                        getattr(c, f"{stream}_N_in").eq(north), getattr(c, f"{stream}_S_in").eq(south),
-                        getattr(c, f"{stream}_W_in").eq(west), getattr(c, f"{stream}_E_in").eq(east),
-                    ]
+                north = (Cat(cl[i - 1][j].h[bit(ROWS - 1, q)] for q in range(COLS)) if i
+                         else border.h_N[COLS * j:COLS * (j + 1)])
+                south = (Cat(cl[i + 1][j].h[bit(0, q)] for q in range(COLS)) if i < CR - 1
+                         else border.h_S[COLS * j:COLS * (j + 1)])
+                west = (Cat(cl[i][j - 1].h[bit(r, COLS - 1)] for r in range(ROWS)) if j
+                        else border.h_W[ROWS * i:ROWS * (i + 1)])
+                east = (Cat(cl[i][j + 1].h[bit(r, 0)] for r in range(ROWS)) if j < CC - 1
+                        else border.h_E[ROWS * i:ROWS * (i + 1)])
+                m.d.comb += [c.h_N_in.eq(north), c.h_S_in.eq(south), c.h_W_in.eq(west), c.h_E_in.eq(east)]
 
         c0 = cl[0][0]
+        # Each edge's Stable flags (the still-block schedule's dirty bits).
+        edges = {"N": [(cl[0][j], [bit(0, q) for q in range(COLS)]) for j in range(CC)],
+                 "S": [(cl[CR - 1][j], [bit(ROWS - 1, q) for q in range(COLS)]) for j in range(CC)],
+                 "W": [(cl[i][0], [bit(r, 0) for r in range(ROWS)]) for i in range(CR)],
+                 "E": [(cl[i][CC - 1], [bit(r, COLS - 1) for r in range(ROWS)]) for i in range(CR)]}
+        for side, parts in edges.items():
+            m.d.comb += ctl.edge_changed[side].eq(~Cat(c.stable[b] for c, bits in parts for b in bits).all())
         m.d.comb += [
             ctl.take.eq(c0.take), ctl.done.eq(c0.done), ctl.checked.eq(c0.checked),
             ctl.busy.eq(c0.busy),
             ctl.all_stable.eq(Cat(*stables).all()), ctl.any_max.eq(Cat(*maxes).any()),
             border.br.eq(ctl.br), border.bc.eq(ctl.bc),
-            border.cntR.eq(c0.cntR), border.r_cnt.eq(c0.r_cnt),
+            border.cntR.eq(c0.cntR), border.addr.eq(c0.r_addr),
         ]
 
         # Border storage writes, whole edge words (every lane of the four
         # edges): while iterating, the edge nodes' bits of the clusters'
         # write port (all clusters write the same address); after a host
-        # write, one cycle later, the edge words at its address: every
-        # cluster's port A read that address in the write's cycle (the host
-        # port's read while idle), the written cluster's word is the host's.
+        # write, READ_LATENCY cycles later, the edge words at its address:
+        # every cluster's read port read that address in the write's cycle
+        # (the host port's read while idle), the written cluster's word is
+        # the host's.
         # So LOAD, one cluster at a time, keeps the lane words whole.
-        fill = Signal()
-        fill_addr, fill_k = Signal.like(host.addr), Signal.like(host.cluster)
-        fill_data = Signal.like(host.wdata)
-        m.d.sync += fill.eq(~c0.busy & host.we)
-        with m.If(~c0.busy & host.we):
-            m.d.sync += [fill_addr.eq(host.addr), fill_k.eq(host.cluster), fill_data.eq(host.wdata)]
+        # The clusters' read data come READ_LATENCY cycles after the address:
+        # the host write's address, cluster and data wait as long.
+        fills = [(Signal(name=f"fill_{i}"), Signal.like(host.addr, name=f"fill_addr_{i}"),
+                  Signal.like(host.cluster, name=f"fill_k_{i}"), Signal.like(host.wdata, name=f"fill_data_{i}"))
+                 for i in range(READ_LATENCY)]
+        m.d.sync += [fills[0][0].eq(~c0.busy & host.we), fills[0][1].eq(host.addr),
+                     fills[0][2].eq(host.cluster), fills[0][3].eq(host.wdata)]
+        for a, b in zip(fills, fills[1:]):
+            m.d.sync += [y.eq(x) for x, y in zip(a, b)]
+        fill, fill_addr, fill_k, fill_data = fills[-1]
         m.d.comb += [border.w_addr.eq(Mux(fill, fill_addr, c0.w_addr)),
-                     border.w_en.eq(fill | (c0.busy & c0.w_en))]
+                     border.w_en.eq(fill | c0.w_en)]
         # The border nodes by cluster edge segment: each cluster edge that
         # faces another block, with the word bits of its nodes (top/bottom
         # rows, left/right columns of the block).
@@ -332,7 +353,7 @@ class Block(wiring.Component):
         whether every node is constant (``all_const``)."""
         ctl = self.control
         wiring.connect(m, wiring.flipped(ctl.border), border.conversion)
-        m.d.comb += border.p.eq(ctl.p)
+        m.d.comb += [border.p.eq(ctl.p), border.r_cnt.eq(clusters[0].r_cnt)]
         for c in clusters:
             m.d.comb += [c.shift.eq(ctl.shift), c.shift_d.eq(ctl.shift_d)]
         c0 = clusters[0]
@@ -341,10 +362,10 @@ class Block(wiring.Component):
         written = Cat(*[c.w_data.any() for c in clusters]).any()
         with m.If(ctl.border.scan):
             m.d.sync += ctl.lead_own.eq(self.stride)
-        with m.Elif(c0.busy & c0.w_en & written & (off >= 1) & (off < ctl.lead_own)):
+        with m.Elif(c0.w_en & written & (off >= 1) & (off < ctl.lead_own)):
             m.d.sync += ctl.lead_own.eq(off)
-        # The flags stream at cycle 0; the next cycle is the take.
-        flags_all = Signal()
-        m.d.sync += flags_all.eq(Cat(*[c.h.all() for c in clusters]).all())
-        with m.If(c0.take):
-            m.d.sync += ctl.all_const.eq(flags_all)
+        # The flags stream at cycle S (h); two registers later is ph2.
+        flags_all, flags_all_r = Signal(), Signal()
+        m.d.sync += [flags_all.eq(Cat(*[c.h.all() for c in clusters]).all()), flags_all_r.eq(flags_all)]
+        with m.If(c0.ph2):
+            m.d.sync += ctl.all_const.eq(flags_all_r)

@@ -68,19 +68,20 @@ class Border(wiring.Component):
     address, block b's words at base ``b*stride``, flag first then value
     bits MSB first) with 18 border nodes per RAM word (:data:`LANE`, the
     width of the paper's 1Kx18 block RAM): ceil(m/18) RAMs per row edge,
-    ceil(n/18) per column edge, each one true dual-port block RAM (port A
-    reads LSB first; port B reads MSB first or writes, never both in a
-    cycle, as in the cluster): 2*ceil(m/18) + 2*ceil(n/18) RAMs, 12 for the
-    paper's 36x66 block (its 204 border nodes in 12 block RAMs, 5.4), 18
-    for 48x96.  A lane word holds one edge of one block, so the four sides
-    read four blocks at once.
+    ceil(n/18) per column edge, each one dual-port block RAM (port A reads
+    LSB first, port B writes, as in the cluster: the nodes' Maximum compares
+    LSB first too): 2*ceil(m/18) + 2*ceil(n/18) RAMs, 12 for the paper's
+    36x66 block (its 204 border nodes in 12 block RAMs, 5.4), 18 for 48x96.
+    A lane word holds one edge of one block, so the four sides read four
+    blocks at once.
 
     Every write writes all lanes of the four edges at one address: the
     clusters' write port (all clusters write in lockstep) while the block
     that holds those nodes is computed, and the whole edge words the
     :class:`~hdl.harmonic.block.Block` assembles after a host write.  While
     block b = br*BC + bc is computed, the border nodes stream, with the
-    clusters' read addresses and one cycle of RAM latency like them:
+    clusters' read addresses and their two cycles of RAM latency (a
+    registered read: the block RAM's output register):
 
     ==========  ==========================================  ===============
     border      the edge it reads                           block address
@@ -92,9 +93,9 @@ class Border(wiring.Component):
     ==========  ==========================================  ===============
 
     A border outside the map (br = 0 for N, br = BR-1 for S, bc = 0 for W,
-    bc = BC-1 for E) generates the constant 0 (an obstacle).  Both read
-    streams exist for every side: ``h_*`` at ``base + cntR`` (LSB first, the
-    Update) and ``m_*`` at ``base + r_cnt`` (MSB first, the Maximum).
+    bc = BC-1 for E) generates the constant 0 (an obstacle).  Every side
+    streams ``h_*`` at ``base + cntR`` (LSB first: the Update and the
+    Maximum).
 
     Parameters
     ----------
@@ -117,8 +118,8 @@ class Border(wiring.Component):
     Per side, ``s_*`` = e_b - e_b' (the computed block's exponent minus the
     neighbour's).  Value bit k of a word is at offset 1 + p - k, so the
     converted bit k (v >> -s for s < 0, v << s for s > 0) is at offset
-    ``cntR + s`` (``r_cnt + s`` MSB first): a read offset, i.e. the stream
-    read -s bits late or delayed by s cycles.  An offset outside 1 .. p+1
+    ``cntR + s``: a read offset, i.e. the stream read -s bits late or
+    delayed by s cycles.  An offset outside 1 .. p+1
     (the shifted-in zeros, or bits shifted out) reads 0; the flag cycle
     (``cntR`` = 0) reads the flag unshifted.  The clamp (s > 0: a 1 in the
     top s bits, offsets 1 .. min(s, p+1), saturates the value at
@@ -137,10 +138,12 @@ class Border(wiring.Component):
                  ``scan_busy`` is never high; the scan costs nothing)
     ===========  ==========================================================
 
-    With block exponents the MSB-first reads (scan, raw) also happen while
-    the block writes, so each RAM has a third port (yosys doubles it).
+    With block exponents a second read port reads MSB first (at ``r_cnt``:
+    the scan, and the raw reads for ``lead``), also while the block writes,
+    so each RAM has three ports (yosys doubles it).
 
-    Exponent ports: ``p`` In (the run's precision) and ``conversion``
+    Exponent ports: ``p`` In (the run's precision), ``r_cnt`` In (the
+    clusters' MSB-first counter) and ``conversion``
     In(:class:`BorderExponentsSignature`): ``s.N .. s.E`` In(signed),
     ``scan`` In(1), ``scan_busy`` Out(1), ``scan_len`` Out (max over the
     sides inside the map of clip(s, 0, p+1)), ``clamped`` Out(1); ``raw``
@@ -154,12 +157,14 @@ class Border(wiring.Component):
     -----
     br, bc : In
         Row and column of the block being computed (held during the visit).
-    cntR, r_cnt : In
-        The clusters' read address offsets (relative to a block base).
+    cntR : In
+        The clusters' read address offset (relative to a block base).
+    addr : In(range(depth))
+        The clusters' absolute read address (base + cntR).
     w_addr : In(range(depth)); w_en : In(1)
     w_top, w_bottom : In(m); w_left, w_right : In(n)
         Edge write: absolute address, enable, every edge node's bit.
-    h_N, h_S, m_N, m_S : Out(m); h_W, h_E, m_W, m_E : Out(n)
+    h_N, h_S : Out(m); h_W, h_E : Out(n)
         The border streams.
     """
 
@@ -188,14 +193,14 @@ class Border(wiring.Component):
         self.e_max = e_max
         extra = {}
         if self.exponents:
-            extra = {"p": In(range(stride)), "conversion": In(BorderExponentsSignature(stride, e_max))}
+            extra = {"p": In(range(stride)), "r_cnt": In(range(stride)),
+                     "conversion": In(BorderExponentsSignature(stride, e_max))}
         super().__init__({
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
-            "cntR": In(range(stride)), "r_cnt": In(range(stride)),
+            "cntR": In(range(stride)), "addr": In(range(self.depth)),
             "w_addr": In(range(self.depth)), "w_en": In(1),
             "w_top": In(m), "w_bottom": In(m), "w_left": In(n), "w_right": In(n),
             "h_N": Out(m), "h_S": Out(m), "h_W": Out(n), "h_E": Out(n),
-            "m_N": Out(m), "m_S": Out(m), "m_W": Out(n), "m_E": Out(n),
             **extra,
         })
 
@@ -213,33 +218,46 @@ class Border(wiring.Component):
         )
         for name, width, wdata, side, offset, valid in sides:
             src = Signal(range(self.depth), name=f"src_{side}")
-            m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
-            # The validity of the data follows its address by one cycle.
-            ok = Signal(name=f"ok_{side}")
-            m.d.sync += ok.eq(valid)
             if self.exponents:
-                conv = self._shift(m, side, width, ok, valid)
+                m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
+            else:
+                # The clusters' absolute read address plus the constant
+                # distance to the neighbour block: no multiplier and one
+                # adder before the RAM (outside the map the address is
+                # anything: the data are masked).
+                m.d.comb += src.eq(self.addr + offset * S)
+            # The validity of the data follows its address by one cycle (the
+            # MSB-first port) and by READ_LATENCY cycles (the registered
+            # LSB-first streams, in step with the clusters' reads).
+            ok, ok2 = Signal(name=f"ok_{side}"), Signal(name=f"ok2_{side}")
+            m.d.sync += [ok.eq(valid), ok2.eq(ok)]
+            if self.exponents:
+                conv = self._shift(m, side, width, ok, ok2, valid)
             for k in range(-(-width // LANE)):
                 sl = slice(k * LANE, min((k + 1) * LANE, width))
-                ram = Memory(shape=sl.stop - sl.start, depth=self.depth, init=[])
+                # Reads hit the neighbour blocks' words, writes the computed
+                # block's own (or, while idle, the host's, when no read is
+                # used): never one address in one cycle, so yosys need not
+                # emulate collisions (no logic between the RAM and its
+                # output register).
+                ram = Memory(shape=sl.stop - sl.start, depth=self.depth, init=[], attrs={"no_rw_check": 1})
                 m.submodules[f"ram_{name}_{k}"] = ram
-                lsb, msb = ram.read_port(), ram.read_port()
+                lsb = ram.read_port()
                 wp = ram.write_port()
-                m.d.comb += [wp.data.eq(wdata[sl]), wp.en.eq(self.w_en)]
+                m.d.comb += [wp.data.eq(wdata[sl]), wp.en.eq(self.w_en), wp.addr.eq(self.w_addr)]
+                # The LSB-first read data register (the block RAM's output
+                # register, as in the cluster: read latency 2).
+                lsb_data = Signal(sl.stop - sl.start, name=f"lsb_{name}_{k}", reset_less=True)
+                m.d.sync += lsb_data.eq(lsb.data)
                 if not self.exponents:
-                    # Port B: the MSB-first reads, or the write on the same
-                    # address (one physical port, as in the cluster).
                     m.d.comb += [
-                        lsb.addr.eq(src + self.cntR),
-                        msb.addr.eq(Mux(self.w_en, self.w_addr, src + self.r_cnt)), wp.addr.eq(msb.addr),
-                        getattr(self, f"h_{side}")[sl].eq(Mux(ok, lsb.data, 0)),
-                        getattr(self, f"m_{side}")[sl].eq(Mux(ok, msb.data, 0)),
+                        lsb.addr.eq(src),
+                        getattr(self, f"h_{side}")[sl].eq(Mux(ok2, lsb_data, 0)),
                     ]
                 else:
-                    # The scan and the raw reads use port B while the block
-                    # writes: a third port (yosys doubles the RAM).
-                    m.d.comb += wp.addr.eq(self.w_addr)
-                    conv(src, sl, lsb, msb)
+                    # The scan and the raw reads: a second read port, MSB
+                    # first, also while the block writes (yosys doubles the RAM).
+                    conv(src, sl, lsb, lsb_data, ram.read_port())
         if self.exponents:
             self._scan_control(m)
         return m
@@ -274,9 +292,10 @@ class Border(wiring.Component):
         with m.If(self._pres):
             m.d.sync += [j.eq(self._jcur + 1), busy.eq(self._jcur + 1 < x.scan_len)]
 
-    def _shift(self, m, side, width, ok, valid):
-        """One side's converted streams: read offset cntR + s / r_cnt + s,
-        0 outside offsets 1..p+1, the flag unshifted, all ones where clamped."""
+    def _shift(self, m, side, width, ok, ok2, valid):
+        """One side's converted stream: read offset cntR + s, 0 outside
+        offsets 1..p+1, the flag unshifted, all ones where clamped; the
+        MSB-first port for the scan and the raw reads."""
         if not hasattr(self, "_pres"):
             self._pres, self._pres_r = Signal(), Signal()
             self._jcur, self._jr = Signal(range(self.stride + 1)), Signal(range(self.stride + 1))
@@ -293,30 +312,23 @@ class Border(wiring.Component):
         m.d.sync += [raw_r.eq(x.raw), roff_r.eq(self.r_cnt)]
         with m.If(x.scan):
             m.d.sync += lead.eq(self.stride)
-        streams = []
-        for cnt, name in ((self.cntR, "h"), (self.r_cnt, "m")):
-            off = Signal(signed(max(self.stride, self.e_max).bit_length() + 3), name=f"off_{name}_{side}")
-            flag, inr = Signal(name=f"flag_{name}_{side}"), Signal(name=f"inr_{name}_{side}")
-            flag_r, inr_r = Signal(name=f"flag_{name}_{side}_r"), Signal(name=f"inr_{name}_{side}_r")
-            m.d.comb += [off.eq(cnt + s), flag.eq(cnt == 0), inr.eq((off >= 1) & (off <= top))]
-            m.d.sync += [flag_r.eq(flag), inr_r.eq(inr)]
-            addr = Signal(range(self.stride), name=f"addr_{name}_{side}")
-            m.d.comb += addr.eq(Mux(flag | ~inr, 0, off[:len(addr)]))
-            streams.append((name, addr, flag_r, inr_r))
+        off = Signal(signed(max(self.stride, self.e_max).bit_length() + 3), name=f"off_{side}")
+        flag, inr = Signal(name=f"flag_{side}"), Signal(name=f"inr_{side}")
+        flag_r, inr_r = Signal(name=f"flag_{side}_r"), Signal(name=f"inr_{side}_r")
+        flag_rr, inr_rr = Signal(name=f"flag_{side}_rr"), Signal(name=f"inr_{side}_rr")
+        m.d.comb += [off.eq(self.cntR + s), flag.eq(self.cntR == 0), inr.eq((off >= 1) & (off <= top))]
+        m.d.sync += [flag_r.eq(flag), inr_r.eq(inr), flag_rr.eq(flag_r), inr_rr.eq(inr_r)]
+        addr = Signal(range(self.stride), name=f"addr_{side}")
+        m.d.comb += addr.eq(Mux(flag | ~inr, 0, off[:len(addr)]))
         # The scan's accumulation: the data of offset 1+jr arrives now.
         sel_s = Signal(name=f"scan_sel_{side}")
         m.d.comb += sel_s.eq(self._pres_r & ok & (self._jr < s))
 
-        def conv(src, sl, lsb, msb):
-
-            for (name, addr, flag_r, inr_r), port in zip(streams, (lsb, msb)):
-                if name == "h":
-                    m.d.comb += port.addr.eq(src + addr)
-                else:
-                    m.d.comb += port.addr.eq(Mux(self._pres, src + 1 + self._jcur,
-                                                 Mux(x.raw, src + self.r_cnt, src + addr)))
-                out = Mux(flag_r, port.data, Mux(inr_r, port.data, 0) | over[sl])
-                m.d.comb += getattr(self, f"{name}_{side}")[sl].eq(Mux(ok, out, 0))
+        def conv(src, sl, lsb, lsb_data, msb):
+            m.d.comb += [lsb.addr.eq(src + addr),
+                         msb.addr.eq(Mux(self._pres, src + 1 + self._jcur, src + self.r_cnt))]
+            out = Mux(flag_rr, lsb_data, Mux(inr_rr, lsb_data, 0) | over[sl])
+            m.d.comb += getattr(self, f"h_{side}")[sl].eq(Mux(ok2, out, 0))
             with m.If(sel_s):
                 m.d.sync += over[sl].eq(over[sl] | msb.data)
             # The ring lead: a raw read of offset r_cnt (registered) with a 1.

@@ -6,6 +6,7 @@ from amaranth.hdl import Array, Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ...models.harmonic.ram import SHIFT_STEP
 from .block import BlockControlSignature
 
 __all__ = ["Controller", "Mode", "order_layout"]
@@ -48,19 +49,21 @@ class Controller(wiring.Component):
       run continues with a sweep at the same precision.
 
     Timing (cycles, see the table in :mod:`models.harmonic.schedule`): a visit of K
-    iterations takes K*(p+2) + 6 cycles:
+    iterations of L = iteration_cycles(p) cycles (p+2 from p = 4 on) takes
+    K*L + 7 cycles:
 
     =========  ============================================================
     cycle      state
     =========  ============================================================
     t          VSTART: ``run`` requested, the clusters start
-    t+1        lead-in (the clusters present the first addresses)
-    t+2 ...    K iterations of p+2 cycles; at the take of iteration k
-               (its cycle 1) the command is: run while k < I and no
+    t+1, t+2   lead-in (the clusters present the first addresses; the RAM
+               answers two cycles later)
+    t+3 ...    K iterations of L cycles; at the take of iteration k
+               (its cycle 0) the command is: run while k < I and no
                earlier iteration was stable (flags of k-2 are known)
-    +2         cycles 0, 1 of the stop iteration: last writes (top bits)
-    t+K(p+2)+4 the last iteration's flags; the clusters are idle
-    t+K(p+2)+5 VEND: next block / pass / level decided
+    +3         cycles 0 .. 2 of the stop iteration: last writes (top bits)
+    t+K*L+5    the last iteration's flags; the clusters are idle
+    t+K*L+6    VEND: next block / pass / level decided
     =========  ============================================================
 
     Parameters
@@ -92,10 +95,11 @@ class Controller(wiring.Component):
         The link to the :class:`~hdl.harmonic.block.Block` (its ``control``).
     """
 
-    def __init__(self, blocks, n, m, p_max, exponents=False, e_max=255, headroom=1):
+    def __init__(self, blocks, n, m, p_max, exponents=False, e_max=255, headroom=1, paper_schedule=False):
         BR, BC = blocks
         self.BR, self.BC, self.n, self.m, self.p_max = BR, BC, n, m, p_max
         self.exponents, self.e_max, self.headroom = bool(exponents), e_max, headroom
+        self.paper = bool(paper_schedule)
         P = range(p_max + 1)
         extra = {}
         if self.exponents:
@@ -146,6 +150,9 @@ class Controller(wiring.Component):
             self._exp_signals(m, locals())
             rep, crs, scanned, scan_j, need_scan = (self._x[k] for k in ("rep", "crs", "scanned", "scan_j",
                                                                           "need_scan"))
+        upd_visit = Signal()            # this visit is an update visit (not a shift visit)
+        m.d.comb += upd_visit.eq(((mode == Mode.UPDATE) & ~rep) if X else (mode == Mode.UPDATE))
+        still = None if self.paper else self._still_signals(m)
 
         def latch_order():
             m.d.sync += [act_br.eq(pend_br), act_bc.eq(pend_bc), act_row.eq(pend_row),
@@ -169,6 +176,8 @@ class Controller(wiring.Component):
                         m.d.sync += [rep.eq(0), crs.eq(0), scanned.eq(0), self._x["sat"].eq(0),
                                      self.repicks.eq(0)]
                         m.d.sync += [e.eq(0) for e in self._x["E"]]
+                    if not self.paper:
+                        m.d.sync += [still["dirty"].eq(still["all"]), still["cur"].eq(1)]
                     m.d.sync += [
                         self.p.eq(self.p1), step.eq(self.step), p_last.eq(self.p_last),
                         iters.eq(self.iters), self.running.eq(1), self.busy.eq(1),
@@ -182,8 +191,12 @@ class Controller(wiring.Component):
                     latch_order()
                     m.d.sync += [mode.eq(Mode.CLEAR), idle_clear.eq(1), self.busy.eq(1),
                                  br.eq(0), bc.eq(0)]
+                    if not self.paper:
+                        m.d.sync += still["cur"].eq(1)
                     m.next = "VSTART"
             with m.State("VSTART"):
+                if not self.paper:
+                    m.d.sync += still["acc"].eq(0)
                 if X:
                     with m.If(need_scan):
                         m.d.sync += scan_j.eq(1)
@@ -207,11 +220,19 @@ class Controller(wiring.Component):
                     m.d.sync += first.eq(0)
                     with m.If(first):
                         m.d.sync += first_ok.eq(blk.all_stable)
-                    with m.If(((mode == Mode.UPDATE) & ~rep) if X else (mode == Mode.UPDATE)):
+                    with m.If(upd_visit):
                         with m.If(~seen):
                             m.d.sync += self.block_iterations.eq(self.block_iterations + 1)
                         with m.If(blk.all_stable):
                             m.d.sync += seen.eq(1)
+                        if not self.paper:
+                            # Still blocks: the edges this visit changed, and
+                            # the Maximum flags of its stable iteration; the
+                            # clusters stop at once (no confirmation iteration).
+                            m.d.sync += still["acc"].eq(still["acc"] | blk.edge_changed.as_value())
+                            with m.If(blk.all_stable):
+                                m.d.sync += still["mx_cur"].eq(blk.any_max)
+                                m.next = "VEND"
                     with m.If(mode == Mode.CHECK):
                         m.d.sync += self.check_iterations.eq(self.check_iterations + 1)
                         with m.If(blk.any_max):
@@ -220,14 +241,22 @@ class Controller(wiring.Component):
                         m.next = "VEND"
             with m.State("VEND"):
                 m.next = "VSTART"
+                vend = self._vend if self.paper else self._vend_still
                 if X:
                     m.d.sync += scanned.eq(0)
                     with self._vend_exponents(m, locals()):
-                        self._vend(m, locals())
+                        vend(m, locals())
                 else:
-                    self._vend(m, locals())
+                    vend(m, locals())
         self._tail(m, locals())
         return m
+
+    def _count_pass(self, m, mode):
+        """The counters at the end of a pass: a sweep, or a clear pass of a run."""
+        with m.If(mode == Mode.UPDATE):
+            m.d.sync += self.sweeps.eq(self.sweeps + 1)
+        with m.If((mode == Mode.CLEAR) & self.running):
+            m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
 
     def _vend(self, m, v):
         """The end of a visit: next block, pass, level (fixed point, and the
@@ -244,10 +273,7 @@ class Controller(wiring.Component):
             m.d.sync += [br.eq(br + 1), bc.eq(0)]
         with m.Else():                              # the end of a pass
             m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
-            with m.If(mode == Mode.UPDATE):
-                m.d.sync += self.sweeps.eq(self.sweeps + 1)
-            with m.If((mode == Mode.CLEAR) & self.running):
-                m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
+            self._count_pass(m, mode)
             with m.If(pend):
                 latch_order()
                 m.d.sync += mode.eq(Mode.CLEAR)
@@ -272,6 +298,109 @@ class Controller(wiring.Component):
                     m.d.sync += [self.running.eq(0), self.busy.eq(0)]
                     m.next = "IDLE"
 
+    # The default schedule: still blocks (models.harmonic.schedule, StillBlocks
+    # and StillTiming).  Not elaborated with paper_schedule.
+
+    def _still_signals(self, m):
+        """The dirty bits, the per-block Maximum flags, the current block as
+        one-hot ``cur`` (beside br, bc) and the visit's edge changes."""
+        B = self.BR * self.BC
+        x = {
+            "all": (1 << B) - 1,
+            "dirty": Signal(B, name="dirty"),     # blocks to visit in this level
+            "mx": Signal(B, name="mx"),           # Maximum flags of each block's last stable visit
+            "cur": Signal(B, name="cur", init=1),  # the current block, one-hot
+            "acc": Signal(4, name="edges"),       # N, S, W, E edges changed in this visit
+            "mx_cur": Signal(name="mx_cur"),      # the Maximum flags of this visit's stable iteration
+        }
+        return x
+
+    def _still_next(self, m, v, own):
+        """(dirty, mx) after the visit that ends now: the block's bit set
+        again if ``own`` (not stable, or its words moved), else cleared;
+        its flag from its stable iteration; the bits of the neighbours whose
+        facing edge changed (one-hot shifts of ``cur``)."""
+        x = v["still"]
+        BC, B = self.BC, self.BR * self.BC
+        cur, acc, seen = x["cur"], x["acc"], v["seen"]
+        all_ = x["all"]
+        not_first_col = sum(1 << i for i in range(B) if i % BC != 0)
+        not_last_col = sum(1 << i for i in range(B) if i % BC != BC - 1)
+        nbr = ((Mux(acc[0], cur >> BC, 0))                                   # N edge: block b-BC
+               | (Mux(acc[1], cur << BC, 0) & all_)                          # S edge: block b+BC
+               | (Mux(acc[2], cur >> 1, 0) & not_last_col)                   # W edge: block b-1
+               | (Mux(acc[3], cur << 1, 0) & all_ & not_first_col))          # E edge: block b+1
+        dirty_n, mx_n = Signal(B, name="dirty_n"), Signal(B, name="mx_n")
+        m.d.comb += [
+            dirty_n.eq((x["dirty"] & ~cur) | Mux(own, cur, 0) | nbr),
+            mx_n.eq(Mux(seen, (x["mx"] & ~cur) | Mux(x["mx_cur"], cur, 0), x["mx"])),
+        ]
+        return dirty_n, mx_n
+
+    def _goto(self, m, v, onehot):
+        """Visit block ``onehot`` next (br, bc and ``cur`` together)."""
+        BC, B = self.BC, self.BR * self.BC
+        if isinstance(onehot, int):
+            i = onehot.bit_length() - 1
+            br_n, bc_n = i // BC, i % BC
+        else:
+            br_n = bc_n = 0
+            for i in range(B):
+                br_n = br_n | Mux(onehot[i], i // BC, 0)
+                bc_n = bc_n | Mux(onehot[i], i % BC, 0)
+        m.d.sync += [v["br"].eq(br_n), v["bc"].eq(bc_n), v["still"]["cur"].eq(onehot)]
+
+    def _vend_still(self, m, v):
+        """The end of a visit with still blocks: the dirty bits, the next
+        dirty block after this one (the priority of a one-hot: x & -x), the
+        end of a sweep (an order waits: a clear pass; a block dirty: the
+        next sweep from the first one), the end of a level (the folded
+        check: the OR of the blocks' Maximum flags)."""
+        x = v["still"]
+        mode, seen, pend, idle_clear = v["mode"], v["seen"], v["pend"], v["idle_clear"]
+        step, p_last, latch_order = v["step"], v["p_last"], v["latch_order"]
+        B = self.BR * self.BC
+        cur = x["cur"]
+        dirty_n, mx_n = self._still_next(m, v, ~seen)
+        above = Signal(B, name="above")             # blocks after the current one
+        m.d.comb += above.eq(~(cur | (cur - 1)))
+        cand, first = Signal(B, name="cand"), Signal(B, name="first_dirty")
+        pool = Signal(B, name="pool")
+        m.d.comb += [
+            pool.eq(Mux(mode == Mode.UPDATE, dirty_n, x["all"]) & above),
+            cand.eq(pool & (~pool + 1)),
+            first.eq(dirty_n & (~dirty_n + 1)),
+        ]
+        with m.If(mode == Mode.UPDATE):
+            m.d.sync += [x["dirty"].eq(dirty_n), x["mx"].eq(mx_n)]
+        with m.If(cand != 0):
+            self._goto(m, v, cand)
+        with m.Else():                                  # the end of a pass
+            self._count_pass(m, mode)
+            with m.If(pend):
+                latch_order()
+                m.d.sync += mode.eq(Mode.CLEAR)
+                self._goto(m, v, 1)
+            with m.Elif(idle_clear):
+                m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
+            with m.Elif(mode == Mode.CLEAR):            # every free node is 0 again
+                m.d.sync += [mode.eq(Mode.UPDATE), x["dirty"].eq(x["all"])]
+                self._goto(m, v, 1)
+            with m.Elif(dirty_n != 0):                  # the next sweep
+                self._goto(m, v, first)
+            with m.Elif(mx_n == 0):                     # no local maximum: converged
+                m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
+            with m.Elif((step != 0) & (self.p + step <= p_last)):
+                m.d.sync += [self.p.eq(self.p + step), x["dirty"].eq(x["all"])]
+                self._goto(m, v, 1)
+                if self.exponents:
+                    self._rise(m, v)
+            with m.Else():
+                m.d.sync += [self.running.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
+
     def _tail(self, m, v):
         # The clusters' run: start request in VSTART, then the command at each
         # take.  Plain expressions (continuous assignments in the Verilog), so
@@ -279,6 +408,8 @@ class Controller(wiring.Component):
         mode, iters, fsm, k, seen = (v[x] for x in ("mode", "iters", "fsm", "k", "seen"))
         limit = Signal(9)
         blk = self.block
+        if not self.paper:
+            m.d.comb += blk.abort.eq(fsm.ongoing("VRUN") & blk.done & blk.all_stable & v["upd_visit"])
         if self.exponents:
             rep = v["rep"]
             x = self._x
@@ -317,12 +448,14 @@ class Controller(wiring.Component):
         x["scan_j"] = Signal(range(p_max + 4), name="scan_j")
         x["shd"] = shd = Signal.like(self.block.shift_d, name="shd")   # this iteration's rotation
         x["rem"] = rem = Signal(range(p_max + 2), name="rem")         # rotation still to do
-        # A shift visit rotates by at most 3 per iteration (reads LSB first,
-        # writes three positions behind: never a bit before it is read; the
-        # rotation by 3 also leaves the next iteration's first reads
-        # written), the rest in the last iteration: set at each take.
+        # A shift visit rotates by at most SHIFT_STEP (4) per iteration (the
+        # cluster's padded shift iteration never overwrites a bit before it
+        # is read and leaves the next iteration's first reads written:
+        # models.harmonic.ram.pads), the rest in the last iteration: set at
+        # each take.
         with m.If(fsm_take := Signal(name="rep_take")):
-            m.d.sync += [shd.eq(Mux(rem > 3, 3, rem)), rem.eq(rem - Mux(rem > 3, 3, rem))]
+            m.d.sync += [shd.eq(Mux(rem > SHIFT_STEP, SHIFT_STEP, rem)),
+                         rem.eq(rem - Mux(rem > SHIFT_STEP, SHIFT_STEP, rem))]
         x["rep_take"] = fsm_take
         x["need_scan"] = Signal(name="need_scan")
         b = x["b"] = Signal(range(max(B, 2)), name="b_cur")
@@ -383,6 +516,11 @@ class Controller(wiring.Component):
             with m.If(d != 0):                        # re-pick: shift visit of this block
                 m.d.sync += [Ea[b].eq(Ea[b] + d), rep.eq(1), v["changed"].eq(1),
                              x["rem"].eq(Mux(d > self.p, self.p, d)), self.repicks.eq(self.repicks + 1)]
+                if not self.paper:
+                    # Still blocks: the visit's dirty bits, the block's own
+                    # set (its ring is read finer after the shift).
+                    dirty_n, mx_n = self._still_next(m, v, 1)
+                    m.d.sync += [v["still"]["dirty"].eq(dirty_n), v["still"]["mx"].eq(mx_n)]
         with m.If(rep & ~crs):
             m.d.sync += rep.eq(0)
         return m.If(~crs & ~((mode == Mode.UPDATE) & ~rep & (d != 0)))
@@ -401,8 +539,12 @@ class Controller(wiring.Component):
                 m.d.sync += [v["br"].eq(i // BC), v["bc"].eq(i % BC), x["rem"].eq(p_new + 1 - dl),
                              E[i].eq(E[i] - dl),
                              x["crs_pend"].eq(mask & ~(1 << i)), x["rep"].eq(1), x["crs"].eq(1)]
+                if not self.paper:
+                    m.d.sync += v["still"]["cur"].eq(1 << i)
         with m.Else():
             m.d.sync += [x["rep"].eq(0), x["crs"].eq(0), v["br"].eq(0), v["bc"].eq(0)]
+            if not self.paper:
+                m.d.sync += v["still"]["cur"].eq(1)
 
     def _rise(self, m, v):
         """A precision rise: blocks saturated in the ending level with e_b > 0

@@ -1,102 +1,172 @@
 """Counters unit shared by the 18 nodes of a cluster (paper 000, section 5.2)."""
 
-from amaranth.hdl import Module, unsigned
+from amaranth.hdl import Module, Mux, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param, check, checked_init
-from .limits import MAX_DEPTH
+from ...models.harmonic.ram import P_MIN, READ_LATENCY, WRITE_LATENCY
+from ..params import Constraint, Param, check, checked_init
+from .limits import DEPTH_WHY, MAX_DEPTH
 
 __all__ = ["Counters"]
 
 
 class Counters(wiring.Component):
-    """RAM address counters and cycle strobes of one iteration (p+2 cycles).
+    """RAM address counters and cycle strobes of one iteration.
 
-    With a synchronous RAM the data of an address appears one cycle after it
-    is presented, so each counter presents, in iteration cycle c, the address
-    whose bit the nodes need at c+1 (see :class:`~hdl.harmonic.node.Node` for
-    the cycle numbering and :mod:`models.harmonic.ram` for the word layout).
+    An iteration is L = p+2+S cycles u = 0 .. L-1 (S pad cycles: 0 for
+    p >= 4, :func:`models.harmonic.pads`); the nodes see the flag at u = S
+    and value bit k at u = S+1+k (see :class:`~hdl.harmonic.node.Node`).
+    The RAM answers a read two cycles after its address (its output
+    register), so the addresses run two cycles ahead of the nodes: in the
+    cycle where the nodes are at u, the Counters present the offsets of
+    :func:`models.harmonic.counters` (u + 2 mod L), and the strobes of u
+    (:func:`models.harmonic.strobes`).  Every output is a register.
 
-    * ``cntR`` (port A, LSB first): ``p+1-c``, a down counter p+1 .. 0, so the
-      nodes read the flag at c = 0 and value bit k at c = k+1.
-    * ``r_cnt`` (port B read, MSB first): ``(c-1) mod (p+2)``, the reverse
-      counter, so check iterations stream value bit p at c = 3 down to bit 0
-      at cycle 1 of the next iteration.
-    * ``cntW`` (port B write): ``(p+4-c) mod (p+2)``, two bit positions behind
-      the data read on port A: that is the division by four of eq. (2).
+    * ``cntR`` (read port, LSB first): a down counter p+1 .. 1, then 0 for
+      the pads and the flag (a pad counter of S+1 cycles at 0 reloads it).
+    * ``r_cnt`` (MSB first, for the border's MSB-first reads with block
+      exponents): 1 .. p+1 in the same slots, 0 in pads and at the flag.
+    * ``cntW`` (write port): the same sequence as cntR five cycles later
+      (two cycles of read latency, the two bit positions of eq. 2's division
+      by four, one cycle of the nodes' write register): the address of the
+      result bit the nodes' ``w`` registers hold.
+    * strobes ``mask`` (u <= S), ``z`` (u = 0), ``ph1`` (u = 1), ``fl``
+      (u = 2), ``ph2`` (u = S+2), ``wcyc`` (not 2 <= u <= S+1): the read
+      slots' markers delayed to the nodes' cycle.  They hold their reset
+      values in the first two cycles after ``start`` (the lead-in, before
+      the first iteration's cycle 0).
 
     Parameters
     ----------
     p_max : int
         Largest precision; sets the counter widths.
+    depth : int
+        RAM depth in words (default p_max + 2): the absolute addresses' width.
 
     Ports
     -----
-    p : In(range(p_max+1))
-        Precision of the run; must be held while ``advance`` is high.
+    p : In(range(p_max+1)); shift : In(1)
+        Precision and the shift-visit flag (block exponents: one pad); both
+        read at ``start``.
     start : In(1)
-        Load the lead-in state (c = p+1: the flag address is presented, so
-        the next cycle is c = 0).
+        Load the lead-in state: the next cycle presents the first
+        iteration's slot u + 2 = 0, the nodes' cycle 0 comes two cycles
+        later.
     advance : In(1)
         Step to the next cycle.
     cntR, r_cnt, cntW : Out(address width)
         The three RAM address offsets.
-    ph0, ph1, ph2 : Out(1)
-        High in cycles c = 0, 1, 2 (decoded from cntW, which is 2, 1, 0
-        there whatever p is; held while ``advance`` is low).
+    base : In(range(depth)); addrR, addrW : Out(range(depth))
+        The word base of the block (read at ``start``) and the absolute
+        read / write addresses ``base + cntR`` and ``base + cntW``, counted
+        in registers beside the offsets, so that the block RAM's address
+        pins see a flip-flop and no adder (the clock's critical path).
+    mask, z, ph1, fl, ph2, wcyc : Out(1)
+        The nodes' cycle strobes (held while ``advance`` is low).
+    mask_next : Out(1)
+        ``mask`` of the next advancing cycle (a register: the cluster
+        registers the nodes' adder mask from it).
     """
 
     PARAMS = (Param("p_max", int, lo=2, hi=MAX_DEPTH - 2,
                     doc="largest precision; sets the counter widths (p_max + 2 <= the RAM depth <= 2**20)",
                     message="p_max must be an integer in 2..{hi} (a word of p_max + 2 bits fills at most a "
-                            "2**20-word RAM), not {value!r}"),)
+                            "2**20-word RAM), not {value!r}"),
+              Param("depth", int, None, lo=4, hi=MAX_DEPTH,
+                    doc="RAM depth in words, the absolute addresses' range (default p_max + 2)",
+                    message=f"RAM depth must be an integer in 4..{MAX_DEPTH}, not {{value!r}} ({DEPTH_WHY})"))
+    CONSTRAINTS = (
+        Constraint("p_max + 2 <= depth", lambda p: p["depth"] is None or p["p_max"] + 2 <= p["depth"],
+                   "precision p_max={p_max} needs words of p_max+2 bits, one per RAM address, "
+                   "but the RAM depth is {depth}"),
+    )
 
     @checked_init
-    def __init__(self, p_max):
-        check(self.PARAMS, p_max=p_max)
+    def __init__(self, p_max, depth=None):
+        check(self.PARAMS, self.CONSTRAINTS, p_max=p_max, depth=depth)
         self.p_max = p_max
+        self.depth = depth = p_max + 2 if depth is None else depth
         addr = unsigned((p_max + 1).bit_length())
         super().__init__({
+            "base": In(range(depth)),
+            "addrR": Out(range(depth)),
+            "addrW": Out(range(depth)),
             "p": In(range(p_max + 1)),
+            "shift": In(1),
             "start": In(1),
             "advance": In(1),
             "cntR": Out(addr),
             "r_cnt": Out(addr),
             "cntW": Out(addr),
-            "ph0": Out(1),
-            "ph1": Out(1),
-            "ph2": Out(1),
+            "mask_next": Out(1),
+            "mask": Out(1), "z": Out(1), "ph1": Out(1), "fl": Out(1), "ph2": Out(1), "wcyc": Out(1, init=1),
         })
 
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest."""
-        return {"iteration_cycles": "p+2", "strobe_cycles": "ph0/ph1/ph2 at c = 0, 1, 2 of each iteration"}
+        return {"iteration_cycles": "p+2 (p >= 4; max(p, 4)+2 below)",
+                "read_lead": "addresses two cycles ahead of the strobes (the RAM's read latency)",
+                "strobe_cycles": "z/ph1/fl at u = 0, 1, 2; ph2 at u = S+2; mask at u <= S"}
 
     def elaborate(self, platform):
         m = Module()
-        last = self.p + 1
+        lag = READ_LATENCY + WRITE_LATENCY + 2          # cntW follows cntR by this many cycles
+        S = Signal(2)                                   # pad cycles of the run
+        p1 = Signal.like(self.p, name="p_plus_1")       # reload value p + 1
+        pad_max = P_MIN - 2                             # S <= 2
+        assert pad_max < 4
+
+        base_p1 = Signal.like(self.base, name="base_plus_p_plus_1")    # the absolute reload value
+
+        def phase(value, q, absolute):
+            """One read-slot counter: value p+1 .. 1, then 0 for S+1 cycles
+            (q counts them), and base + value beside it; returns (slot is 0,
+            slot is the flag)."""
+            zero = Signal(name=f"{value.name}_zero")
+            m.d.comb += zero.eq(value == 0)
+            reload = zero & (q == S)
+            with m.If(self.advance & ~self.start):
+                m.d.sync += [value.eq(Mux(reload, p1, Mux(zero, 0, value - 1))),
+                             absolute.eq(Mux(reload, base_p1, Mux(zero, absolute, absolute - 1))),
+                             q.eq(Mux(zero & ~reload, q + 1, 0))]
+            return zero, reload
+
+        qR, qW = Signal(2), Signal(2)
+        zR, reloadR = phase(self.cntR, qR, self.addrR)
+        phase(self.cntW, qW, self.addrW)
+        one = Signal()
+        m.d.comb += one.eq(self.cntR == 1)
+        with m.If(self.advance & ~self.start):
+            m.d.sync += self.r_cnt.eq(Mux(reloadR, 1, Mux((self.r_cnt == 0) | one, 0, self.r_cnt + 1)))
+
+        # The read slot's markers, delayed to the nodes' cycle u (slot - 2).
+        x0 = zR & (qR == 0)             # slot 0: u = 0 two cycles later
+        pad = zR & (qR != S)            # slot < S: u = slot + 2 writes nothing, two cycles after that
+        chain = {}
+        for name, src, n in (("mask", zR, 2), ("zc", x0, 4), ("ph2", reloadR, 4), ("pad", pad, 4)):
+            regs = [Signal(name=f"{name}_d{i}") for i in range(1, n + 1)]
+            with m.If(self.start):
+                m.d.sync += [r.eq(0) for r in regs]
+            with m.Elif(self.advance):
+                m.d.sync += [regs[0].eq(src), *(b.eq(a) for a, b in zip(regs, regs[1:]))]
+            chain[name] = regs
         m.d.comb += [
-            self.ph0.eq(self.cntW == 2),
-            self.ph1.eq(self.cntW == 1),
-            self.ph2.eq(self.cntW == 0),
+            self.mask.eq(chain["mask"][1]), self.mask_next.eq(chain["mask"][0]),
+            self.z.eq(chain["zc"][1]), self.ph1.eq(chain["zc"][2]), self.fl.eq(chain["zc"][3]),
+            self.ph2.eq(chain["ph2"][3]), self.wcyc.eq(~chain["pad"][3]),
         ]
+
+        # The lead-in: slot 0 next (cntR 0, its pad count 0); cntW five slots
+        # behind, slot L-5 (L >= 6): a value slot (offset 5) for p >= 4, else
+        # the pad / flag slot p + S - 3 <= S.
+        s_new = Signal(2)
+        m.d.comb += s_new.eq(Mux(self.p < P_MIN, P_MIN - self.p, self.shift))
         with m.If(self.start):
-            m.d.sync += [
-                self.cntR.eq(0),
-                self.r_cnt.eq(self.p),
-                self.cntW.eq(3),
-            ]
-        with m.Elif(self.advance):
-            m.d.sync += [
-                self.cntR.eq(self.cntR - 1),
-                self.r_cnt.eq(self.r_cnt + 1),
-                self.cntW.eq(self.cntW - 1),
-            ]
-            with m.If(self.cntR == 0):
-                m.d.sync += self.cntR.eq(last)
-            with m.If(self.r_cnt == last):
-                m.d.sync += self.r_cnt.eq(0)
-            with m.If(self.cntW == 0):
-                m.d.sync += self.cntW.eq(last)
+            m.d.sync += [S.eq(s_new), p1.eq(self.p + 1), self.cntR.eq(0), qR.eq(0), self.r_cnt.eq(0),
+                         base_p1.eq(self.base + self.p + 1), self.addrR.eq(self.base)]
+            with m.If(self.p < P_MIN):
+                m.d.sync += [self.cntW.eq(0), qW.eq(self.p + s_new - 3), self.addrW.eq(self.base)]
+            with m.Else():
+                m.d.sync += [self.cntW.eq(lag), qW.eq(0), self.addrW.eq(self.base + lag)]
         return m

@@ -18,49 +18,70 @@ class Node(wiring.Component):
     All data ports are 1 bit wide and serial.  The node has no storage of its
     own value: it lives in the cluster's RAM, one bit per address, as described
     in :mod:`models.harmonic.ram` (constant flag, then bits p..0).  The shared
-    Counters unit walks the RAM so that the node sees, in an iteration of p+2
-    cycles numbered c = 0 .. p+1:
+    Counters unit walks the RAM so that the node sees, in an iteration of
+    L = p+2+S cycles numbered u = 0 .. L-1 (S pad cycles, 0 for p >= 4:
+    :func:`models.harmonic.pads`), its own word and its four neighbours'
+    LSB first:
 
     =========  =========================================================
-    cycle c    what the node sees / does
+    cycle u    what the node sees / does
     =========  =========================================================
-    0 (ph0)    ``h`` carries the constant flag; the adder sees 0 (its
-               inputs are masked) and flushes the last sum bit (bit p-1 of
-               the previous iteration's result is written).
-    1 (ph1)    ``h`` carries bit 0; the carry's low bit (result bit p)
-               is written; the adder starts afresh.
-    2 (ph2)    ``h`` carries bit 1; the constant flag of the new word is
-               written; the Stable and Maximum results of the previous
-               iteration are valid on ``stable`` / ``local_max``.
-    k+1        ``h`` carries bit k; result bit k-2 is written (k >= 2).
+    0          ``z``: the Maximum result of the previous iteration is
+               latched; ``w`` = result bit p-1 of the previous iteration
+               (the carry flushing: the adder's inputs are masked)
+    1          ``ph1``: ``w`` = result bit p (the carry's low bit); the
+               adder restarts
+    < S        pads (``mask``): nothing read, the adder's inputs masked
+    S          the constant flag (``mask``: the adder sees 0)
+    S+1+k      value bit k; ``w`` = result bit k-2 (k >= 2)
+    S+2        ``ph2``: ``w`` = the constant flag of the new word
     =========  =========================================================
 
     So the sum of the four neighbours is formed LSB first by one serial
     four-operand adder with a two-bit carry (eq. 2), and dropping its two
-    low bits, i.e. writing each sum bit two bit
-    positions late, divides it by four.  The write window of one iteration
-    runs from its cycle 2 to cycle 1 of the next one.
+    low bits, i.e. writing each sum bit two bit positions late, divides it
+    by four.  The write window of one iteration runs from its cycle S+2 to
+    cycle 1 of the next one (the cycles 2 .. S+1 of a padded iteration
+    write nothing: the cluster holds ``enable`` low there).  ``w`` is a
+    register: the bit computed in cycle u is on ``w`` in cycle u+1, when
+    the cluster writes it.
 
     In an iteration with ``enable`` low ("check" iteration) nothing changes:
-    ``w`` is the stored bit, and the second RAM port streams the stored
-    values MSB first on ``hm`` / ``m_*`` (stored bit p at cycle 3 down to bit 0
-    at cycle 1 of the next iteration) for the Maximum comparison.
+    ``w`` is the stored bit.
+
+    The Maximum compares the node's value with each neighbour's on the very
+    LSB-first streams the adder reads (value bit k at cycle S+1+k): per
+    neighbour one flip-flop holds "mine >= its so far", and a higher bit that
+    differs overrides it, so after bit p it is the comparison of the whole
+    values.  (The paper reads a second, MSB-first stream through the RAM's
+    other port for this, 3.2.1; port B writes in update iterations, so that
+    comparison exists only in check iterations.  LSB first it needs no
+    second read port and comes with every iteration, update, check or clear,
+    which folds the check pass into the visits: see
+    :mod:`models.harmonic.schedule`.)
+
+    Flags: ``stable`` and ``local_max`` of an iteration are valid in cycle 2
+    of the next one (``local_max`` from cycle 1, ``stable`` once the last
+    written bit has been compared), until its cycle S+2 (``stable``) / 0
+    (``local_max``).
 
     Ports
     -----
     h : In(1)
-        Own stored word, from RAM port A (LSB first, flag first).
+        Own stored word, from the RAM's read port (LSB first, flag first).
     h_N, h_E, h_W, h_S : In(1)
         The four neighbours' words, same timing as ``h``.
-    hm : In(1)
-        Own value MSB first, from RAM port B (check iterations).
-    m_N, m_E, m_W, m_S : In(1)
-        The four neighbours' values MSB first, same timing as ``hm``.
-    ph0, ph1, ph2 : In(1)
-        Cycle strobes from the Counters unit (c = 0, 1, 2).
+    mask : In(1)
+        Pad and flag cycles (u <= S): the Maximum restarts.
+    zero : In(1)
+        The adder's inputs are masked (0): ``mask``, and the bits of a
+        clear iteration (the Maximum still compares the values read).  One
+        input, so that the sum's parity and its mask take one LUT level.
+    z, ph1, ph2 : In(1)
+        Cycle strobes from the Counters unit (u = 0, u = 1, u = S+2).
     enable : In(1)
-        Update iteration (1) or check iteration (0).  Held over the write
-        window (c = 2 .. c = 1 of the next iteration).
+        Update iteration (1) or check iteration (0), held over the write
+        window; low in the non-writing cycles of a padded iteration.
     Sel, Sat : In(1)
         Saturation order: in an update iteration with ``Sel`` high the node
         becomes constant with value ``Sat`` (0 obstacle, 1 goal).  Held over
@@ -68,17 +89,15 @@ class Node(wiring.Component):
     to : Out(1)
         The node's value, LSB first, for its four neighbours (the paper's
         to_N, to_E, to_W, to_S are this one signal) and the decision module.
-    to_m : Out(1)
-        The node's value MSB first, for its neighbours' Maximum modules.
     w : Out(1)
-        Bit to write to RAM port B (Mem multiplexer): the update, the stored
-        bit (constant node or check iteration) or the saturation constant.
+        Bit to write to the RAM (Mem multiplexer, registered): the update,
+        the stored bit (constant node or check iteration) or the saturation
+        constant.
     stable : Out(1)
         The word written in the previous iteration equals the stored one.
-        Valid when ``ph2`` is high.
     local_max : Out(1)
-        Free node whose value is >= its four neighbours' (MSB-first values of
-        the previous iteration).  Valid when ``ph2`` is high.
+        Free node whose value is >= its four neighbours' (the values the
+        previous iteration read, update, check or clear).
     """
 
     h: In(1)
@@ -86,19 +105,15 @@ class Node(wiring.Component):
     h_E: In(1)
     h_W: In(1)
     h_S: In(1)
-    hm: In(1)
-    m_N: In(1)
-    m_E: In(1)
-    m_W: In(1)
-    m_S: In(1)
-    ph0: In(1)
+    mask: In(1)
+    zero: In(1)
+    z: In(1)
     ph1: In(1)
     ph2: In(1)
     enable: In(1)
     Sel: In(1)
     Sat: In(1)
     to: Out(1)
-    to_m: Out(1)
     w: Out(1)
     stable: Out(1)
     local_max: Out(1)
@@ -107,24 +122,26 @@ class Node(wiring.Component):
 
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest."""
-        return {"iteration_cycles": "p+2", "flags_valid": "stable/local_max at ph2 (cycle 2) of the next iteration"}
+        return {"iteration_cycles": "p+2 (p >= 4; max(p, 4)+2 below)",
+                "w_latency": "the bit of cycle u is on w in cycle u+1",
+                "flags_valid": "stable/local_max in cycle 2 of the next iteration"}
 
     def elaborate(self, platform):
         m = Module()
         # Mem: the stored word is the node's value as its neighbours see it.
-        m.d.comb += [self.to.eq(self.h), self.to_m.eq(self.hm)]
+        m.d.comb += self.to.eq(self.h)
 
         # Update: one serial adder of the four neighbours, (N + S + E + W)
         # LSB first, whose carry k (0 .. 3: at most (4 + 3) // 2) takes two
-        # flip-flops where three chained full adders take three.  At ph0 the
-        # inputs carry the flags and are masked, which flushes the carry:
-        # sum bit p+1 is written at ph0 (result bit p-1), sum bit p+2 is
-        # k[0] at ph1 (result bit p), and the adder starts afresh at ph1.
-        live = ~self.ph0
+        # flip-flops where three chained full adders take three.  While
+        # masked the carry flushes: sum bit p+1 (result bit p-1) is written
+        # at u = 0, sum bit p+2 is k[0] at u = 1 (result bit p), and the
+        # adder starts afresh there (kin masked; k[1] is 0 by then).
+        live = ~self.zero
         a, b = self.h_N & live, self.h_S & live
         c, d = self.h_E & live, self.h_W & live
         k = Signal(2)
-        kin = k[0] & ~self.ph1          # k[0] holds result bit p at ph1; k[1] is 0 there
+        kin = k[0] & ~self.ph1
         # a + b + c + d + kin + 2*k[1] as two full adders of weight 1 and
         # one of weight 2 (plain gates: no carry chain for a 3-bit sum).
         s1, g1 = a ^ b ^ c, _maj(a, b, c)
@@ -132,10 +149,10 @@ class Node(wiring.Component):
         m.d.sync += k.eq(Cat(g1 ^ g2 ^ k[1], _maj(g1, g2, k[1])))
 
         # Mem: the stored stream delayed by two flip-flops lines up with the
-        # write address, so it is both the write-back value and the Stable
-        # reference.  At ph2 it holds the stored constant flag.
-        d1, old = Signal(), Signal()
-        m.d.sync += [d1.eq(self.h), old.eq(d1)]
+        # bit being computed, so it is both the write-back value and, one
+        # flip-flop later (old_r), the Stable reference of the registered w.
+        d1, old, old_r = Signal(), Signal(), Signal()
+        m.d.sync += [d1.eq(self.h), old.eq(d1), old_r.eq(old)]
 
         # Saturation: the constant flag of the word being written.
         saturate = self.enable & self.Sel
@@ -144,33 +161,39 @@ class Node(wiring.Component):
         with m.If(self.ph2):
             m.d.sync += const.eq(flag)
 
+        w = Signal()
         with m.If(self.ph2):
-            m.d.comb += self.w.eq(flag)
+            m.d.comb += w.eq(flag)
         with m.Elif(saturate):
-            m.d.comb += self.w.eq(self.ph1 & self.Sat)   # only bit p may be 1
+            m.d.comb += w.eq(self.ph1 & self.Sat)    # only bit p may be 1
         with m.Elif(~self.enable | const):
-            m.d.comb += self.w.eq(old)
+            m.d.comb += w.eq(old)
         with m.Elif(self.ph1):
-            m.d.comb += self.w.eq(k[0])
+            m.d.comb += w.eq(k[0])
         with m.Else():
-            m.d.comb += self.w.eq(total)
+            m.d.comb += w.eq(total)
+        m.d.sync += self.w.eq(w)
 
-        # Stable: serial compare of the written word with the stored one.
+        # Stable: serial compare of the written word (registered) with the
+        # stored one; the window starts with the flag's write (ph2 one cycle
+        # earlier clears the record).  Its last bit is compared in cycle 2
+        # of the next iteration, combinationally into the output.
         diff = Signal()
-        changed = self.w ^ old
-        m.d.sync += diff.eq(changed | (diff & ~self.ph2))
-        m.d.comb += self.stable.eq(~diff)
+        changed = self.w ^ old_r
+        m.d.sync += diff.eq(~self.ph2 & (diff | changed))
+        m.d.comb += self.stable.eq(~(diff | changed))
 
-        # Maximum: MSB-first compare against each neighbour.  eq[n] says the
-        # values agree so far; lt records a neighbour found greater at the
-        # first differing bit.  Reset at ph2 (the flag slot of the stream).
-        lt = Signal()
-        found_lt = 0
-        for nb in (self.m_N, self.m_E, self.m_W, self.m_S):
-            eq = Signal(init=1)
-            found_lt = found_lt | (eq & ~self.hm & nb)
-            m.d.sync += eq.eq(self.ph2 | (eq & ~(self.hm ^ nb)))
-        m.d.sync += lt.eq(~self.ph2 & (lt | found_lt))
-        m.d.comb += self.local_max.eq(~lt & ~const)
+        # Maximum, LSB first: ge[n] says h >= neighbour n on the bits seen so
+        # far (the highest differing bit decides); masked cycles (pads, the
+        # flag) restart it.  Its result is latched at u = 0, after bit p.
+        ges = []
+        for nb in (self.h_N, self.h_E, self.h_W, self.h_S):
+            ge = Signal(init=1)
+            m.d.sync += ge.eq(self.mask | ((self.h ^ nb) & self.h) | (~(self.h ^ nb) & ge))
+            ges.append(ge)
+        lm = Signal()
+        with m.If(self.z):
+            m.d.sync += lm.eq(Cat(*ges).all())
+        m.d.comb += self.local_max.eq(lm & ~const)
 
         return m

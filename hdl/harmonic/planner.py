@@ -7,6 +7,7 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ...models.harmonic.ram import READ_LATENCY
 from ..params import Constraint, Param, check, checked_init
 from .block import Block
 from .cluster import COLS, ROWS
@@ -40,12 +41,13 @@ def direction_latency(p, inside=4):
     """DIRECTION's response latency at precision ``p`` (fixed point), in
     cycles from the clock edge that takes the command to the one that
     raises ``o_stream.valid``: the node and its ``inside`` neighbours in the
-    map are read serially (p+4 cycles each: the flag and p+1 value bits
-    through the host port, one cycle to start the read), a neighbour
+    map are read serially (p+3+READ_LATENCY = p+5 cycles each: the flag and
+    p+1 value bits through the host port, whose data come READ_LATENCY
+    cycles after the address, one cycle to start the read), a neighbour
     outside the map costs 1 cycle, then 1 cycle starts the Decision, whose
     2p+5 cycles (two serial passes) end with the response.  With block
     exponents each value read adds its conversion: 1 + the shift cycles."""
-    return (1 + inside) * (p + 4) + (4 - inside) + 1 + (2 * p + 5)
+    return (1 + inside) * (p + 3 + READ_LATENCY) + (4 - inside) + 1 + (2 * p + 5)
 
 
 def _pw(p_max):
@@ -111,7 +113,7 @@ class Planner(wiring.Component):
                gradient (g_row, g_col) of :func:`models.harmonic.decision`
                (block exponents: of :func:`models.harmonic.decision_exponents`,
                in the centre's units; ``exponent`` = its e_b).  Response
-               after :func:`direction_latency` cycles (7p+26 inside the map).
+               after :func:`direction_latency` cycles (7p+31 inside the map).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
@@ -148,6 +150,12 @@ class Planner(wiring.Component):
         With ``block_exponents``: the largest e_b (1 ..) and the re-pick's
         headroom h (0 .. p_max), ``plan_exponents``' ``e_max`` and
         ``headroom`` (defaults 255 and 1, the model's).
+    paper_schedule : bool
+        False (default): still blocks, :func:`models.harmonic.plan`'s
+        default (a sweep visits only the blocks a change can reach, no
+        confirmation iteration, no check pass; ``check_iterations`` stays
+        0).  True: the paper's schedule, ``plan(..., paper_schedule=True)``.
+        Both give the same field (see :mod:`models.harmonic.schedule`).
     """
 
     # Block's parameters (it checks them), at the planner's defaults, and the
@@ -158,17 +166,22 @@ class Planner(wiring.Component):
                     message="block_exponents={value!r}: must be True or False"),
               Param("headroom", int, 1, lo=0, hi=MAX_DEPTH - 2,
                     doc="top mantissa bits a re-pick leaves empty (with block_exponents; headroom <= p_max)",
-                    message="headroom={value!r}: must be an integer in 0..{hi} (headroom <= p_max)"))
+                    message="headroom={value!r}: must be an integer in 0..{hi} (headroom <= p_max)"),
+              Param("paper_schedule", bool, False,
+                    doc="the paper's schedule (every block in every sweep, a confirmation iteration, a "
+                        "check pass) instead of the default still blocks",
+                    message="paper_schedule={value!r}: must be True or False"))
     CONSTRAINTS = (*Block.CONSTRAINTS,
                    Constraint("headroom <= p_max", lambda p: p["headroom"] <= p["p_max"],
                               "headroom={headroom!r}: leaves no mantissa bit at p_max={p_max}"))
 
     @checked_init
     def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False, e_max=255,
-                 headroom=1):
+                 headroom=1, paper_schedule=False):
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=blocks[0], bc=blocks[1], p_max=p_max, depth=depth,
-              block_exponents=block_exponents, e_max=e_max, headroom=headroom)
+              block_exponents=block_exponents, e_max=e_max, headroom=headroom, paper_schedule=paper_schedule)
         self.exponents = bool(block_exponents)
+        self.paper = bool(paper_schedule)
         self.e_max, self.headroom = e_max, headroom
         ekw = {"exponents": True, "e_max": e_max} if self.exponents else {}
         self.block = Block(n, m, blocks, p_max, depth, **ekw)
@@ -183,10 +196,12 @@ class Planner(wiring.Component):
 
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest (see Controller's table)."""
-        return {"iteration_cycles": "p+2", "block_visit_cycles": "K*(p+2)+6 for K iterations",
+        return {"iteration_cycles": "L = p+2 (p >= 4; 6 below; a shift iteration one more: iteration_cycles())",
+                "block_visit_cycles": "K*L+7 for K iterations",
+                "schedule": "paper's" if self.paper else "still blocks",
                 "response": "one o_stream beat per i_stream command, in order",
-                "direction_latency": "7p+26 cycles (a node with 4 neighbours in the map; "
-                                     "p+3 fewer per neighbour outside it: direction_latency())",
+                "direction_latency": "7p+31 cycles (a node with 4 neighbours in the map; "
+                                     "p+4 fewer per neighbour outside it: direction_latency())",
                 "run_cycles": "reported by STATUS (cycles field)"}
 
     def elaborate(self, platform):
@@ -197,7 +212,7 @@ class Planner(wiring.Component):
         m.submodules.block = blk = self.block
         X = self.exponents
         xkw = {"exponents": True, "e_max": self.e_max, "headroom": self.headroom} if X else {}
-        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, **xkw)
+        m.submodules.control = ctl = Controller((BR, BC), n, mm, p_max, paper_schedule=self.paper, **xkw)
         m.submodules.decision = dec = Decision(p_max)
         wiring.connect(m, ctl.block, blk.control)
         host = blk.host             # the LOAD / READ / DIRECTION path to the RAMs
@@ -236,7 +251,7 @@ class Planner(wiring.Component):
             m.d.sync += self.o_stream.valid.eq(0)
 
         # Serial read of one node word through the host port (p+2 addresses,
-        # data one cycle after its address): flag, then value MSB first.
+        # data READ_LATENCY cycles after its address): flag, then value MSB first.
         rd_go, rd_done = Signal(), Signal()
         rd_base = Signal(range(self.depth))
         rd_ci, rd_bit = Signal.like(c_ci), Signal.like(c_bit)
@@ -249,11 +264,11 @@ class Planner(wiring.Component):
             m.d.comb += [host.addr.eq(rd_base + rd_j), host.cluster.eq(rd_ci)]
             m.d.sync += rd_j.eq(rd_j + 1)
             got = host.rdata.bit_select(rd_bit, 1)
-            with m.If(rd_j == 1):
+            with m.If(rd_j == READ_LATENCY):
                 m.d.sync += rd_const.eq(got)
-            with m.Elif(rd_j > 1):
+            with m.Elif(rd_j > READ_LATENCY):
                 m.d.sync += rd_val.eq(Cat(got, rd_val[:-1]))
-            with m.If(rd_j == ctl.p + 2):
+            with m.If(rd_j == ctl.p + 1 + READ_LATENCY):
                 m.d.sync += rd_busy.eq(0)
                 m.d.comb += rd_done.eq(1)
 

@@ -17,20 +17,23 @@ grid.py           the map on blocks: :func:`pad_to_blocks`, :func:`reachable`,
                   and ``BlockGrid``, the fixed-point field the schedule runs
                   on (block visit, check, precision rise, dynamic orders)
 schedule.py       the section 4 schedule: the one loop (``run``) and its
-                  hooks, the Control module's timing (:data:`VISIT_OVERHEAD`,
-                  :func:`visit_cycles`, ``Timing``), :class:`PlanResult`
+                  hooks, the Control module's two schedules (``control``:
+                  still blocks, the default, or the paper's) and timing
+                  (:data:`VISIT_OVERHEAD`, :func:`visit_cycles`, ``Timing``,
+                  ``StillTiming``), :class:`PlanResult`
 planner.py        :func:`plan`: the schedule on the fixed-point field (or
                   block exponents), as the RTL runs it
 decision.py       the Decision module (5.3): :func:`decision`,
                   :func:`steepest_triangle`, :data:`TRIANGLES`,
                   :func:`decision_exponents`
 ram.py            storage: :func:`word_bits`, :func:`ram_image`,
-                  :func:`from_ram_image`, :func:`counters`, and the border
+                  :func:`from_ram_image`, the cluster's pipeline (:func:`iteration_cycles`,
+                  :func:`pads`, :func:`counters`, :func:`strobes`), and the border
                   conversion between block exponents :func:`convert_mantissa`
 ascent.py         gradient ascent on a field: :func:`trajectory`,
                   :func:`ascent_next`, :func:`ascent_reaches`, ``Trajectory``
 explore.py        the schedule study (4.5): :func:`plan_explore` with block
-                  orders and still-block skipping (:data:`SKIP_CYCLES`)
+                  orders, still blocks or the paper's visits
 exponents.py      block exponents (issue 10): ``ExponentGrid``,
                   :func:`plan_exponents`, :func:`shift_iterations`,
                   :data:`E_MAX`, :data:`REPICK_HEADROOM`, :data:`SHIFT_STEP`
@@ -44,12 +47,13 @@ nothing of the project outside ``models.harmonic``.
 """
 
 from .decision import TRIANGLES, decision, decision_exponents, steepest_triangle
-from .explore import SKIP_CYCLES, plan_explore
+from .explore import plan_explore
 from .exponents import E_MAX, REPICK_HEADROOM, SHIFT_STEP, plan_exponents, shift_iterations
 from .grid import pad_to_blocks, reachable
 from .node import local_max, neighbours, one, relax, step, update
 from .planner import plan
-from .ram import convert_mantissa, counters, from_ram_image, ram_image, word_bits
+from .ram import (P_MIN, convert_mantissa, counters, from_ram_image, iteration_cycles, pads, ram_image, read_offset,
+                  strobes, word_bits)
 from .schedule import RUN_OVERHEAD, SET_OVERHEAD, VISIT_OVERHEAD, PlanResult, visit_cycles
 from .ascent import ASCENT_MOVES, Trajectory, ascent_next, ascent_reaches, trajectory
 
@@ -57,9 +61,10 @@ __all__ = [
     "one", "neighbours", "update", "local_max", "step", "relax",
     "pad_to_blocks", "reachable", "PlanResult", "plan", "decision", "steepest_triangle", "visit_cycles",
     "VISIT_OVERHEAD", "RUN_OVERHEAD", "SET_OVERHEAD", "TRIANGLES",
-    "word_bits", "ram_image", "from_ram_image", "counters",
+    "word_bits", "ram_image", "from_ram_image", "counters", "strobes", "read_offset", "pads", "iteration_cycles",
+    "P_MIN",
     "ASCENT_MOVES", "ascent_next", "Trajectory", "trajectory", "ascent_reaches",
-    "SKIP_CYCLES", "plan_explore",
+    "plan_explore",
     "E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "decision_exponents", "plan_exponents",
     "shift_iterations",
 ]

@@ -1,5 +1,5 @@
 """Schedule exploration (benches: the choices section 4.5 of paper 000 leaves
-open): the block order and skipping still blocks, on the one schedule loop
+open): the block order, with still blocks or the paper's visits, on the one schedule loop
 (:func:`models.harmonic.schedule.run`).
 
 Number format and rounding: those of the fixed-point field
@@ -17,14 +17,9 @@ order:  "raster" (plan's: row-major), "serpentine" (row-major, every other
         block row reversed), "alternate" (raster, reversed on every other
         sweep), "goal" (blocks by their BFS distance to the nearest goal,
         nearest first: the values flow outward from the goals).
-skip:   a block is visited in a sweep only while "dirty": all blocks are
-        dirty at the start of a level; a visit that changes the block makes
-        dirty the neighbouring blocks whose facing border row/column changed,
-        and the block itself if it used up its I iterations.  A skipped
-        block costs SKIP_CYCLES (the Control module's decision cycle); the
-        level's update phase ends when no block is dirty, which is again a
-        fixed point of the whole map (every block stable against its
-        neighbours' current values).  Hardware cost: one dirty bit per block.
+paper_schedule: the paper's visits (every block in every sweep, the
+        confirmation iteration, a check pass) instead of the default still
+        blocks (:class:`~models.harmonic.schedule.StillBlocks`).
 """
 
 from collections import deque
@@ -32,15 +27,11 @@ from collections import deque
 import numpy as np
 
 from .grid import BlockGrid
-from .schedule import EveryBlock, run
+from .schedule import control, run
 
-__all__ = ["SKIP_CYCLES", "ORDERS", "block_order", "StillBlocks", "plan_explore"]
+__all__ = ["ORDERS", "block_order", "plan_explore"]
 
-SKIP_CYCLES = 1
 ORDERS = ("raster", "serpentine", "alternate", "goal")
-
-# A block's edges (N, E, W, S) and the neighbour block each one faces.
-_EDGES = ((-1, 0), (0, 1), (0, -1), (1, 0))
 
 
 def _check_order(order):
@@ -81,47 +72,13 @@ def _goal_distance(grid):
     return lambda b: (dist[b[0] * n:b[0] * n + n, b[1] * m:b[1] * m + m].min(), b)
 
 
-class StillBlocks(EveryBlock):
-    """The ``visits`` policy ``skip=True``: one dirty bit per block (see the
-    module docstring); a skipped visit costs :data:`SKIP_CYCLES`."""
-
-    skip_cycles = SKIP_CYCLES
-
-    def __init__(self, grid):
-        self.grid = grid
-        self.dirty = dict.fromkeys(grid.blocks, True)
-
-    def reset(self):
-        for b in self.dirty:
-            self.dirty[b] = True
-
-    def skip(self, b):
-        return not self.dirty[b]
-
-    def before(self, b):
-        self.dirty[b] = False
-        blk = self.grid.block(b)
-        self.edges = (blk[0].copy(), blk[:, -1].copy(), blk[:, 0].copy(), blk[-1].copy())
-
-    def after(self, b, stable, changed):
-        if not changed:
-            return
-        self.dirty[b] = not stable
-        blk = self.grid.block(b)
-        for (dr, dc), now, was in zip(_EDGES, (blk[0], blk[:, -1], blk[:, 0], blk[-1]), self.edges):
-            nb = (b[0] + dr, b[1] + dc)
-            if nb in self.dirty and not (now == was).all():
-                self.dirty[nb] = True
-
-    def again(self, changed):
-        return any(self.dirty.values())
-
-
-def plan_explore(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), order="raster", skip=False):
-    """:func:`~models.harmonic.plan` (without events) with a block ``order``
-    and optional skipping of still blocks; returns a
-    :class:`~models.harmonic.PlanResult` (``skipped`` visits are counted in
-    ``levels``, 0 without skipping)."""
+def plan_explore(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), order="raster",
+                 paper_schedule=False):
+    """:func:`~models.harmonic.plan` (without events) with a block ``order``;
+    returns a :class:`~models.harmonic.PlanResult` (``skipped`` visits are
+    counted, 0 in the paper's schedule)."""
     _check_order(order)
     grid = BlockGrid(obstacle, goals, block, iters, schedule)
-    return run(grid, order=block_order(grid, order), visits=StillBlocks(grid) if skip else EveryBlock())
+    grid.res.paper_schedule = bool(paper_schedule)
+    visits, timing = control(grid, paper_schedule)
+    return run(grid, order=block_order(grid, order), visits=visits, timing=timing)

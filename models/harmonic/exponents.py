@@ -29,14 +29,13 @@ import numpy as np
 
 from .grid import BlockGrid
 from .node import local_max
-from .ram import convert_mantissa
-from .schedule import run, visit_cycles
+from .ram import SHIFT_STEP, convert_mantissa
+from .schedule import control, run, visit_cycles
 
 __all__ = ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "shift_iterations", "ExponentGrid", "plan_exponents"]
 
 E_MAX = 255             # default exponent bound: an 8-bit exponent register per block
 REPICK_HEADROOM = 1     # default h: a re-pick leaves the top h mantissa bits empty
-SHIFT_STEP = 3          # the RTL's in-place rotation per iteration (rtl=True)
 
 # A block's four border rings (N, S, W, E): the neighbour block's offset and
 # where the ring sits in the visit's local (n+2) x (m+2) array.
@@ -47,9 +46,10 @@ _SIDES = (((-1, 0), (0, slice(1, -1))), ((1, 0), (-1, slice(1, -1))),
 def shift_iterations(d):
     """Iterations of the RTL's shift visit that rotates a block's words by d
     value positions (rtl=True): an iteration reads LSB first and writes each
-    bit three positions behind the read, so a rotation by at most 3 never
-    overwrites a bit before it is read; a rotation by d takes ceil(d/3)
-    iterations (3, 3, ..., the rest last: see hdl/harmonic/cluster.py)."""
+    bit rotated in place, at most :data:`SHIFT_STEP` (4) positions per
+    iteration (:func:`~models.harmonic.ram.pads`), so a rotation by d takes
+    ceil(d/4) iterations (4, 4, ..., the rest last: see
+    hdl/harmonic/cluster.py), each one pad cycle longer than an update's."""
     return max(1, -(-int(d) // SHIFT_STEP))
 
 
@@ -181,7 +181,9 @@ class ExponentGrid(BlockGrid):
             return 0
         self.res.repicks += 1
         level["repicks"] += 1
-        return visit_cycles(shift_iterations(min(d, self.p)) if self.rtl else 1, self.p)
+        if self.rtl:
+            return visit_cycles(shift_iterations(min(d, self.p)), self.p, shift=True)
+        return visit_cycles(1, self.p)
 
     def check(self, level):
         """The check pass: (local maxima, the RTL's clamp scans); records the
@@ -226,8 +228,9 @@ class ExponentGrid(BlockGrid):
         self.p = later[0]
         self.sat[...] = False
         # rtl: the right shift by δ is a left rotation by p+1-δ
-        return sum(visit_cycles(shift_iterations(self.p + 1 - delta) if self.rtl else 1, self.p)
-                   for delta in deltas)
+        if self.rtl:
+            return sum(visit_cycles(shift_iterations(self.p + 1 - delta), self.p, shift=True) for delta in deltas)
+        return len(deltas) * visit_cycles(1, self.p)
 
     def snapshot(self):
         return self.E.copy(), np.array(self.hv, dtype=object)
@@ -324,7 +327,7 @@ class ExponentGrid(BlockGrid):
 
 def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
                    e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False, events=(),
-                   progress=None):
+                   progress=None, paper_schedule=False):
     """The block-synchronous planner (:func:`~models.harmonic.plan`) with one exponent per block.
 
     Number format: block b's node with stored mantissa v (p+1 bits, the word
@@ -380,7 +383,8 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     exponents in bounds, the end a fixed point of F).
 
     Cycles: the timing model of :func:`~models.harmonic.plan` at word
-    precision p (a visit of K iterations is K*(p+2) + VISIT_OVERHEAD; a check
+    precision p (a visit of K iterations is K*L + VISIT_OVERHEAD, L =
+    iteration_cycles(p); a check
     pass is B visits of K = 1).  A re-pick that changes e_b costs one shift
     visit of K = 1 (one iteration reads the block's words and writes them d
     positions earlier: the write counter's offset; the leading-one positions
@@ -416,4 +420,6 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     re-picked every block and changed nothing; asserted here).
     """
     grid = ExponentGrid(obstacle, goals, block, iters, schedule, headroom, e_max, repick, ceiling, rtl)
-    return run(grid, events=events, trace=trace, progress=progress)
+    grid.res.paper_schedule = bool(paper_schedule)
+    visits, timing = control(grid, paper_schedule)
+    return run(grid, events=events, visits=visits, timing=timing, trace=trace, progress=progress)

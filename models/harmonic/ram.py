@@ -25,19 +25,80 @@ import numpy as np
 
 from .node import one
 
-__all__ = ["counters", "word_bits", "ram_image", "from_ram_image", "convert_mantissa"]
+__all__ = ["READ_LATENCY", "WRITE_LATENCY", "P_MIN", "SHIFT_STEP", "pads", "iteration_cycles", "read_offset",
+           "counters", "strobes", "word_bits", "ram_image", "from_ram_image", "convert_mantissa"]
 
 
-def counters(c, p):
-    """Addresses the Counters unit presents in iteration cycle c (0 .. p+1):
-    ``(cntR, r_cnt, cntW)``.  A synchronous RAM answers one cycle later, so
-    cntR = p+1-c makes the nodes see the flag at c = 0 and value bit k at
-    c = k+1 (LSB first); r_cnt = (c-1) mod (p+2) streams bit p at c = 3 down
-    to bit 0 at c = 1 of the next iteration (MSB first); cntW = (p+4-c) mod
-    (p+2) writes each result bit two bit positions behind the data read."""
-    if not 0 <= c <= p + 1:
-        raise ValueError(f"cycle {c} outside 0 .. p+1 = {p + 1}")
-    return p + 1 - c, (c - 1) % (p + 2), (p + 4 - c) % (p + 2)
+# The cluster's pipeline (hdl/harmonic/cluster.py): the block RAM answers a
+# read two cycles after the address (its output register: REGMODE OUTREG on
+# an ECP5 DP16KD), and a node's write bit is a register, written one cycle
+# after it is computed.  An iteration reads the words the previous one wrote,
+# so a word must be written before it is read again: that holds in p+2
+# cycles from p = 4 on; a smaller p pads its iterations to 6 cycles.
+READ_LATENCY = 2        # cycles from a read address to the data the nodes see
+WRITE_LATENCY = 1       # cycles from a node's result bit to its RAM write
+P_MIN = READ_LATENCY + WRITE_LATENCY + 1    # the least p whose iteration is p+2 cycles
+SHIFT_STEP = READ_LATENCY + WRITE_LATENCY + 1   # rotation per (padded) shift iteration (block exponents)
+
+
+def pads(p, shift=False):
+    """Pad cycles at the start of an iteration at precision ``p``: 0 for
+    p >= P_MIN, else P_MIN - p (a word is written before it is read again);
+    a shift iteration (block exponents) has at least 1: it writes each bit
+    rotated by :data:`SHIFT_STEP` positions, which never overwrites a bit
+    before it is read (a rotation by r lands r - READ_LATENCY cycles after
+    the read of the bit it overwrites, which needs r <= READ_LATENCY +
+    WRITE_LATENCY + 1) and, with one pad, writes the bits that wrap around
+    (top to bottom) before the next iteration reads them (r >=
+    READ_LATENCY + WRITE_LATENCY + 2 - pads): no read and write of one
+    address in one cycle."""
+    return max(P_MIN - p, 1 if shift else 0)
+
+
+def iteration_cycles(p, shift=False):
+    """Cycles of one iteration: p+2 for p >= P_MIN (and no shift)."""
+    return p + 2 + pads(p, shift)
+
+
+def read_offset(x, p, shift=False):
+    """The word offset whose bit the nodes see in cycle x of an iteration
+    (0 .. L-1): S = :func:`pads` pad cycles (they read offset 0, the
+    flag, and ignore it), the flag at x = S, value bit k at x = S+1+k
+    (offset 1 + p - k): LSB first."""
+    S, L = pads(p, shift), iteration_cycles(p, shift)
+    if not 0 <= x < L:
+        raise ValueError(f"cycle {x} outside 0 .. L-1 = {L - 1}")
+    return 0 if x <= S else L - x
+
+
+def counters(x, p, shift=False):
+    """Offsets the Counters unit presents while the nodes are ``READ_LATENCY``
+    cycles before cycle x of an iteration (x = 0 .. L-1, L =
+    :func:`iteration_cycles`): ``(cntR, r_cnt, cntW)``.  cntR is
+    :func:`read_offset` (x): the read port's address, whose data the nodes see
+    two cycles later; r_cnt the same slots MSB first (bit p at x = S+1, 0 in
+    pads and at the flag), for the border's MSB-first reads (block
+    exponents); cntW the write address of the registered result bit, the
+    offset read five cycles earlier: a node's result bit k is computed when
+    it sees bit k+2 (eq. 2's division by 4, two bit positions late), one
+    cycle later it is written (``WRITE_LATENCY``)."""
+    S, L = pads(p, shift), iteration_cycles(p, shift)
+    lag = READ_LATENCY + WRITE_LATENCY + 2
+    return read_offset(x, p, shift), (0 if x <= S else x - S), read_offset((x - lag) % L, p, shift)
+
+
+def strobes(u, p, shift=False):
+    """The node strobes of iteration cycle u (the cycle the nodes see
+    :func:`read_offset` (u)): ``mask`` (u <= S: pads and the flag, the adder's
+    inputs masked), ``z`` (u = 0: the Maximum result latched), ``ph1``
+    (u = 1: result bit p, the adder restarts), ``fl`` (u = 2: the previous
+    iteration's flags), ``ph2`` (u = S+2: the flag written), ``wcyc``
+    (cycle u writes a bit: all but 2 .. S+1)."""
+    S, L = pads(p, shift), iteration_cycles(p, shift)
+    if not 0 <= u < L:
+        raise ValueError(f"cycle {u} outside 0 .. L-1 = {L - 1}")
+    return {"mask": u <= S, "z": u == 0, "ph1": u == 1, "fl": u == 2, "ph2": u == S + 2,
+            "wcyc": not 2 <= u <= S + 1}
 
 
 def word_bits(v, flag, p):

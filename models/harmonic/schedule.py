@@ -13,12 +13,15 @@ The loop (:func:`run`) is the pseudo-code of section 4 as the Control module
 
     p = schedule[0]
     loop
-      sweep: every block b, in the visit order, runs up to I iterations,
-             stopping after the first one in which it is stable (it counts)
+      sweep: every block b (default: every *dirty* block), in the visit
+             order, runs up to I iterations, stopping after the first one
+             in which it is stable (it counts)
       after every pass: apply the dynamic orders due (a clear pass each),
              then sweep again
-      another sweep while the last one changed a block
-      check pass: one check iteration per block, the Maximum flags
+      another sweep while the last one changed a block (default: while a
+             block is dirty)
+      the check: (paper) a check pass, one check iteration per block, the
+             Maximum flags; (default) the flags each block's last visit left
       no local maximum: converged, stop
       the field may rescale at the same p (block exponents' re-pick): a new
              level, sweep again
@@ -52,10 +55,12 @@ grid.apply_due         the dynamic orders due after a pass (a clear pass each)
 order(sweep)           the blocks of a sweep in visit order (raster, the
                        RTL's; plan_explore: serpentine, alternate, goal)
 visits                 which visits a sweep skips and whether another sweep
-                       is needed (None: every block, another sweep while one
-                       changed a block; plan_explore: still-block skipping)
+                       is needed (:class:`StillBlocks`, the default: dirty
+                       bits; :class:`EveryBlock`, the paper's: every block,
+                       another sweep while one changed a block)
 timing                 the Control module's cycle accounting
-                       (:class:`Timing`, the tables below)
+                       (:class:`StillTiming` / :class:`Timing`, the tables
+                       below)
 trace                  None or a list that gets (event, p, exponents,
                        values, cycles) after every visit, re-pick, check,
                        clear pass and precision rise
@@ -63,30 +68,107 @@ progress               None or ``progress(result, p, cycles)`` after every
                        pass (update or check): the commands' progress line
 =====================  =========================================================
 
-Where later work goes: skipping still blocks in plan() and the RTL (issue 19)
-is a ``visits`` policy (:class:`EveryBlock` is the protocol) with its own
-skip cost, plus a :class:`Timing` whose ``update_visit`` drops the
-confirmation iteration and whose ``check_pass`` folds the check into a sweep;
-an exponent width chosen from the map (issue 22) is ExponentGrid's ``e_max``;
+The two schedules the Control module runs are a ``visits`` policy and a
+:class:`Timing` (:func:`control`): the paper's (``paper_schedule=True``:
+:class:`EveryBlock`, :class:`Timing`) and the default, still blocks
+(:class:`StillBlocks`, :class:`StillTiming`).  Where later work goes: an
+exponent width chosen from the map (issue 22) is ExponentGrid's ``e_max``;
 a vectorized fast path replaces ``grid.visit`` (a grid class whose visit
 runs on precomputed views, or batches independent blocks) without touching
 the loop.
 
+The default schedule: still blocks cost nothing (issue 19)
+-----------------------------------------------------------
+Section 4.5.2: "large parts of the environment stay unchanged (still) for
+several iterations while distant blocks slowly propagate the changes".  The
+paper still visits them (one stable iteration each, and here one more: the
+confirmation iteration below) and ends every level with a sweep that
+changes nothing and a check pass.  The default schedule drops all three:
+
+1. **Dirty bits.**  One bit per block (:class:`StillBlocks`): all set at a
+   level's start and after a clear pass; a visit clears its block's bit,
+   sets it again if the visit used up its I iterations without a stable
+   one, and sets the bit of every neighbour block whose facing edge the
+   visit changed (the RTL: an edge node's Stable flag low in an update
+   iteration; the Block ORs them per edge).  A sweep visits the dirty blocks
+   only, in raster order; the next dirty block is chosen in the visit's
+   last cycle, so a skipped block costs no cycle.  The update phase ends
+   when no bit is set: no confirmation sweep.
+2. **No confirmation iteration.**  The flags of iteration i come at cycle 2
+   of iteration i+1, which the clusters have started; when iteration i was
+   stable the Control module stops them right there (the cluster's
+   ``abort``), so a visit that is stable at its i-th iteration costs i
+   iterations, not i+1.
+3. **The check folded in.**  The node compares its word with each
+   neighbour's LSB first, from the same port-A streams its adder reads (the
+   last differing bit decides, as the first does MSB first), so every
+   update iteration brings the Maximum flags of the values it read; the
+   Control module keeps, per block, the flag of the block's last stable
+   iteration, and a level ends with the OR of those B bits: no check pass.
+
+**Why skipping never changes the result** (the fixed point and the
+local-maximum check).  Let F be the floored update on the whole map and
+F_b its part for block b: F_b(x) depends only on block b's words and its
+ring (the facing edges of its four neighbours; with block exponents, their
+exact values, converted: a re-pick keeps the exact values).
+
+* Invariant: between visits, every clean block b is a fixed point of its
+  own update, F_b(x) = x_b.  At a level's start and after a clear pass no
+  block is clean.  A visit that ends with a stable iteration leaves
+  F_b(x) = x_b (that iteration rewrote every word unchanged from the
+  current words and ring) and clears the bit; one that does not leaves the
+  bit set.  For any other clean block c, F_c can change only if its ring
+  changes, i.e. if the visit changed the edge facing c, and then c's bit is
+  set.  A re-pick's shift visit changes block b's units (its ring is read
+  finer): b's bit is set; its neighbours see the same exact values.
+* So when no bit is set, every block is a fixed point against its ring: the
+  whole map is a fixed point of F, as at the end of the paper's confirmation
+  sweep.  Every visit either raises the field (finitely often: values only
+  rise from below and are bounded) or clears a bit and sets none, so every
+  level ends.  From below, any schedule of block updates that stops at a
+  fixed point stops at the least one (hdl/harmonic/README.md, "The block
+  schedule's error bound"), so in fixed point every level ends in the very
+  field the paper's schedule ends in, bit for bit: the same precisions, the
+  same final field; only the cycles differ.
+* The abort (2) is exact: after a stable iteration i, iteration i+1 reads
+  the same words and ring (another block's border words are written only
+  while that block is visited), so everything it writes before it is
+  stopped (its flag bit at cycle 2; iteration i's last two bits were
+  written at cycles 0-1, before) is what is already stored.
+* The folded check (3) is the check pass's: block b's last visit of the
+  level ended with a stable iteration, after which b was not visited again
+  and no facing edge changed (else its bit would be set at the end), so the
+  words and ring that iteration compared are the final field's, and the
+  OR over blocks is the check pass's Cvg.  tb/harmonic/test_model_blocks.py
+  checks all of it: equal fields level by level against the paper's
+  schedule, and each block's flag of its last stable visit against the
+  Maximum of the final field.
+
+Cycles of the default schedule (:class:`StillTiming`): an update visit
+stable at its i-th iteration K = i (else K = I) iterations, K*L +
+VISIT_OVERHEAD (L = iteration_cycles(p)); a skipped block 0; no check pass; clear visits as in the
+paper's (K = 1).  ``check_iterations`` stays 0 and passes (for the dynamic
+orders) are the sweeps.
+
 Timing of the Control module (hdl/harmonic/controller.py), in clock cycles,
-measured on the RTL and asserted by tb/harmonic/test_planner.py.  A block
-visit running K iterations of p+2 cycles takes K*(p+2) + VISIT_OVERHEAD:
+measured on the RTL and asserted by tb/harmonic/test_planner.py.  An
+iteration takes L = :func:`~models.harmonic.ram.iteration_cycles` (p) = p+2
+cycles (p >= 4; 6 below, and a shift iteration of block exponents one
+more); a block visit running K iterations takes K*L + VISIT_OVERHEAD:
 
 ==================  ======================================================
 cycle of a visit    what happens
 ==================  ======================================================
 t                   VSTART: the clusters get ``run`` (start request)
-t+1                 the clusters' lead-in (first addresses presented)
-t+2 .. t+1+K(p+2)   K iterations (update, check or clear)
-+1, +2              cycles 0 and 1 of the stop iteration: the last
-                    iteration's top two bits are written (the write runs
-                    two bit positions behind the read, eq. 2's /4)
-t+4+K(p+2)          the last iteration's Stable / Maximum flags
-t+5+K(p+2)          VEND: next block, pass, precision or end decided
+t+1, t+2            the clusters' lead-in (first addresses presented; the
+                    RAM answers two cycles later: its output register)
+t+3 .. t+2+K*L      K iterations (update, check or clear)
++1 .. +3            cycles 0 .. 2 of the stop iteration: the last
+                    iteration's top two bits are computed and written (the
+                    write runs two bit positions behind the read, eq. 2's
+                    /4, and one cycle behind its computation)
+t+5+K*L             (cycle 2) the last iteration's Stable / Maximum flags
+t+6+K*L             VEND: next block, pass, precision or end decided
 ==================  ======================================================
 
 ==================  ======================================================
@@ -116,27 +198,31 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .node import one
+from .ram import iteration_cycles
 
-__all__ = ["VISIT_OVERHEAD", "RUN_OVERHEAD", "SET_OVERHEAD", "visit_cycles", "Timing", "PlanResult",
-           "EveryBlock", "run"]
+__all__ = ["VISIT_OVERHEAD", "RUN_OVERHEAD", "SET_OVERHEAD", "visit_cycles", "Timing", "StillTiming",
+           "PlanResult", "EveryBlock", "StillBlocks", "control", "run"]
 
-VISIT_OVERHEAD = 6
+VISIT_OVERHEAD = 7
 RUN_OVERHEAD = 0
 SET_OVERHEAD = 0
 
 
-def visit_cycles(k, p):
-    """Cycles of one block visit running ``k`` iterations at precision ``p``."""
-    return k * (p + 2) + VISIT_OVERHEAD
+def visit_cycles(k, p, shift=False):
+    """Cycles of one block visit running ``k`` iterations at precision ``p``
+    (``shift``: a shift visit of block exponents, padded iterations)."""
+    return k * iteration_cycles(p, shift) + VISIT_OVERHEAD
 
 
 class Timing:
-    """The Control module's cycle accounting (the tables above): what
-    :func:`run` adds for the run, each update visit, check pass and clear
-    pass.  A schedule with other costs (issue 19: no confirmation iteration,
-    the check pass folded into a sweep) is a subclass."""
+    """The Control module's cycle accounting of the paper's schedule
+    (``paper_schedule=True``, the tables above): what :func:`run` adds for
+    the run, each update visit, check pass and clear pass.
+    ``folded_check``: False, every level ends with a check pass of B check
+    visits (counted in ``check_iterations`` and as a pass)."""
 
     run = RUN_OVERHEAD
+    folded_check = False
 
     def update_visit(self, i, stable, iters, p):
         """An update visit that counted ``i`` iterations (``stable``: its
@@ -150,7 +236,27 @@ class Timing:
         return SET_OVERHEAD + blocks * visit_cycles(1, p)
 
 
+class StillTiming(Timing):
+    """The default schedule's accounting (still blocks, see "The default
+    schedule" above): an update visit whose i-th iteration was stable costs
+    i iterations (the iteration after it is stopped when its flags come, at
+    its cycle 2: the confirmation iteration is gone), one that used up its I
+    iterations I; no check pass (``folded_check``: the Maximum flags come
+    with every update iteration and the Control module keeps each block's
+    flag from its last stable one); skipped blocks cost nothing (the next
+    dirty block is found in the visit's last cycle)."""
+
+    folded_check = True
+
+    def update_visit(self, i, stable, iters, p):
+        return visit_cycles(i if stable else iters, p)
+
+    def check_pass(self, blocks, p):
+        return 0
+
+
 TIMING = Timing()
+STILL_TIMING = StillTiming()
 
 
 def check_schedule(schedule):
@@ -168,20 +274,24 @@ class PlanResult:
 
     ``h``: values at precision ``p`` (object ints, goal = 2**p); ``const``:
     goals, obstacles and walled-off cells.  ``maxima``: local maxima among
-    the free (non-constant) nodes at the last check pass (0 when converged).
+    the free (non-constant) nodes at the last check (0 when converged).
     ``unreachable``: free cells of the input map no goal reaches; they were
     loaded as constant-0 obstacles.  ``sweeps``: update passes over all
-    blocks; ``block_iterations``: update iterations counted as the pseudo-code
-    counts them (i, the stable one included), summed over block visits;
-    ``check_iterations``: check iterations (one per block per check pass);
+    blocks (a block skipped as still is passed by); ``visits``: update
+    visits; ``skipped``: visits skipped (still blocks; 0 in the paper's
+    schedule); ``block_iterations``: update iterations counted as the
+    pseudo-code counts them (i, the stable one included), summed over block
+    visits; ``check_iterations``: check iterations (one per block per check
+    pass; 0 in the default schedule, whose check is folded into the visits);
     ``node_updates``: block_iterations * n*m (every node of a block is
     updated in an iteration, obstacles and padding included);
     ``clear_passes``: passes that restarted the free nodes from 0 after a
     dynamic order; ``cycles``: the clock cycles the RTL spends from its START
     command to idle (see the timing table of :mod:`models.harmonic.schedule`);
     ``levels``: per precision level, dicts with p, sweeps, block_iterations,
-    maxima (None if the level ended without a check); ``events_applied``:
-    events that were due.
+    skipped, maxima (None if the level ended without a check);
+    ``events_applied``: events that were due; ``paper_schedule``: the run
+    used the paper's schedule (else the default, still blocks).
     """
     h: np.ndarray
     const: np.ndarray
@@ -197,6 +307,9 @@ class PlanResult:
     cycles: int = 0
     levels: list = field(default_factory=list)
     events_applied: int = 0
+    visits: int = 0
+    skipped: int = 0
+    paper_schedule: bool = False
     block: tuple = (1, 1)
     blocks: tuple = (1, 1)
     padded_h: np.ndarray = None
@@ -215,11 +328,11 @@ class PlanResult:
 
 
 class EveryBlock:
-    """The ``visits`` protocol of :func:`run`, as the paper and the RTL
-    schedule it: every block is visited in every sweep, and another sweep
-    follows while the last one changed a block.  A policy that skips blocks
-    overrides these; ``run`` counts its skipped visits in each level's
-    ``skipped`` and charges ``skip_cycles`` for each."""
+    """The ``visits`` protocol of :func:`run`, as the paper schedules it
+    (``paper_schedule=True``): every block is visited in every sweep, and
+    another sweep follows while the last one changed a block.  A policy that
+    skips blocks overrides these; ``run`` counts its skipped visits in each
+    level's ``skipped`` and charges ``skip_cycles`` for each."""
 
     skip_cycles = 0
 
@@ -236,9 +349,77 @@ class EveryBlock:
     def after(self, b, stable, changed):
         """After block ``b``'s visit (``changed``: it changed the block)."""
 
+    def touched(self, b):
+        """Block ``b``'s words were moved after its visit (block exponents:
+        a re-pick's shift visit, which makes its ring finer)."""
+
     def again(self, changed):
         """Another sweep after this one (``changed``: it changed a block)?"""
         return changed
+
+
+# A block's edges (N, E, W, S) and the neighbour block each one faces.
+_EDGES = ((-1, 0), (0, 1), (0, -1), (1, 0))
+
+
+class StillBlocks(EveryBlock):
+    """The default ``visits`` policy: one dirty bit per block (the Control
+    module's ``dirty`` register; see "The default schedule" above).
+
+    Every block is dirty at the start of a level and after a clear pass.  A
+    sweep visits the dirty blocks in its order and passes the others by at
+    no cost.  A visit clears the block's bit, sets it again if the visit
+    used up its I iterations without a stable one, and sets the bit of each
+    neighbour block whose facing edge (the block's top row for the block
+    above, ...) the visit changed: in the RTL, an edge node's Stable flag
+    low in one of the visit's update iterations (values only rise within a
+    visit, so that is "the edge changed"); here, the edge before and after.
+    A re-pick's shift visit (block exponents) sets the block's own bit: its
+    ring is read at a finer scale now, its neighbours' view of it is the
+    same exact value.  The update phase of a level ends when no bit is set.
+    """
+
+    def __init__(self, grid):
+        self.grid = grid
+        self.dirty = dict.fromkeys(grid.blocks, True)
+
+    def reset(self):
+        for b in self.dirty:
+            self.dirty[b] = True
+
+    def skip(self, b):
+        return not self.dirty[b]
+
+    def _edges(self, b):
+        blk = self.grid.block(b)
+        return blk[0], blk[:, -1], blk[:, 0], blk[-1]
+
+    def before(self, b):
+        self.dirty[b] = False
+        self.was = [e.copy() for e in self._edges(b)]
+
+    def after(self, b, stable, changed):
+        if not changed:
+            return
+        self.dirty[b] = not stable
+        for (dr, dc), now, was in zip(_EDGES, self._edges(b), self.was):
+            nb = (b[0] + dr, b[1] + dc)
+            if nb in self.dirty and not (now == was).all():
+                self.dirty[nb] = True
+
+    def touched(self, b):
+        self.dirty[b] = True
+
+    def again(self, changed):
+        return any(self.dirty.values())
+
+
+def control(grid, paper_schedule=False):
+    """The Control module's schedule for ``grid``: (visits policy, timing);
+    the default (still blocks) or the paper's."""
+    if paper_schedule:
+        return EveryBlock(), TIMING
+    return StillBlocks(grid), STILL_TIMING
 
 
 def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None, progress=None):
@@ -246,19 +427,24 @@ def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None, pro
     return its :class:`PlanResult`.
 
     ``events``: dynamic orders ``(s, (r, c), kind)``: passes are numbered
-    0, 1, ... from the start of the run (update and check passes alike); an
-    order with s >= 1 is applied at the end of pass s-1 (the Control module
-    takes a host order at the next pass boundary), s = 0 before the run (a
-    SET command sent while idle: its cycles are not part of the run).
+    0, 1, ... from the start of the run (update and check passes alike; the
+    default schedule has no check pass); an order with s >= 1 is applied at
+    the end of pass s-1 (the Control module takes a host order at the next
+    pass boundary), s = 0 before the run (a SET command sent while idle: its
+    cycles are not part of the run).
     ``order``: ``order(sweep)`` -> the blocks of the level's sweep number
     ``sweep`` in visit order; default ``grid.blocks`` (raster, the RTL's).
     ``visits``: None (every block) or an :class:`EveryBlock` policy; it sees
-    the visits, not what ``grid.after_visit`` does (plan_explore uses one on
-    the fixed-point grid, where that is nothing).
+    the visits, and ``touched`` after a visit that ``grid.after_visit``
+    charged cycles for.  ``timing``: :class:`Timing` (the paper's) or
+    :class:`StillTiming` (:func:`control` pairs them with the policy).
     """
     res, B, iters = grid.res, grid.B, grid.iters
     if order is None:
         order = lambda sweep: grid.blocks      # noqa: E731 - the RTL's raster order
+    if visits is None:
+        visits = EveryBlock()
+    folded = timing.folded_check
     due = grid.orders(events)
     grid.apply_due(due, 0)                     # pass 0: sent while idle, before START
     cycles = timing.run
@@ -270,9 +456,8 @@ def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None, pro
 
     def new_level():
         level = grid.new_level()
-        if visits is not None:
-            level["skipped"] = 0
-            visits.reset()
+        level["skipped"] = 0
+        visits.reset()
         return level
 
     def cleared():
@@ -281,8 +466,7 @@ def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None, pro
         k = grid.apply_due(due, passes)
         if k:
             cycles += k * timing.clear_pass(B, grid.p)
-            if visits is not None:
-                visits.reset()
+            visits.reset()
             note("clear")
         return k > 0
 
@@ -292,41 +476,45 @@ def run(grid, events=(), order=None, visits=None, timing=TIMING, trace=None, pro
     while True:
         changed = False                        # an update pass (a sweep)
         for b in order(level["sweeps"]):
-            if visits is not None:
-                if visits.skip(b):
-                    cycles += visits.skip_cycles
-                    level["skipped"] += 1
-                    continue
-                visits.before(b)
+            if visits.skip(b):
+                cycles += visits.skip_cycles
+                level["skipped"] += 1
+                res.skipped += 1
+                continue
+            visits.before(b)
             cycles += grid.scan_cycles(b)
             i, stable = grid.visit(b)
             res.block_iterations += i
+            res.visits += 1
             level["block_iterations"] += i
             cycles += timing.update_visit(i, stable, iters, grid.p)
             moved = i > 1 or not stable        # the block changed
             changed |= moved
-            if visits is not None:
-                visits.after(b, stable, moved)
+            visits.after(b, stable, moved)
             note("visit")
             extra = grid.after_visit(b, i, stable, level)
             if extra:
                 cycles += extra
                 changed = True
+                visits.touched(b)
                 note("repick")
         res.sweeps += 1
         level["sweeps"] += 1
         passes += 1
         if progress is not None:
             progress(res, grid.p, cycles)
-        if cleared() or (changed if visits is None else visits.again(changed)):
+        if cleared() or visits.again(changed):
             continue
-        maxima, extra = grid.check(level)      # a check pass: nothing written
-        cycles += timing.check_pass(B, grid.p) + extra
-        res.check_iterations += B
+        # The check: a pass of check visits (the paper's), or the Maximum
+        # flags every block's last (stable) visit left (folded: no cycles).
+        maxima, extra = grid.check(level)
         level["maxima"] = maxima
+        if not folded:
+            cycles += timing.check_pass(B, grid.p) + extra
+            res.check_iterations += B
+            passes += 1
         note("check")
-        passes += 1
-        if cleared():
+        if not folded and cleared():
             continue
         if maxima == 0:
             res.converged = True

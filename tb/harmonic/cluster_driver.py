@@ -1,9 +1,10 @@
 """Drive a harmonic Cluster in simulation: host port, border words, iterations.
 
 Used by the cluster regression (tb/harmonic/test_cluster.py).  The driver
-emulates the border nodes around the 3x6 cluster: fixed words stored one bit per address and read, with one
-cycle of RAM latency, at the addresses the cluster presents (cntR for the
-LSB-first streams, r_cnt for the MSB-first ones).
+emulates the border nodes around the 3x6 cluster: fixed words stored one bit
+per address and read, with the cluster's two cycles of RAM latency
+(models.harmonic.ram.READ_LATENCY), at the LSB-first addresses the cluster
+presents (cntR).
 """
 
 from dataclasses import dataclass, field
@@ -12,6 +13,7 @@ import numpy as np
 
 from navcores.hdl.harmonic.cluster import COLS, ROWS
 from navcores.models.harmonic import from_ram_image
+from navcores.models.harmonic.ram import READ_LATENCY
 from tb.harmonic.serial import SerialWord, next_cycle
 
 
@@ -54,7 +56,7 @@ class ClusterDriver:
             "W": [SerialWord(ring[r + 1, 0], True, p) for r in range(ROWS)],
             "E": [SerialWord(ring[r + 1, COLS + 1], True, p) for r in range(ROWS)],
         }
-        for port in ("run", "enable", "Sel", "Sat", "host_we", "p", "clear", "base"):
+        for port in ("run", "enable", "Sel", "Sat", "host_we", "p", "clear", "base", "abort"):
             getattr(dut, port).value = 0
 
     async def host_write(self, words, base=0):
@@ -66,28 +68,31 @@ class ClusterDriver:
         self.dut.host_we.value = 0
 
     async def host_read(self, count):
+        """Words 0 .. count-1, addresses one per cycle (the data comes
+        READ_LATENCY cycles after its address)."""
         words = []
-        for addr in range(count):
-            self.dut.host_addr.value = addr
-            await next_cycle(self.dut)       # read data one cycle after the address
-            words.append(int(self.dut.host_rdata.value))
+        for addr in range(count + READ_LATENCY - 1):
+            if addr < count:
+                self.dut.host_addr.value = addr
+            await next_cycle(self.dut)
+            if addr >= READ_LATENCY - 1:
+                words.append(int(self.dut.host_rdata.value))
         return words
 
-    def _drive_border(self, addr, raddr):
+    def _drive_border(self, addr):
         for side, words in self.border.items():
             h = sum(w.bits[addr] << i for i, w in enumerate(words)) if addr is not None else 0
-            m = sum(w.bits[raddr] << i for i, w in enumerate(words)) if raddr is not None else 0
             getattr(self.dut, f"h_{side}_in").value = h
-            getattr(self.dut, f"m_{side}_in").value = m
 
-    async def iterate(self, decide, on_words=None, on_done=None, max_cycles=10**6):
+    async def iterate(self, decide, on_words=None, on_done=None, max_cycles=10**6, abort=None):
         """Start the cluster at precision p and iterate until it stops.
 
         ``decide(k)`` gives the :class:`Command` of iteration k (a command with
         ``run`` false stops the cluster); ``on_words(k, h, const)`` receives
         the 18 words the cluster read in iteration k, rebuilt from the ``h``
-        bus; ``on_done(k, done)`` the flags of iteration k.  Returns the list
-        of :class:`Done`.
+        bus; ``on_done(k, done)`` the flags of iteration k; ``abort(k,
+        done)`` true: raise ``abort`` with that ``done`` (the cluster must be
+        idle in the next cycle).  Returns the list of :class:`Done`.
         """
         dut, p = self.dut, self.p
         dut.p.value = p
@@ -95,10 +100,11 @@ class ClusterDriver:
         image = [0] * (p + 2)
         commands, dones = [], []
         snapshots = 0
-        addr = raddr = None
+        addrs = [None] * READ_LATENCY           # the read addresses of the last cycles, oldest first
         t0 = None
         for cycle in range(max_cycles):
-            self._drive_border(addr, raddr)
+            addr = addrs[0]
+            self._drive_border(addr)
             busy = bool(dut.busy.value)
             if t0 is None and busy:
                 t0 = cycle - 1                    # the cycle run was seen idle
@@ -121,17 +127,23 @@ class ClusterDriver:
                 if on_done:
                     on_done(len(dones), done)
                 dones.append(done)
+                if abort is not None and abort(len(dones) - 1, done):
+                    dut.abort.value = 1
+                    dut.run.value = 0               # (run high while idle would start it again)
+                    await next_cycle(dut)
+                    dut.abort.value = 0
+                    assert not bool(dut.busy.value), "busy after abort"
+                    return dones
                 if not commands[len(dones)].run:
                     return dones
-            # The h bus carries the words at the address presented last cycle;
-            # offset 1 (value bit p) is the last one an iteration reads.
+            # The h bus carries the words at the address presented READ_LATENCY
+            # cycles ago; offset 1 (value bit p) is the last one an iteration reads.
             if addr is not None:
                 image[addr] = int(dut.h.value)
                 if addr == 1:
                     if on_words:
                         on_words(snapshots, *from_ram_image(image, p, (ROWS, COLS)))
                     snapshots += 1
-            addr = int(dut.cntR.value) if busy else None
-            raddr = int(dut.r_cnt.value) if busy else None
+            addrs = addrs[1:] + [int(dut.cntR.value) if busy else None]
             await next_cycle(dut)
         raise AssertionError(f"p={p}: the cluster did not stop within {max_cycles} cycles")

@@ -6,10 +6,14 @@ the period-2 oscillation that lowering values by a new obstacle can cause),
 with a goal and an obstacle set through Sel/Sat in mid-run and check iterations along the way (one early,
 one after stabilization).  Every iteration the drv rebuilds all 18 stored
 words from the ``h`` bus and compares them with the model; every ``done`` it
-compares the stable flags, after every check iteration the local-maximum
-flags.  Iteration k's flags must come exactly (k+1)(p+2) + 4 cycles after the
-start request (lead-in, then p+2 cycles per iteration).  At the end the RAM
-is read back through the host port and compared with the model's image.
+compares the stable and local-maximum flags (the Maximum compares LSB
+first, so update iterations have it too).  Iteration k's flags must come
+exactly (k+1)L + 5 cycles after the start request (two cycles of lead-in,
+then L = iteration_cycles(p) cycles per iteration: p+2 from p = 4 on, 6 for
+p = 2, 3).  At the end the RAM is read back through the host port and
+compared with the model's image.  ``abort`` at the flags of the first stable
+iteration (the Control module's early stop) leaves the RAM as that iteration
+wrote it, and the cluster idle in the next cycle.
 """
 
 import os
@@ -22,7 +26,7 @@ from cocotb.triggers import ClockCycles
 
 from navcores.hdl.harmonic.cluster import COLS, ROWS
 from navcores.hdl.params import unelaborated
-from navcores.models.harmonic import neighbours, one, ram_image, step
+from navcores.models.harmonic import iteration_cycles, neighbours, one, ram_image, step
 from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
 from tb.harmonic.cluster_driver import ClusterDriver, Command
@@ -31,7 +35,7 @@ from tb.harmonic.serial import next_cycle
 # Parameter sets of the regression: the cocotb side learns its set from the
 # environment the pytest side passes.
 SETS = {
-    "small": ({"depth": 64, "p_max": 62}, "2,8,13,32,62"),
+    "small": ({"depth": 64, "p_max": 62}, "2,3,4,8,13,32,62"),
     "paper": ({"depth": 1024}, "100"),            # the paper's 1Kx18 RAM, p_max 1022
 }
 DEPTH = int(os.environ.get("CLUSTER_DEPTH", "64"))
@@ -105,10 +109,9 @@ class ModelRun:
         assert (done.stable == stable).all(), f"p={p} iteration {k}: stable\n{done.stable}\nmodel\n{stable}"
         assert done.all_stable == stable.all()
         assert done.checked == (not self.commands[k].enable)
-        if done.checked:
-            assert (done.local_max == maximum).all(), f"p={p} iteration {k}: local_max\n{done.local_max}\nmodel\n{maximum}"
-            assert done.any_max == maximum.any()
-        assert done.cycle == (k + 1) * (p + 2) + 4, f"iteration {k} done at cycle {done.cycle}"
+        assert (done.local_max == maximum).all(), f"p={p} iteration {k}: local_max\n{done.local_max}\nmodel\n{maximum}"
+        assert done.any_max == maximum.any()
+        assert done.cycle == (k + 1) * iteration_cycles(p) + 5, f"iteration {k} done at cycle {done.cycle}"
 
 
 @cocotb.test()
@@ -139,14 +142,41 @@ async def _run_and_check(dut, drv, model):
         words.append(k)
 
     dones = await drv.iterate(model.decide, on_words=on_words, on_done=model.check_done,
-                                max_cycles=MAX_ITER * (p + 2))
+                                max_cycles=MAX_ITER * iteration_cycles(p))
     assert model.settled is not None
     assert len(dones) == len(words) == len(model.states) - 1, (len(dones), len(words), len(model.states))
-    assert np.diff([d.cycle for d in dones]).tolist() == [p + 2] * (len(dones) - 1)
+    assert np.diff([d.cycle for d in dones]).tolist() == [iteration_cycles(p)] * (len(dones) - 1)
     await ClockCycles(dut.clk, 2)
     await next_cycle(dut)
     assert not bool(dut.busy.value)
     assert await drv.host_read(p + 2) == ram_image(*model.states[-1], p), "RAM readback after the run"
+
+
+@cocotb.test()
+async def cluster_abort_after_stable(dut):
+    """The early stop without a confirmation iteration: ``abort`` with the
+    flags of the first stable update iteration (the next one has started):
+    the cluster is idle in the next cycle and its RAM holds the stable
+    words; the maxima came with the update iterations."""
+    p = PRECISIONS[-1]
+    rng = random.Random(cocotb.RANDOM_SEED * 31 + p)
+    await start(dut)
+    h, const, ring = _initial(rng, p)
+    drv = ClusterDriver(dut, p, ring)
+    model = ModelRun(p, h, const, ring)
+    await drv.host_write(ram_image(h, const, p))
+    seen_max = set()
+
+    def stop_here(k, done):
+        seen_max.add(done.any_max)
+        return done.all_stable and not done.checked
+
+    dones = await drv.iterate(model.decide, on_done=model.check_done, abort=stop_here,
+                              max_cycles=MAX_ITER * iteration_cycles(p))
+    assert model.outcome == "stable" and len(dones) == model.settled + 1
+    assert await drv.host_read(p + 2) == ram_image(*model.states[model.settled + 1], p), "RAM after abort"
+    assert True in seen_max, "the update iterations must show the starting plateau's maxima"
+    dut._log.info(f"p={p}: aborted after stable iteration {model.settled}, RAM equal")
 
 
 @cocotb.test()
@@ -177,7 +207,7 @@ async def cluster_increasing_precision(dut):
 async def cluster_refuses_bad_precision(dut):
     """p < 2 or p > p_max: no start, p_err raised; a good p starts and clears it."""
     await start(dut)
-    for port in ("enable", "Sel", "Sat", "host_we", "clear", "base"):
+    for port in ("enable", "Sel", "Sat", "host_we", "clear", "base", "abort"):
         getattr(dut, port).value = 0
     too_big = [(P_MAX + 1, False)] if P_MAX + 1 < 1 << P_MAX.bit_length() else []
     for p, ok in [(1, False), (0, False), *too_big, (P_MAX, True), (2, True)]:

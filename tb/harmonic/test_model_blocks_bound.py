@@ -140,8 +140,8 @@ def test_padding_changes_nothing():
 @pytest.mark.parametrize("block,iters", [((3, 6), 2), ((4, 4), 1), ((5, 7), 4)])
 def test_plan_explore_defaults_are_plan(block, iters):
     """plan_explore (the benchmarks' schedule variants) with its defaults is
-    plan() counter for counter; every order, with and without skipping still
-    blocks, ends in the same fixed point (part 2 above)."""
+    plan() counter for counter; every order, with still blocks or the
+    paper's schedule, ends in the same fixed point (part 2 above)."""
     from navcores.models.harmonic import plan_explore
     ob, goals = _random(13, 17, 22, 0.15)
     sched = (8, 16, 24)
@@ -153,9 +153,10 @@ def test_plan_explore_defaults_are_plan(block, iters):
     assert (a.padded_h == b.padded_h).all()
     cycles = set()
     for order in ("raster", "serpentine", "alternate", "goal"):
-        for skip in (False, True):
-            c = plan_explore(ob, goals, block=block, iters=iters, schedule=sched, order=order, skip=skip)
-            assert (c.padded_h == a.padded_h).all() and c.p == a.p, (order, skip)
+        for paper in (False, True):
+            c = plan_explore(ob, goals, block=block, iters=iters, schedule=sched, order=order,
+                             paper_schedule=paper)
+            assert (c.padded_h == a.padded_h).all() and c.p == a.p, (order, paper)
             _, _, stable, _ = step(c.padded_h, c.padded_const, c.p, neighbours(c.padded_h))
             assert stable.all()
             cycles.add(c.cycles)

@@ -2,16 +2,20 @@
 
 The test plays the node's surroundings as a cluster would: the node's own
 word and its four neighbours' words are stored one bit per address and read
-through the Counters' address sequences with one cycle of RAM latency; the
-node's ``w`` output is written back into its own word at ``cntW``, so an error
-compounds into the following iterations.  The neighbours' values are chosen
+through the Counters' address sequences with the cluster's two cycles of RAM
+latency (a bit is sampled when its address is presented, before that cycle's
+write, and reaches the node two cycles later); the node's registered ``w``
+output is written back into its own word at ``cntW``, so an error compounds
+into the following iterations.  An iteration takes L =
+``iteration_cycles(p)`` cycles (padded below p = 4), and the strobes are
+``models.harmonic.strobes``.  The neighbours' values are chosen
 at random for every iteration (held, random, all goals, equal to the node,
 zero; their constant flags at random, which the node must ignore), the node
 is saturated through Sel/Sat in mid-run, and about one iteration in seven is
-a check iteration.  The MSB-first streams come from the words as they were at
-the start of the iteration, as a RAM not being written gives them.  After
-every iteration the node's stored word and its stable / local-max flags are
-compared with ``models.harmonic.step``.
+a check iteration.  After every iteration the node's stored word and its
+stable / local-max flags (the Maximum compares the LSB-first streams, in
+update and check iterations alike) are compared with
+``models.harmonic.step``.
 """
 
 import os
@@ -21,13 +25,13 @@ import cocotb
 import numpy as np
 import pytest
 
-from navcores.models.harmonic import one, step
+from navcores.models.harmonic import counters, iteration_cycles, one, pads, read_offset, step, strobes
 from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
-from tb.harmonic.serial import SerialWord, cnt_w, next_cycle, read_offsets, settle
+from tb.harmonic.serial import SerialWord, next_cycle
 
 DIRS = ("N", "E", "W", "S")
-PRECISIONS = [int(x) for x in os.environ.get("NODE_P", "8,16,32,64").split(",")]
+PRECISIONS = [int(x) for x in os.environ.get("NODE_P", "2,8,16,32,64").split(",")]
 EPISODES = int(os.environ.get("NODE_EPISODES", "4"))
 WINDOWS = int(os.environ.get("NODE_WINDOWS", "24"))
 
@@ -44,20 +48,21 @@ def _next_neighbours(rng, p, own, prev):
     return {d: (value[mode](), rng.random() < 0.5) for d in DIRS}, mode
 
 
-def _drive(dut, own, nbrs, msb_src, window, c, p):
-    """Drive cycle c's inputs."""
-    a, b = read_offsets(c, p)
-    dut.h.value = own.bits[a]
-    dut.hm.value = msb_src["own"][b]
-    for d in DIRS:
-        getattr(dut, f"h_{d}").value = nbrs[d].bits[a]
-        getattr(dut, f"m_{d}").value = msb_src[d][b]
-    dut.ph0.value = int(c == 0)
-    dut.ph1.value = int(c == 1)
-    dut.ph2.value = int(c == 2)
-    dut.enable.value = int(window is not None and window["enable"])
+def _drive(dut, bits, window, u, p):
+    """Drive cycle u's inputs: ``bits`` the (own, N, E, W, S) bits read
+    for this cycle; returns whether the node computes a bit to write."""
+    dut.h.value = bits[0]
+    for d, b in zip(DIRS, bits[1:]):
+        getattr(dut, f"h_{d}").value = b
+    st = strobes(u, p)
+    for name in ("mask", "z", "ph1", "ph2"):
+        getattr(dut, name).value = int(st[name])
+    dut.zero.value = int(st["mask"])                 # no clear iteration here
+    writes = window is not None and window["enable"] and st["wcyc"]
+    dut.enable.value = int(writes)
     dut.Sel.value = int(window is not None and window["sel"])
     dut.Sat.value = window["sat"] if window is not None else 0
+    return writes
 
 
 async def _episode(dut, p, rng, seen):
@@ -69,14 +74,33 @@ async def _episode(dut, p, rng, seen):
     nbrs = {d: SerialWord(v, f, p) for d, (v, f) in nbr_vals.items()}
     sel_at = {rng.randrange(3, WINDOWS // 2): 1,
               rng.randrange(WINDOWS // 2, WINDOWS - 2): rng.randint(0, 1)}
-    msb_src = {"own": list(own.bits), **{d: list(nbrs[d].bits) for d in DIRS}}
     window = None
+    L = iteration_cycles(p)
+    def read(x):                        # the bits at the read offset of slot x
+        a = read_offset(x, p)
+        return a, [own.bits[a], *(nbrs[d].bits[a] for d in DIRS)]
+
+    lead = [read(0)[1], read(1)[1]]     # the bits read for the next two cycles (the lead-in)
+    pending = None                      # the window of the bit on w (computed last cycle)
     for it in range(WINDOWS + 1):
-        for c in range(p + 2):
-            if c == 2:
+        for u in range(L):
+            # The RAM: the address of cycle u+2 is read now, before this
+            # cycle's write (which never hits a bit still to be read).
+            x = (u + 2) % L
+            a, bits = read(x)
+            lead.append(bits)
+            # The registered w: the bit computed last cycle, written now at
+            # cntW; the neighbours' words take their next values likewise.
+            if pending is not None:
+                addr = counters(x, p)[2]
+                assert addr != a or x < pads(p), f"p={p} u={u}: write and read of offset {a} in one cycle"
+                own.bits[addr] = int(dut.w.value)
+                for d in DIRS:
+                    nbrs[d].bits[addr] = pending["next"][d].bits[addr]
+            if u == 2:
                 if window is not None:
                     # Iteration it-1 has written its last bit: check it.  The
-                    # flags are register outputs, valid from the clock edge.
+                    # flags are valid in this cycle.
                     want = window["expect"]
                     got = (own.value(), own.flag(), bool(dut.stable.value), bool(dut.local_max.value))
                     assert got == want, (
@@ -109,16 +133,7 @@ async def _episode(dut, p, rng, seen):
                 seen["sel"] |= sel
                 seen["check"] |= not enable
                 nbr_vals = new_vals
-                msb_src = {"own": list(own.bits), **{d: list(nbrs[d].bits) for d in DIRS}}
-            _drive(dut, own, nbrs, msb_src, window, c, p)
-            if window is not None and window["enable"]:
-                # Port B writes the node's output, two bit positions behind;
-                # the neighbours' words take their next values likewise.
-                await settle()
-                addr = cnt_w(c, p)
-                own.bits[addr] = int(dut.w.value)
-                for d in DIRS:
-                    nbrs[d].bits[addr] = window["next"][d].bits[addr]
+            pending = window if _drive(dut, lead.pop(0), window, u, p) else None
             await next_cycle(dut)
 
 

@@ -256,7 +256,7 @@ def test_manifest_and_lint(name, params, tmp_path):
         payload = next(p for p in man["ports"] if p["name"] == "i_stream__payload")
         assert [(f["lsb"], f["msb"]) for f in payload["fields"]] == [(0, 9), (10, 19)]
     elif name == "harmonic_cluster":
-        assert t["iteration_cycles"] == "p+2"
+        assert t["iteration_cycles"] == "p+2 (p >= 4; max(p, 4)+2 below)"  # models.harmonic.iteration_cycles
     elif name == "dflc_core":             # n = 3: 8 cycles per sample; no back-pressure on o_stream
         assert t["initiation_interval_cycles"] == 8
         assert t["latency_cycles"] == latency(config_for(fll=str(N3_PROD), div="array"))
