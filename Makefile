@@ -24,7 +24,7 @@ all: test
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "Python >= 3.11 is needed ($(PYTHON) is older)"; exit 1; }
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install -q -e '.[ip]'
+	$(BIN)/python -m pip install -q -e '.[ip,dev]'
 	touch $@
 venv: $(STAMP)
 $(FPGA): $(STAMP)

@@ -6,7 +6,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..params import REQUIRED, Param, check
+from ..params import REQUIRED, Param, check, checked_init
 
 __all__ = ["Border", "BorderExponentsSignature", "SIDES"]
 
@@ -179,6 +179,7 @@ class Border(wiring.Component):
               message="e_max={value!r}: must be an integer >= 1"),
     )
 
+    @checked_init
     def __init__(self, n, m, blocks, p_max, exponents=False, e_max=255):
         BR, BC = blocks
         check(self.PARAMS, n=n, m=m, br=BR, bc=BC, p_max=p_max, exponents=exponents, e_max=e_max)

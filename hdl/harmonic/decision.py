@@ -4,7 +4,7 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param, check
+from ..params import Param, check, checked_init
 
 __all__ = ["Decision", "NEIGHBOURHOOD", "neighbourhood_layout"]
 
@@ -82,6 +82,7 @@ class Decision(wiring.Component):
     PARAMS = (Param("p_max", int, lo=2, doc="largest precision",
                     message="precision p_max={value!r} is not supported: p must be at least 2"),)
 
+    @checked_init
     def __init__(self, p_max):
         check(self.PARAMS, p_max=p_max)
         self.p_max = p_max

@@ -7,7 +7,7 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .block import Block
 from .cluster import COLS, ROWS
 from .controller import Controller
@@ -173,6 +173,7 @@ class Planner(wiring.Component):
                    Constraint("headroom <= p_max", lambda p: p["headroom"] <= p["p_max"],
                               "headroom={headroom!r}: leaves no mantissa bit at p_max={p_max}"))
 
+    @checked_init
     def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False, e_max=255,
                  headroom=1, paper_schedule=False):
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=blocks[0], bc=blocks[1], p_max=p_max, depth=depth,

@@ -1,4 +1,3 @@
-# amaranth: UnusedElaboratable=no
 """The Border's block-exponent option against models.harmonic.convert_mantissa.
 
 ``Border(..., exponents=True)`` on 3x3 blocks of 3x6 nodes: random words
