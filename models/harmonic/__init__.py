@@ -47,8 +47,9 @@ nothing of the project outside ``models.harmonic``.
 
 from .decision import TRIANGLES, decision, decision_exponents, steepest_triangle
 from .explore import plan_explore
-from .exponents import E_MAX, REPICK_HEADROOM, SHIFT_STEP, plan_exponents, shift_iterations
-from .grid import pad_to_blocks, reachable
+from .exponents import (E_MAX, REPICK_HEADROOM, SHIFT_STEP, exponent_bound, plan_exponents, precision_estimate,
+                        shift_iterations)
+from .grid import distances, pad_to_blocks, reachable
 from .node import local_max, neighbours, one, relax, step, update
 from .planner import plan
 from .ram import convert_mantissa, counters, from_ram_image, ram_image, word_bits
@@ -63,5 +64,5 @@ __all__ = [
     "ASCENT_MOVES", "ascent_next", "Trajectory", "trajectory", "ascent_reaches",
     "plan_explore",
     "E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "decision_exponents", "plan_exponents",
-    "shift_iterations",
+    "shift_iterations", "exponent_bound", "precision_estimate", "distances",
 ]
