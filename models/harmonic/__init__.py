@@ -45,7 +45,7 @@ are all re-exported here.  Each module states its number format and rounding.  T
 nothing of the project outside ``models.harmonic``.
 """
 
-from .decision import TRIANGLES, decision, decision_exponents, steepest_triangle
+from .decision import TRIANGLES, decision, decision_exponents, decision_paths, decision_step, steepest_triangle
 from .explore import plan_explore
 from .exponents import (E_MAX, REPICK_HEADROOM, SHIFT_STEP, exponent_bound, plan_exponents, precision_estimate,
                         shift_iterations)
@@ -64,5 +64,5 @@ __all__ = [
     "ASCENT_MOVES", "ascent_next", "Trajectory", "trajectory", "ascent_reaches",
     "plan_explore",
     "E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "decision_exponents", "plan_exponents",
-    "shift_iterations", "exponent_bound", "precision_estimate", "distances",
+    "shift_iterations", "exponent_bound", "precision_estimate", "distances", "decision_step", "decision_paths",
 ]

@@ -15,7 +15,7 @@ import numpy as np
 
 from .ram import convert_mantissa
 
-__all__ = ["TRIANGLES", "decision", "steepest_triangle", "decision_exponents"]
+__all__ = ["TRIANGLES", "decision", "steepest_triangle", "decision_exponents", "decision_step", "decision_paths"]
 
 # The four triangles of a node and two consecutive neighbours, in this order
 # (the tie-break: the first of equal slopes wins).
@@ -98,3 +98,59 @@ def decision_exponents(mantissa, exponents, block, p, r, c):
          for d, x in _neighbour_cells(mantissa.shape, r, c).items()}
     t, g = steepest_triangle(int(mantissa[r, c]), v)
     return t, g, e
+
+
+# The Decision's move (decision_step): the triangle's two neighbours by
+# gradient component, (row step, column step).
+_MOVE = {"N": (-1, 0), "S": (1, 0), "W": (0, -1), "E": (0, 1)}
+
+
+def decision_step(mantissa, exponents, block, p, r, c):
+    """The cell the Decision module sends a robot at node (r, c) to (issue
+    22): the steepest triangle's gradient (:func:`decision_exponents`,
+    the RTL's), one step along its larger component (rows: S if g_row > 0,
+    N if < 0; columns: E / W), the row component on a tie; ``None`` where
+    both are 0 or that step would not rise.  The component towards a
+    triangle neighbour is that neighbour's converted value minus the
+    centre's, so a positive one is a strictly higher neighbour (its exact
+    value is at least the converted one); the other sign points away from
+    the triangle, where the plane only extrapolates, and the exact values
+    decide (a step must rise, exactly, so a path never repeats a cell)."""
+    n, m = block
+    t, (g_row, g_col), _ = decision_exponents(mantissa, exponents, block, p, r, c)
+    if g_row == 0 and g_col == 0:
+        return None
+    dr, dc = ((1 if g_row > 0 else -1), 0) if abs(g_row) >= abs(g_col) else (0, (1 if g_col > 0 else -1))
+    rr, cc = r + dr, c + dc
+    if not (0 <= rr < mantissa.shape[0] and 0 <= cc < mantissa.shape[1]):
+        return None
+    # exact comparison on the common scale: v / 2**(p + e)
+    here, e_here = int(mantissa[r, c]), int(exponents[r // n][c // m])
+    there, e_there = int(mantissa[rr, cc]), int(exponents[rr // n][cc // m])
+    top = max(e_here, e_there)
+    if (there << (top - e_there)) <= (here << (top - e_here)):
+        return None
+    return rr, cc
+
+
+def decision_paths(mantissa, exponents, block, p, goals, starts):
+    """Paths by :func:`decision_step` from each of ``starts`` until a goal
+    (``goals``: bool mask of the mantissa's shape) or a stop: a list of
+    (path, reached_goal).  Steps are memoized, so many starts on one
+    field cost one Decision per cell visited."""
+    mantissa = np.asarray(mantissa, dtype=object)
+    memo = {}
+    out = []
+    for start in starts:
+        r, c = (int(x) for x in start)
+        path = [(r, c)]
+        while not goals[r, c]:
+            if (r, c) not in memo:
+                memo[r, c] = decision_step(mantissa, exponents, block, p, r, c)
+            nxt = memo[r, c]
+            if nxt is None:
+                break
+            r, c = nxt
+            path.append(nxt)
+        out.append((path, bool(goals[r, c])))
+    return out
