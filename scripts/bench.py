@@ -540,6 +540,9 @@ def study_sections():
         return out
     text, _ = bench_exponents.comparison()
     out.append(("Harmonic planner: fixed point against block exponents", text))
+    import bench_float
+    text, _ = bench_float.section()
+    out.append((bench_float.TITLE, text))
     return out
 
 
