@@ -44,8 +44,8 @@ word's p; the JSON gains "exponents" (the final e_b per block, BR x BC) and
 exact local maxima of the final field.  --e-max: the largest exponent, the
 Planner's exponent register 0..e_max (default "map": 2 x the longest BFS
 distance to a goal, what the exact field can need, issue 22:
-models.harmonic.exponent_bound; the RTL engines refuse a map that needs
-more than 65535); the summary names the bound, its register width and the
+models.harmonic.exponent_bound, at least 255, the 8-bit default; the RTL
+engines refuse a map that needs more than 65535); the summary names the bound, its register width and the
 blocks that end at it.  The model runs its fast visit (bit for bit the
 reference's, tested).
 
@@ -115,7 +115,7 @@ def add_arguments(parser):
                              "the word length follows the block, not the map")
     parser.add_argument("--e-max", type=e_max_arg, default="map", metavar="N|map",
                         help="with --block-exponents: the largest block exponent (default map: 2 x the "
-                             "longest BFS distance to a goal)")
+                             "longest BFS distance to a goal, at least 255)")
     add_outputs(parser, csv=True, plot_help="plot map, potential (log scale) and trajectories")
 
 
@@ -229,13 +229,13 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
     """The whole command without I/O: returns the JSON-ready dict and the
     field (h at precision p, unpadded map; with block exponents h is on the
     common scale 2**-frac_bits and p is that scale)."""
-    from navcores.models.harmonic import ascent_next, decision_paths, exponent_bound, pad_to_blocks, reachable, trajectory
+    from navcores.models.harmonic import ascent_next, decision_paths, e_max_for, pad_to_blocks, reachable, trajectory
 
     height, width = grid.shape
     padded = pad_to_blocks(grid, block)
     reach = reachable(grid, goals)
     if block_exponents and e_max == "map":
-        e_max = exponent_bound(grid, goals)
+        e_max = e_max_for(grid, goals)
     res = run_engine(engine, grid, goals, block, iters, schedule, block_exponents, progress, e_max)
     h, p = np.asarray(res["h"], dtype=object)[:height, :width], int(res["p"])
     scale = int(res["frac_bits"]) if block_exponents else p
@@ -342,8 +342,8 @@ def run(args):
     bexp = bool(args.block_exponents)
     e_max = args.e_max
     if bexp and e_max == "map":
-        from navcores.models.harmonic import exponent_bound
-        e_max = exponent_bound(grid, goals)
+        from navcores.models.harmonic import e_max_for
+        e_max = e_max_for(grid, goals)
     if args.engine != "model":
         check_rtl(args.engine, grid.shape, block, schedule, bexp, e_max)
 

@@ -100,37 +100,39 @@ def decision_exponents(mantissa, exponents, block, p, r, c):
     return t, g, e
 
 
-# The Decision's move (decision_step): the triangle's two neighbours by
-# gradient component, (row step, column step).
-_MOVE = {"N": (-1, 0), "S": (1, 0), "W": (0, -1), "E": (0, 1)}
+# The Decision's candidate moves, in tie-break order (N, E, W, S, as the ascent's).
+_STEPS = ((-1, 0), (0, 1), (0, -1), (1, 0))
 
 
 def decision_step(mantissa, exponents, block, p, r, c):
     """The cell the Decision module sends a robot at node (r, c) to (issue
-    22): the steepest triangle's gradient (:func:`decision_exponents`,
-    the RTL's), one step along its larger component (rows: S if g_row > 0,
-    N if < 0; columns: E / W), the row component on a tie; ``None`` where
-    both are 0 or that step would not rise.  The component towards a
-    triangle neighbour is that neighbour's converted value minus the
-    centre's, so a positive one is a strictly higher neighbour (its exact
-    value is at least the converted one); the other sign points away from
-    the triangle, where the plane only extrapolates, and the exact values
-    decide (a step must rise, exactly, so a path never repeats a cell)."""
+    22): the steepest triangle's gradient (g_row, g_col)
+    (:func:`decision_exponents`, the RTL's), then the 4-neighbour step
+    closest to it, the one with the largest projection (-g_row N, g_row
+    S, -g_col W, g_col E; ties in N, E, W, S order), among the neighbours
+    whose exact value (v / 2**(p + e_b)) is strictly above the node's:
+    the direction is the hardware's, the cell grid and the rising values
+    a robot's (so a path never repeats a cell, and on a converged field,
+    where every free node has a higher neighbour, it ends on a goal).
+    ``None`` where no neighbour is higher.  Where the Decision's direction
+    is closest to a higher neighbour that is not the highest, the path
+    parts from the exact ascent (:func:`~models.harmonic.trajectory`)."""
     n, m = block
-    t, (g_row, g_col), _ = decision_exponents(mantissa, exponents, block, p, r, c)
-    if g_row == 0 and g_col == 0:
-        return None
-    dr, dc = ((1 if g_row > 0 else -1), 0) if abs(g_row) >= abs(g_col) else (0, (1 if g_col > 0 else -1))
-    rr, cc = r + dr, c + dc
-    if not (0 <= rr < mantissa.shape[0] and 0 <= cc < mantissa.shape[1]):
-        return None
-    # exact comparison on the common scale: v / 2**(p + e)
+    _, (g_row, g_col), _ = decision_exponents(mantissa, exponents, block, p, r, c)
     here, e_here = int(mantissa[r, c]), int(exponents[r // n][c // m])
-    there, e_there = int(mantissa[rr, cc]), int(exponents[rr // n][cc // m])
-    top = max(e_here, e_there)
-    if (there << (top - e_there)) <= (here << (top - e_here)):
-        return None
-    return rr, cc
+    best, best_proj = None, None
+    for dr, dc in _STEPS:
+        rr, cc = r + dr, c + dc
+        if not (0 <= rr < mantissa.shape[0] and 0 <= cc < mantissa.shape[1]):
+            continue
+        there, e_there = int(mantissa[rr, cc]), int(exponents[rr // n][cc // m])
+        top = max(e_here, e_there)            # exact comparison on the finer of the two scales
+        if (there << (top - e_there)) <= (here << (top - e_here)):
+            continue
+        proj = dr * g_row + dc * g_col
+        if best is None or proj > best_proj:
+            best, best_proj = (rr, cc), proj
+    return best
 
 
 def decision_paths(mantissa, exponents, block, p, goals, starts):

@@ -32,7 +32,8 @@ from .node import local_max
 from .ram import convert_mantissa
 from .schedule import control, run, visit_cycles
 
-__all__ = ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "shift_iterations", "exponent_bound", "precision_estimate",
+__all__ = ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "shift_iterations", "exponent_bound", "e_max_for",
+           "precision_estimate",
            "ExponentGrid", "plan_exponents"]
 
 E_MAX = 255             # default exponent bound: an 8-bit exponent register per block
@@ -73,6 +74,13 @@ def exponent_bound(obstacle, goals):
     The exponent register is ``e_max.bit_length()`` bits."""
     d = distances(obstacle, goals)
     return max(1, 2 * int(d.max()))
+
+
+def e_max_for(obstacle, goals):
+    """``e_max="map"``: :func:`exponent_bound`, at least :data:`E_MAX` (the
+    8-bit default: a small map keeps the default registers, and the RTL
+    build they share)."""
+    return max(E_MAX, exponent_bound(obstacle, goals))
 
 
 def precision_estimate(obstacle, goals, block, headroom=REPICK_HEADROOM):
@@ -534,9 +542,9 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     run still ends.  Tested by :mod:`test_model_exponents` (x never falls,
     exponents in bounds, the end a fixed point of F).
 
-    ``e_max``: an int, or ``"map"``: :func:`exponent_bound` of the map
-    (2 * its longest BFS distance to a goal, what the exact field can
-    need); the result's ``e_max`` is the bound used and ``at_e_max``
+    ``e_max``: an int, or ``"map"``: :func:`e_max_for` the map
+    (:func:`exponent_bound`: 2 * its longest BFS distance to a goal, what
+    the exact field can need; at least :data:`E_MAX`); the result's ``e_max`` is the bound used and ``at_e_max``
     counts the blocks that end at it (then the bound may have held the
     field back: a larger one is worth a try).
 
@@ -584,7 +592,7 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     if isinstance(e_max, str):
         if e_max != "map":
             raise ValueError(f"e_max={e_max!r}: an integer >= 0 or 'map'")
-        e_max = exponent_bound(obstacle, goals)
+        e_max = e_max_for(obstacle, goals)
     grid = ExponentGrid(obstacle, goals, block, iters, schedule, headroom, e_max, repick, ceiling, rtl, fast)
     grid.res.paper_schedule = bool(paper_schedule)
     visits, timing = control(grid, paper_schedule)
