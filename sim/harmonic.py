@@ -252,10 +252,10 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
         tr = trajectory(h, goal_mask, s, nxt=nxt).as_dict()
         if block_exponents:
             path, reached = decided[k]
-            ascent = tr["path"]
-            tr.update(path=[list(c) for c in path], reached_goal=reached, ascent=ascent,
-                      differs_at=next((i for i, (a, b) in enumerate(zip(tr["path"], ascent)) if a != b),
-                                      None if len(path) == len(ascent) else min(len(path), len(ascent))))
+            path, ascent = [list(c) for c in path], tr["path"]
+            parted = next((i for i, (a, b) in enumerate(zip(path, ascent)) if a != b),
+                          None if len(path) == len(ascent) else min(len(path), len(ascent)))
+            tr.update(path=path, reached_goal=reached, ascent=ascent, differs_at=parted)
         tr["reachable"] = bool(reach[s])
         if frame is not None:
             tr["path_xy"] = path_xy(frame, tr["path"])
