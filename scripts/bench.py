@@ -36,6 +36,7 @@ the options (a re-run only redoes what changed).
 
     python scripts/bench.py [--md BENCHMARKS.md] [--json build/bench/results.json]
                             [--skip study,simspeed,...]
+    python scripts/bench.py --only study    # redo the study sections of BENCHMARKS.md in place
 """
 
 import argparse
@@ -522,15 +523,7 @@ def study_sections():
     """The harmonic schedule study and the block-exponent comparison, as markdown."""
     import bench_harmonic
     out = []
-    lines = []
-    parts = []
-    for name in ("maze-32-32-2.map", "random-32-32-10.map"):
-        part, summary = bench_harmonic.cycles_section(name)
-        lines += part
-        parts.append(summary)
-    lines += ["Summary: " + "; ".join(
-        f"{s['map']}: the paper's algorithm {s['paper']:.2f}x, best variation {s['best']:.2f}x ({s['best_what']})"
-        for s in parts), ""]
+    lines, _ = bench_harmonic.study_lines()
     bits, _ = bench_harmonic.bits_section()
     out.append(("Harmonic planner: block-synchronous schedule against one block (paper 4.5.2)", "\n".join(lines)))
     out.append(("Harmonic planner: bits of precision against the longest distance (paper 3.2.2)", "\n".join(bits)))
@@ -546,12 +539,40 @@ def study_sections():
     return out
 
 
+def update_study(md):
+    """``--only study``: the study sections of ``md`` replaced by a new run
+    (a section missing from ``md`` is appended before the run time line)."""
+    if not md.exists():
+        log(f"{md} does not exist: run the whole bench first")
+        return 2
+    t0 = time.time()
+    text = md.read_text()
+    for title, body in study_sections():
+        stamp = f"(This section: `scripts/bench.py --only study`, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.)"
+        section = f"## {title}\n\n{body.rstrip()}\n\n{stamp}\n"
+        match = re.search(rf"^## {re.escape(title)}\n.*?(?=^## |^Bench run time|\Z)", text, flags=re.M | re.S)
+        if match:
+            text = text[:match.start()] + section + "\n" + text[match.end():]
+        else:
+            at = text.rfind("\nBench run time")
+            at = len(text) if at < 0 else at + 1
+            text = text[:at] + section + "\n" + text[at:]
+    md.write_text(text)
+    log(f"replaced the study sections of {md} in {time.time() - t0:.0f} s")
+    return 0
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--md", default=str(ROOT / "BENCHMARKS.md"))
     ap.add_argument("--json", default=str(OUT / "results.json"))
     ap.add_argument("--skip", default="", help=f"comma-separated parts to leave out: {','.join(PARTS)}")
+    ap.add_argument("--only", choices=("study",),
+                    help="study: rerun only the harmonic study sections (6 above) and replace them in --md, "
+                         "each with this run's time; the other sections stay as their run wrote them")
     args = ap.parse_args(argv)
+    if args.only:
+        return update_study(Path(args.md))
     skip = {s for s in args.skip.split(",") if s}
     if skip - set(PARTS):
         ap.error(f"--skip: unknown part(s) {sorted(skip - set(PARTS))}; parts: {','.join(PARTS)}")

@@ -3,7 +3,8 @@
 All numbers come from the golden model (models.harmonic: plan, plan_explore),
 whose cycle counts follow the planner RTL's timing table (a block visit of K
 iterations at precision p costs K*(p+2) + VISIT_OVERHEAD cycles, a check pass
-one iteration per block).
+one iteration per block; the default schedule: no confirmation iteration,
+no check pass, still blocks skipped).
 
 1. Paper 4.5.2 (Fig. 5-6): block-synchronous + increasing precision against
    one block at fixed p_max, on the labyrinth maze-32-32-2 and on
@@ -13,8 +14,12 @@ one iteration per block).
    schedule ends in the same fixed point).  The one block needs an array of
    the whole map's size, a block schedule an n x m array, so runs are compared
    by work = cycles x nodes of the array (node-cycles): the time ratio on
-   equal hardware.  Then the schedule choices the paper leaves open: I, block
-   size, precision step, block order, skipping still blocks.
+   equal hardware.  Before (the paper's schedule, Planner(paper_schedule=True))
+   and after (still blocks, the default); the speed-up as a product of
+   factors (padding, per-visit costs, iterations) and per precision level,
+   which says why it stays below 2; then the schedule choices the paper
+   leaves open: I, block size, precision step, block order.  Then every
+   bundled map, before and after.
 2. Paper 3.2.2 (Fig. 3): bits of precision needed (least p whose fixed point
    has no local maximum, p scanned one by one) against the longest distance L
    to the goal, on the bundled maps, corridors and spirals.
@@ -56,13 +61,6 @@ def work(res, block):
     return res.cycles * block[0] * block[1]
 
 
-def ideal(res, block):
-    """Work without the RTL's per-visit costs (confirmation iteration, visit
-    overhead, check passes): counted iterations x (p+2) x block nodes, the
-    paper's own measure of Fig. 5."""
-    return sum(lv["block_iterations"] * (lv["p"] + 2) for lv in res.levels) * block[0] * block[1]
-
-
 def longest_distance(obstacle, goals):
     """Largest 4-connected BFS distance from a goal to a reachable free cell."""
     from collections import deque
@@ -83,41 +81,101 @@ def longest_distance(obstacle, goals):
 
 # --- 1. cycles ---------------------------------------------------------------
 
+def iteration_cycles(res):
+    """Cycles of the counted iterations alone, sum over levels of
+    iterations x (p+2): what remains without the per-visit costs."""
+    return sum(lv["block_iterations"] * (lv["p"] + 2) for lv in res.levels)
+
+
+def factors(res, block, base, whole, map_nodes):
+    """The speed-up over the baseline as a product (the "where the work
+    goes" table): W_base / W = base_costs x padding x visit_costs x
+    iterations, where padding = map nodes / (B x n x m), visit_costs =
+    iteration cycles / cycles (confirmation iterations, VISIT_OVERHEAD,
+    check passes), iterations = the baseline's iteration cycles over the
+    blocked run's per block (its iteration cycles / B), base_costs the
+    baseline's own visit costs (its iteration cycles / its cycles)."""
+    B = res.blocks[0] * res.blocks[1]
+    f = {
+        "base_costs": base.cycles / iteration_cycles(base) if base.cycles else 1.0,
+        "padding": map_nodes / (B * block[0] * block[1]),
+        "visit_costs": iteration_cycles(res) / res.cycles,
+        "iterations": iteration_cycles(base) * B / iteration_cycles(res),
+    }
+    f["product"] = f["padding"] * f["visit_costs"] * f["iterations"] / f["base_costs"]
+    return f
+
+
+def _schedule(step, p_max):
+    sched = list(range(step, p_max + 1, step))
+    if not sched or sched[-1] != p_max:
+        sched.append(p_max)
+    return sched
+
+
 def cycles_section(name):
+    """Section 1 for one bundled map: the runs, where the work goes, the
+    levels, the schedule variations (all on the default schedule, the RTL's,
+    unless said)."""
     obstacle, goals = bundled(name)
     whole = obstacle.shape
+    A = whole[0] * whole[1]
     t0 = time.time()
-    sched16 = tuple(range(16, 513, 16))
-    ref = plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS, schedule=sched16)
+    ref = plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS, schedule=tuple(range(16, 513, 16)))
     p_max = ref.p
+    inc = list(range(16, p_max + 1, 16))
     base = plan(obstacle, goals, block=whole, iters=10**9, schedule=(p_max,))
     assert (base.h == ref.h).all(), "schedules must reach the same field"
-    base_work = work(base, whole)
+    base_wk = work(base, whole)
     rows = []
 
-    def row(label, res, block, extra=""):
-        if extra == "same_p=False":
-            extra = "a finer field than the others"
+    def row(label, res, block, note=""):
+        if res.p == p_max:
+            assert (res.h == ref.h).all(), label
         else:
-            assert (res.h == ref.h).all() and res.p == p_max, label
+            note = (note + "; " if note else "") + f"a finer field than the others (p = {res.p})"
         w = work(res, block)
-        rows.append(f"| {label} | {block[0]}x{block[1]} | {res.p} | {res.sweeps} | {res.block_iterations} | "
-                    f"{res.cycles} | {w / 1e6:.2f} | **{base_wk / w:.2f}** | "
-                    f"{ideal(base, whole) / ideal(res, block):.2f} | {extra} |")
+        rows.append(f"| {label} | {block[0]}x{block[1]} | {res.p} | {res.sweeps} | {res.visits} | {res.skipped} | "
+                    f"{res.block_iterations} | {res.check_iterations} | {res.cycles} | {w / 1e6:.2f} | "
+                    f"**{base_wk / w:.2f}** | {base_wk / (iteration_cycles(res) * block[0] * block[1]):.2f} | "
+                    f"{note} |")
         return base_wk / w
 
-    base_wk = base_work
+    one = dict(block=whole, iters=10**9)
+    blk = dict(block=RTL_BLOCK, iters=RTL_ITERS)
     row("one block, fixed p_max (baseline)", base, whole)
-    inc = list(range(16, p_max + 1, 16))
-    # Without the increasing schedule the planner cannot know p_max in advance:
-    # it would run at the schedule's top, 256, for example.
     row("one block, fixed p = 256 (p_max not known in advance)",
-        plan(obstacle, goals, block=whole, iters=10**9, schedule=(256,)), whole, "same_p=False")
-    row("one block, increasing 16:16", plan(obstacle, goals, block=whole, iters=10**9, schedule=inc), whole)
-    row("RTL blocks, fixed p_max", plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS,
-                                        schedule=(p_max,)), RTL_BLOCK)
-    paper = row("RTL blocks, increasing 16:16 (the paper's algorithm)", ref, RTL_BLOCK,
-                f"I = {RTL_ITERS}")
+        plan(obstacle, goals, schedule=(256,), **one), whole)
+    one_inc = plan(obstacle, goals, schedule=inc, **one)
+    row("one block, increasing 16:16", one_inc, whole)
+    row("6x12, fixed p_max, the paper's schedule", plan(obstacle, goals, schedule=(p_max,), paper_schedule=True,
+                                                        **blk), RTL_BLOCK)
+    row("6x12, fixed p_max, still blocks", plan(obstacle, goals, schedule=(p_max,), **blk), RTL_BLOCK)
+    paper_run = plan(obstacle, goals, schedule=inc, paper_schedule=True, **blk)
+    paper = row("**before**: 6x12, increasing 16:16, the paper's schedule (Planner(paper_schedule=True))",
+                paper_run, RTL_BLOCK, f"I = {RTL_ITERS}")
+    after = row("**after**: 6x12, increasing 16:16, still blocks (the default)", ref, RTL_BLOCK, f"I = {RTL_ITERS}")
+
+    # Where the work goes: the speed-up as a product of factors.
+    fac = []
+    for label, res in (("the paper's schedule", paper_run), ("still blocks (default)", ref)):
+        f = factors(res, RTL_BLOCK, base, whole, A)
+        fac.append(f"| 6x12, I = {RTL_ITERS}, {label} | {f['base_costs']:.3f} | {f['padding']:.2f} | "
+                   f"{f['visit_costs']:.2f} | {f['iterations']:.2f} | {f['product']:.2f} |")
+    f_one = factors(one_inc, whole, base, whole, A)
+    fac.append(f"| one block, increasing 16:16 | {f_one['base_costs']:.3f} | 1.00 | {f_one['visit_costs']:.2f} | "
+               f"{f_one['iterations']:.2f} | {f_one['product']:.2f} |")
+
+    # Levels: iterations the one block and the 6x12 blocks spend at each precision.
+    B = ref.blocks[0] * ref.blocks[1]
+    one_lv = {lv["p"]: lv for lv in one_inc.levels}
+    lv_rows = []
+    for lv, plv in zip(ref.levels, paper_run.levels):
+        o = one_lv.get(lv["p"], {"block_iterations": 0})
+        visits = lv["sweeps"] * B - lv["skipped"]
+        lv_rows.append(f"| {lv['p']} | {o['block_iterations']} | {plv['block_iterations'] / B:.1f} | "
+                       f"{lv['sweeps']} | {visits} | {lv['skipped']} | {lv['block_iterations'] / B:.1f} | "
+                       f"{lv['block_iterations'] / max(visits, 1):.2f} |")
 
     var = []
 
@@ -127,73 +185,126 @@ def cycles_section(name):
         else:       # a finer precision step may stop at a lower p
             note = (note + "; " if note else "") + f"ends at p = {res.p}"
         w = work(res, block)
-        visits = res.sweeps * res.blocks[0] * res.blocks[1] - sum(lv.get("skipped", 0) for lv in res.levels)
+        f = factors(res, block, base, whole, A)
         var.append((base_wk / w, f"| {what} | {res.cycles} | {w / 1e6:.2f} | {base_wk / w:.2f} | "
-                                 f"{res.block_iterations / visits:.2f} | {note} |"))
+                                 f"{f['padding']:.2f} | {f['visit_costs']:.2f} | {f['iterations']:.2f} | "
+                                 f"{res.block_iterations / max(res.visits, 1):.2f} | {res.skipped} | {note} |"))
         return base_wk / w
 
-    # I, on the RTL block
-    for it in (1, 2, 3, 4, 8, 16):
+    for it in (1, 2, 3, 4, 8):
         vrow(f"6x12, I = {it}", plan(obstacle, goals, block=RTL_BLOCK, iters=it, schedule=inc), RTL_BLOCK)
-    # block size (I = 2: the best I of the 6x12 rows on both maps, see the table)
-    for blk in ((3, 6), (4, 4), (8, 8), (16, 16)):
-        vrow(f"{blk[0]}x{blk[1]}, I = 2", plan(obstacle, goals, block=blk, iters=2, schedule=inc), blk)
-    # precision step
-    for step in (8, 32, 64):
-        sched = list(range(step, p_max + 1, step))
-        if not sched or sched[-1] != p_max:
-            sched.append(p_max)
-        vrow(f"6x12, I = 6, step {step}", plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS,
-                                               schedule=sched), RTL_BLOCK)
-    # block order and skipping still blocks
-    for blk, it in ((RTL_BLOCK, RTL_ITERS), ((3, 6), 2), ((4, 4), 2)):
-        for order in ("raster", "serpentine", "alternate", "goal"):
-            for skip in (False, True):
-                if order == "raster" and not skip and blk == RTL_BLOCK:
-                    continue                           # = the paper's row
-                res = plan_explore(obstacle, goals, block=blk, iters=it, schedule=inc, order=order, skip=skip)
-                skipped = sum(lv.get("skipped", 0) for lv in res.levels)
-                vrow(f"{blk[0]}x{blk[1]}, I = {it}, order {order}{', skip still blocks' if skip else ''}",
-                     res, blk, f"{skipped} visits skipped" if skip else "")
-    best = plan_explore(obstacle, goals, block=(4, 4), iters=2, schedule=inc, order="goal", skip=True)
     for step in (8, 32):
-        sched = list(range(step, p_max + 1, step))
-        if not sched or sched[-1] != p_max:
-            sched.append(p_max)
-        vrow(f"4x4, I = 2, order goal, skip, step {step}",
-             plan_explore(obstacle, goals, block=(4, 4), iters=2, schedule=sched, order="goal", skip=True), (4, 4))
-    for it in (1, 3, 4):
-        vrow(f"4x4, I = {it}, order goal, skip",
-             plan_explore(obstacle, goals, block=(4, 4), iters=it, schedule=inc, order="goal", skip=True), (4, 4))
-    vrow("8x8, I = 2, order goal, skip",
-         plan_explore(obstacle, goals, block=(8, 8), iters=2, schedule=inc, order="goal", skip=True), (8, 8))
+        vrow(f"6x12, I = {RTL_ITERS}, step {step}",
+             plan(obstacle, goals, schedule=_schedule(step, p_max), **blk), RTL_BLOCK)
+    for order in ("serpentine", "goal"):
+        vrow(f"6x12, I = 2, order {order}",
+             plan_explore(obstacle, goals, block=RTL_BLOCK, iters=2, schedule=inc, order=order), RTL_BLOCK)
+    # other block sizes the RTL builds (multiples of the 3x6 cluster)
+    for b, its in (((3, 6), (1, 2)), ((6, 6), (2,)), ((9, 12), (2,)), ((12, 12), (2,)), ((12, 24), (2,))):
+        for it in its:
+            vrow(f"{b[0]}x{b[1]}, I = {it}", plan(obstacle, goals, block=b, iters=it, schedule=inc), b)
+    vrow("3x6, I = 1, step 8", plan(obstacle, goals, block=(3, 6), iters=1, schedule=_schedule(8, p_max)), (3, 6))
 
     seconds = time.time() - t0
     L = longest_distance(obstacle, goals)
+    best = max(var)
     lines = [
         f"### {name} (goal {goals[0]}, longest distance L = {L}, p_max = {p_max})",
         "",
-        "| run | block | final p | sweeps | block iterations | cycles | work (M node-cycles) | "
-        "speed-up vs baseline (equal hardware) | speed-up without the per-visit costs | note |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| run | block | final p | sweeps | visits | skipped visits | block iterations | check iterations | "
+        "cycles | work (M node-cycles) | speed-up vs baseline (equal hardware) | "
+        "speed-up without the per-visit costs | note |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
         *rows,
         "",
-        f"At {CLOCK_HZ / 1e6:.0f} MHz the paper's algorithm on the 6x12 array takes "
-        f"{ref.cycles / CLOCK_HZ * 1e3:.2f} ms; the baseline on a {whole[0]}x{whole[1]} array "
-        f"{base.cycles / CLOCK_HZ * 1e3:.3f} ms.",
+        f"At {CLOCK_HZ / 1e6:.0f} MHz the default schedule on the 6x12 array takes "
+        f"{ref.cycles / CLOCK_HZ * 1e3:.2f} ms (the paper's {paper_run.cycles / CLOCK_HZ * 1e3:.2f} ms); "
+        f"the baseline on a {whole[0]}x{whole[1]} array {base.cycles / CLOCK_HZ * 1e3:.3f} ms.",
         "",
-        "Schedule variations (increasing 16:16 unless said; speed-up against the same baseline):",
+        "Where the work goes: speed-up = padding x visit costs x iterations / baseline costs.  *Padding*: "
+        "map nodes over the nodes of the B blocks (the blocked array also updates the padding to whole "
+        "blocks); *visit costs*: iteration cycles (counted iterations x (p+2)) over all cycles (confirmation "
+        "iterations, the 6-cycle visit overhead, check passes); *iterations*: the baseline's iteration "
+        "cycles over the blocked run's per block (its iteration cycles / B), i.e. what block-synchronous "
+        "updates and increasing precision save in iterations; *baseline costs*: the same visit costs of the "
+        "baseline (one visit).",
         "",
-        "| variation | cycles | work (M node-cycles) | speed-up | Î (iterations per block visit, Fig. 6) | note |",
+        "| run | baseline costs | padding | visit costs | iterations | speed-up |",
         "|---|---|---|---|---|---|",
+        *fac,
+        "",
+        f"Per precision level (6x12, I = {RTL_ITERS}): iterations of the one block (increasing 16:16), "
+        "iterations per block of the paper's schedule and of still blocks, and the still-block run's "
+        "sweeps, visits, skipped visits and Î (iterations per visit, Fig. 6):",
+        "",
+        "| p | one block: iterations | paper: iterations / B | still: sweeps | still: visits | "
+        "still: skipped | still: iterations / B | still: Î |",
+        "|---|---|---|---|---|---|---|---|",
+        *lv_rows,
+        "",
+        "Schedule variations (the default schedule, increasing 16:16 unless said; speed-up against the same "
+        "baseline, with its factors):",
+        "",
+        "| variation | cycles | work (M node-cycles) | speed-up | padding | visit costs | iterations | Î | "
+        "skipped visits | note |",
+        "|---|---|---|---|---|---|---|---|---|---|",
         *[text for _, text in var],
         "",
-        f"Best variation: {max(var)[1].split('|')[1].strip()} ({max(var)[0]:.2f}x; "
-        f"the paper's algorithm as the RTL runs it: {paper:.2f}x).  Model time {seconds:.0f} s.",
+        f"Best variation: {best[1].split('|')[1].strip()} ({best[0]:.2f}x; 6x12 at I = {RTL_ITERS}: "
+        f"before {paper:.2f}x, after {after:.2f}x).  Model time {seconds:.0f} s.",
         "",
     ]
-    return lines, {"map": name, "paper": paper, "best": max(var)[0], "best_what": max(var)[1].split('|')[1].strip(),
-                   "skip_4x4": base_wk / work(best, (4, 4))}
+    return lines, {"map": name, "paper": paper, "after": after, "best": best[0],
+                   "best_what": best[1].split('|')[1].strip()}
+
+
+CYCLE_MAPS = ("maze-32-32-2.map", "random-32-32-10.map")
+ALL_MAPS = ("empty-16-16.map", "room-32-32-4.map", "random-32-32-10.map", "maze-32-32-4.map", "maze-32-32-2.map",
+            "room-64-64-8.map", "random-64-64-10.map", "den312d.map")
+
+
+def study_lines():
+    """Section 1 as markdown lines (the two maps, the summary, every bundled
+    map) and the two maps' summaries; scripts/bench.py puts it in BENCHMARKS.md."""
+    lines, summaries = [], []
+    for name in CYCLE_MAPS:
+        part, summary = cycles_section(name)
+        lines += part
+        summaries.append(summary)
+    lines += ["Summary (6x12, I = %d): " % RTL_ITERS + "; ".join(
+        f"{s['map']}: before (the paper's schedule) {s['paper']:.2f}x, after (still blocks) {s['after']:.2f}x, "
+        f"best variation {s['best']:.2f}x ({s['best_what']})" for s in summaries), "",
+        f"Every bundled map, 6x12 blocks, I = {RTL_ITERS}, increasing 16:16 to the map's p_max, against one "
+        "block at fixed p_max (speed-up on equal hardware; padding and the iterations factor of the default "
+        "schedule as above):", ""]
+    lines += maps_section(ALL_MAPS) + [""]
+    return lines, summaries
+
+
+def maps_section(names):
+    """Every bundled map: the baseline against the 6x12 planner at I = RTL_ITERS,
+    the paper's schedule (before) and still blocks (after)."""
+    lines = [
+        "| map | p_max | blocks | baseline cycles | paper's cycles | default cycles | before (paper's) | "
+        "after (default) | padding | iterations factor (default) | model s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name in names:
+        t0 = time.time()
+        obstacle, goals = bundled(name)
+        whole = obstacle.shape
+        ref = plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS, schedule=tuple(range(16, 513, 16)))
+        inc = list(range(16, ref.p + 1, 16))
+        paper = plan(obstacle, goals, block=RTL_BLOCK, iters=RTL_ITERS, schedule=inc, paper_schedule=True)
+        base = plan(obstacle, goals, block=whole, iters=10**9, schedule=(ref.p,))
+        assert (paper.h == ref.h).all() and (base.h == ref.h).all(), name
+        bw = work(base, whole)
+        f = factors(ref, RTL_BLOCK, base, whole, whole[0] * whole[1])
+        lines.append(f"| {name[:-4]} ({whole[0]}x{whole[1]}) | {ref.p} | {ref.blocks[0] * ref.blocks[1]} | "
+                     f"{base.cycles} | {paper.cycles} | {ref.cycles} | {bw / work(paper, RTL_BLOCK):.2f} | "
+                     f"**{bw / work(ref, RTL_BLOCK):.2f}** | {f['padding']:.2f} | {f['iterations']:.2f} | "
+                     f"{time.time() - t0:.0f} |")
+    return lines
 
 
 # --- 2. bits needed ------------------------------------------------------------
@@ -287,15 +398,9 @@ def main():
         "hardware.  Every run below ends in the same field, bit for bit.  The paper claims 2 to 4.",
         "",
     ]
-    summaries = []
-    for name in ("maze-32-32-2.map", "random-32-32-10.map"):
-        part, summary = cycles_section(name)
-        lines += part
-        summaries.append(summary)
-        print("\n".join(part), flush=True)
-    lines += ["Summary: " + "; ".join(
-        f"{s['map']}: the paper's algorithm {s['paper']:.2f}x, best variation {s['best']:.2f}x ({s['best_what']})"
-        for s in summaries), ""]
+    part, summaries = study_lines()
+    lines += part
+    print("\n".join(part), flush=True)
     lines += ["## 2. Bits of precision needed against the longest distance to the goal (paper 3.2.2, Fig. 3)", ""]
     part, _ = bits_section()
     lines += part + [""]

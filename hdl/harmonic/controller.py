@@ -248,6 +248,13 @@ class Controller(wiring.Component):
         self._tail(m, locals())
         return m
 
+    def _count_pass(self, m, mode):
+        """The counters at the end of a pass: a sweep, or a clear pass of a run."""
+        with m.If(mode == Mode.UPDATE):
+            m.d.sync += self.sweeps.eq(self.sweeps + 1)
+        with m.If((mode == Mode.CLEAR) & self.running):
+            m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
+
     def _vend(self, m, v):
         """The end of a visit: next block, pass, level (fixed point, and the
         exponent option's update/check visits)."""
@@ -263,10 +270,7 @@ class Controller(wiring.Component):
             m.d.sync += [br.eq(br + 1), bc.eq(0)]
         with m.Else():                              # the end of a pass
             m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
-            with m.If(mode == Mode.UPDATE):
-                m.d.sync += self.sweeps.eq(self.sweeps + 1)
-            with m.If((mode == Mode.CLEAR) & self.running):
-                m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
+            self._count_pass(m, mode)
             with m.If(pend):
                 latch_order()
                 m.d.sync += mode.eq(Mode.CLEAR)
@@ -369,10 +373,7 @@ class Controller(wiring.Component):
         with m.If(cand != 0):
             self._goto(m, v, cand)
         with m.Else():                                  # the end of a pass
-            with m.If(mode == Mode.UPDATE):
-                m.d.sync += self.sweeps.eq(self.sweeps + 1)
-            with m.If((mode == Mode.CLEAR) & self.running):
-                m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
+            self._count_pass(m, mode)
             with m.If(pend):
                 latch_order()
                 m.d.sync += mode.eq(Mode.CLEAR)

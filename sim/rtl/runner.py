@@ -49,7 +49,7 @@ def seed_from_env(default=12345):
     return random.randrange(1 << 31) if text == "random" else int(text)
 
 
-def run(name, params, sim, test_module, env=None, seed=None, log_file=None, factory=None):
+def run(name, params, sim, test_module, env=None, seed=None, log_file=None, factory=None, build_args=()):
     """Emit ``name`` at ``params``, build it for ``sim`` and run ``test_module``.
 
     ``env`` is passed to the test (its parameters); ``log_file`` takes the
@@ -68,7 +68,8 @@ def run(name, params, sim, test_module, env=None, seed=None, log_file=None, fact
     # Parallel pytest workers (make test runs pytest-xdist) may ask for the same
     # build at once: the first builds it, the others wait and reuse it.
     with _locked(build_dir):
-        return _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir, factory)
+        return _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir, factory,
+                               build_args)
 
 
 @contextlib.contextmanager
@@ -82,7 +83,7 @@ def _locked(build_dir):
             fcntl.flock(lock, fcntl.LOCK_UN)
 
 
-def _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir, factory):
+def _build_and_test(name, params, sim, test_module, env, seed, log_file, module, build_dir, factory, build_args):
     from cocotb_tools.check_results import get_results
     from cocotb_tools.runner import get_runner
 
@@ -96,7 +97,8 @@ def _build_and_test(name, params, sim, test_module, env, seed, log_file, module,
         hdl_toplevel=module,
         build_dir=build_dir,
         timescale=TIMESCALE,
-        build_args=[str(VERILATOR_WAIVERS), *VERILATOR_TOP_ARGS.get(name, [])] if sim == "verilator" else [],
+        build_args=[str(VERILATOR_WAIVERS), *VERILATOR_TOP_ARGS.get(name, []), *build_args]
+        if sim == "verilator" else [],
         waves=waves,
     )
     if seed is None:

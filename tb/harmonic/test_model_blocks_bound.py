@@ -139,7 +139,7 @@ def test_padding_changes_nothing():
 
 @pytest.mark.parametrize("block,iters", [((3, 6), 2), ((4, 4), 1), ((5, 7), 4)])
 def test_plan_explore_defaults_are_plan(block, iters):
-    """plan_explore (the benches' schedule variants) with its defaults is
+    """plan_explore (the benchmarks' schedule variants) with its defaults is
     plan() counter for counter; every order, with still blocks or the
     paper's schedule, ends in the same fixed point (part 2 above)."""
     from navcores.models.harmonic import plan_explore

@@ -1,6 +1,11 @@
 """The whole harmonic Planner RTL against models.harmonic.plan, bit-exact.
 
-One build per parameter set (B = BR x BC blocks of n x m nodes); the cocotb
+One build per parameter set (B = BR x BC blocks of n x m nodes), each on
+Icarus and Verilator: ``b3x6`` (3x3 blocks of one cluster: every border
+kind), ``b6x12`` (2x2 blocks of 6x12 nodes, four clusters each: the seams
+between clusters inside a block; planner_maps only, Verilator at -O0) and
+``b3x6_paper`` (the paper's schedule, ``Planner(paper_schedule=True)``
+against ``plan(..., paper_schedule=True)``; planner_maps only).  The cocotb
 tests drive only the host streams (sim/rtl/planner_driver.py):
 
 * planner_maps: a corridor, a spiral and a random map: LOAD, START, poll
@@ -49,14 +54,25 @@ from tb.harmonic.planner_maps import MAPS, random_map
 SETS = {
     # 3x3 blocks of one cluster: every border kind (B+-1, B+-k, the map edge)
     "b3x6": dict(n=3, m=6, br=3, bc=3, p_max=16, depth=256),
-    # 2x2 blocks of 6x12 nodes (4 clusters each)
+    # 2x2 blocks of 6x12 nodes (4 clusters each: the seams between clusters
+    # inside a block, and B+-1, B+-k, the map edge between blocks)
     "b6x12": dict(n=6, m=12, br=2, bc=2, p_max=12, depth=64),
+    # the paper's schedule (Planner(paper_schedule=True)) on the b3x6 blocks
+    "b3x6_paper": dict(n=3, m=6, br=3, bc=3, p_max=16, depth=256, paper_schedule=1),
 }
 # (map, schedule, I) per parameter set; schedules arithmetic, p <= p_max
 RUNS = {
     "b3x6": [("corridor", (6, 12), 4), ("spiral", (6, 12), 2), ("random", (8, 16), 3)],
     "b6x12": [("corridor", (6, 12), 3), ("spiral", (6, 12), 4), ("random", (4, 8, 12), 2)],
+    "b3x6_paper": [("spiral", (6, 12), 2), ("random", (8, 16), 3)],
 }
+# Sets that run planner_maps only (the Control logic the other tests
+# exercise is the same as b3x6's; these add the cluster seams inside a block
+# and the paper's schedule).
+MAPS_ONLY = ("b6x12", "b3x6_paper")
+# Verilator builds the 6x12 planner's C++ at -O0: g++ -Os took 10+ minutes
+# on the four clusters; the runs are short (12x24 map, p <= 12).
+VERILATOR_ARGS = {"b6x12": ("-CFLAGS", "-O0")}
 PARAMS = json.loads(os.environ.get("PLANNER_PARAMS", json.dumps(SETS["b3x6"])))
 SET_NAME = os.environ.get("PLANNER_SET", "b3x6")
 PAPER = bool(PARAMS.get("paper_schedule", 0))
@@ -127,7 +143,7 @@ async def planner_maps(dut):
         compared += await _directions(drv, res, name, rng, seen)
     dut._log.info(f"DIRECTION: {seen}")
     assert all(seen.values()), f"not exercised: {[k for k, v in seen.items() if not v]}"
-    assert compared > 3 * rows * cols
+    assert compared > len(RUNS[SET_NAME]) * rows * cols
     dut._log.info(_stalled(drv))
 
 
@@ -173,7 +189,7 @@ def _around(h, r, c):
     return v
 
 
-@cocotb.test()
+@cocotb.test(skip=SET_NAME in MAPS_ONLY)
 async def planner_dynamic(dut):
     await start(dut)
     drv = _driver(dut)
@@ -208,7 +224,7 @@ async def planner_dynamic(dut):
     dut._log.info(_stalled(drv))
 
 
-@cocotb.test()
+@cocotb.test(skip=SET_NAME in MAPS_ONLY)
 async def planner_bad_commands(dut):
     await start(dut)
     drv = _driver(dut)
@@ -255,12 +271,9 @@ async def planner_bad_commands(dut):
 @pytest.mark.parametrize("sim", SIMULATORS)
 @pytest.mark.parametrize("name", SETS)
 def test_planner(sim, name):
-    if name == "b6x12" and os.environ.get("HARMONIC_BIG") != "1":
-        # Icarus runs ~200 cycles/s on 72 nodes, Verilator compiles the
-        # 4-cluster design for 10+ minutes: outside the regression budget.
-        pytest.skip("6x12 blocks: set HARMONIC_BIG=1 (minutes of build and run)")
     run("harmonic_planner", SETS[name], sim, "test_planner",
-        env={"PLANNER_PARAMS": json.dumps(SETS[name]), "PLANNER_SET": name})
+        env={"PLANNER_PARAMS": json.dumps(SETS[name]), "PLANNER_SET": name},
+        build_args=VERILATOR_ARGS.get(name, ()))
 
 
 # --- elaboration (no simulation) ---
