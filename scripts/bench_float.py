@@ -23,9 +23,9 @@ Per map:
   (it does not fit the iCE40-HX8K, BENCHMARKS.md "Hardware"; no ECP5 fit
   was run): the column says so.
 
-Starts: every reachable cell on the crops; on the whole map the 10
-scenario starts of the longest bucket and 1,000 random reachable cells
-(seed 0).  The planner runs only on the maps named by --planner (default
+Starts: every reachable cell on the crops; on the whole map the starts
+of the longest bucket's scenarios with the chosen goal (one) and 1,000
+random reachable cells (seed 0).  The planner runs only on the maps named by --planner (default
 the 64 and 128 crops: the 256 crop needs p of about 7,400 bits and about
 9 M block iterations, an hour or more of model time on this machine;
 the table gives precision_estimate's p for the others).
@@ -86,11 +86,20 @@ def _reached(field, goal, starts):
     return int(ascent_reaches(field, [goal], mask).sum())
 
 
+def node_ram_bits(blocks, p, block=BLOCK):
+    """Node RAM bits a planner of ``blocks`` (BR, BC) needs at word
+    precision p: each 3x6 cluster of a block holds B words of p+2 bits
+    (one bit per address, 18 nodes wide: B * (p+2) words of 18 bits)."""
+    clusters = (block[0] // 3) * (block[1] // 6)
+    return clusters * blocks[0] * blocks[1] * (p + 2) * 18
+
+
 def measure(key, obstacle, goal, scenario, run_planner, log=print):
     dist = distances(obstacle, [goal])
     reach = dist >= 0
     starts = _starts(reach, scenario)
-    row = {"key": key, "reachable": int(reach.sum()), "longest": int(dist.max()), "starts": len(starts)}
+    row = {"key": key, "reachable": int(reach.sum()), "longest": int(dist.max()), "starts": len(starts),
+           "shape": obstacle.shape}
     const = obstacle | ~reach
     gmask = np.zeros(obstacle.shape, dtype=bool)
     gmask[goal] = True
@@ -115,6 +124,7 @@ def measure(key, obstacle, goal, scenario, run_planner, log=print):
                progress=lambda r, p, cycles: log(f"  {key}: p = {p}, {r.sweeps} sweeps, {r.block_iterations} "
                                                  f"block iterations, {cycles} cycles") if r.sweeps % 200 == 0 else None)
     row["planner_seconds"] = time.perf_counter() - t0
+    row["ram_mbit"] = node_ram_bits(res.blocks, res.p) / 1e6
     row.update(p1=p1, converged=bool(res.converged), p=res.p, e_lo=int(res.exponents.min()),
                e_hi=int(res.exponents.max()), at_e_max=res.at_e_max, cycles=res.cycles,
                block_iterations=res.block_iterations)
@@ -138,21 +148,23 @@ def section(planner=("64", "128"), log=print):
         rows.append(measure(key, obstacle, goal, scenario, key in planner, log))
     lines = [
         f"maze512-1-0 (corridors 1 wide), cropped from the top-left corner and whole; starts: every reachable "
-        f"cell of a crop, on the whole map the longest bucket's 10 scenario starts and {SAMPLE:,} random reachable "
-        "cells. float64: scipy spsolve of the Dirichlet problem (goal 1, obstacles 0; tb/harmonic/dirichlet.py). "
+        f"cell of a crop, on the whole map the start of the longest bucket's scenario with that goal and "
+        f"{SAMPLE:,} random reachable cells. float64: scipy spsolve of the Dirichlet problem (goal 1, obstacles 0; tb/harmonic/dirichlet.py). "
         "Log-space: red-black Gauss-Seidel on float64 logarithms (Wray et al., IROS 2016; "
         "tb/harmonic/logspace.py), stop when a sweep changes no log by 1e-9. Planner: block exponents as the RTL "
         f"runs them (plan(..., block_exponents=True, rtl=True)), block {BLOCK[0]}x{BLOCK[1]}, I = {ITERS}, "
         "schedule P1:64:P1+1024 from P1 = precision_estimate rounded to 64, e_max = exponent_bound (2 x the "
         "longest distance); ascent: the exact steepest ascent; Decision: the Decision module's paths "
-        "(decision_paths). Hardware time: cycles over the exponent planner's clock on a part it fits: not "
-        "measured (it does not fit the iCE40-HX8K; no ECP5 fit run).",
+        "(decision_paths). Node RAM: the planner's cluster RAMs at that p (4 clusters a 6x12 block, each "
+        "B x (p+2) words of 18 bits; an ECP5-85 has 3.7 Mbit of block RAM). Hardware time: cycles over the "
+        "exponent planner's clock on a part it fits: not measured (no fit of a planner this size was run; the "
+        "2x2-block exponent planner does not fit the iCE40-HX8K).",
         "",
         "| map | reachable cells | longest BFS distance | float64 spsolve: cells at exactly 0 | log-space: time, "
         "sweeps, ascent reaches goal | p the blocks need (estimate; spread) | planner: converged, p, e_b range "
-        "(e_max, register bits) | planner cycles | hardware time | model time | planner ascent / Decision reach "
-        "goal (Decision paths differing) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|",
+        "(e_max, register bits) | planner cycles | node RAM | hardware time | model time | planner ascent / Decision "
+        "reach goal (Decision paths differing) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         share = 100 * r["f64_zero"] / r["reachable"]
@@ -165,11 +177,14 @@ def section(planner=("64", "128"), log=print):
             plan_col = (f"{conv}, p = {r['p']:,}, e_b {r['e_lo']}..{r['e_hi']:,} (e_max {r['e_max']:,}, "
                         f"{r['e_max'].bit_length()} bits" + (f", {r['at_e_max']} blocks at it" if r["at_e_max"] else "")
                         + ")")
-            rest = (f"{r['cycles']:,} | not measured | {r['planner_seconds']:.0f} s | {r['ascent_reached']:,} / "
+            rest = (f"{r['cycles']:,} | {r['ram_mbit']:.1f} Mbit | not measured | {r['planner_seconds']:.0f} s | "
+                    f"{r['ascent_reached']:,} / "
                     f"{r['decision_reached']:,} of {r['starts']:,} ({r['decision_differs']})")
         else:
             plan_col = f"not run (e_max {r['e_max']:,}, {r['e_max'].bit_length()} bits)"
-            rest = "not run | not measured | - | -"
+            blocks = [-(-s // b) for s, b in zip(r["shape"], BLOCK)]
+            rest = (f"not run | about {node_ram_bits(blocks, r['p_estimate']) / 1e6:.0f} Mbit at the estimate | "
+                    "not measured | - | -")
         lines.append(f"| {labels[r['key']]} | {r['reachable']:,} | {r['longest']:,} | {r['f64_zero']:,} ({share:.0f} %; "
                      f"smallest {r['f64_min']:.1e}) | {log_col} | {est} | {plan_col} | {rest} |")
     lines += ["", "One exponent serves a whole block, so a block's word must span the distances inside the block and "
