@@ -33,8 +33,7 @@ from .ram import convert_mantissa
 from .schedule import control, run, visit_cycles
 
 __all__ = ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "shift_iterations", "exponent_bound", "e_max_for",
-           "precision_estimate",
-           "ExponentGrid", "plan_exponents"]
+           "precision_estimate", "ExponentGrid", "plan_exponents"]
 
 E_MAX = 255             # default exponent bound: an 8-bit exponent register per block
 REPICK_HEADROOM = 1     # default h: a re-pick leaves the top h mantissa bits empty
@@ -234,9 +233,10 @@ class ExponentGrid(BlockGrid):
         """Per block, the index arrays of :meth:`_visit_fast` into the flat
         padded field: its free nodes, the constants its free nodes read (its
         own constant nodes, the 0 ring outside the map), per side the ring
-        cells its free nodes read and the whole ring (for the clamp flag),
-        and per direction N, S, W, E where each free node's neighbour sits
-        in the visit's vector [free nodes, constants, converted ring]."""
+        cells its free nodes read, the whole ring (for the clamp flag) and
+        the neighbour block, and per free node where its N, S, W, E
+        neighbours sit in the visit's vector [free nodes, constants,
+        converted ring]."""
         n, m, S = self.n, self.m, self.cols + 2
         const = self.const
         self.gather = {}
@@ -244,7 +244,6 @@ class ExponentGrid(BlockGrid):
             r0, c0 = br * n, bc * m
             cells = [(r, c) for r in range(r0, r0 + n) for c in range(c0, c0 + m) if not const[r, c]]
             slot = {rc: k for k, rc in enumerate(cells)}
-            consts, sides = [], [[] for _ in _SIDES]
             const_slot, side_slot = {}, [{} for _ in _SIDES]
             refs = []                       # per free node, per direction: ("x"|"c"|side, key)
             for r, c in cells:
@@ -273,7 +272,6 @@ class ExponentGrid(BlockGrid):
 
             def where(kind, key):
                 return key if kind == "x" else f + key if kind == "c" else base[kind] + key
-            nbr = np.array([[where(*ref) for ref in row] for row in refs], dtype=np.int64).reshape(f, 4).T
             rings = []
             for k, ring in enumerate(self.rings[br, bc]):
                 if ring is None:
@@ -286,7 +284,8 @@ class ExponentGrid(BlockGrid):
                     cc = c0 - 1 if dc < 0 else c0 + m
                     full = [(r, cc) for r in range(r0, r0 + n)]
                 rings.append((flat(sides[k]), flat(full), ring[1]))
-            self.gather[br, bc] = (flat(cells), flat(consts), rings, [tuple(q) for q in nbr.T.tolist()])
+            quads = [tuple(where(*ref) for ref in row) for row in refs]
+            self.gather[br, bc] = (flat(cells), flat(consts), rings, quads)
 
     def _visit_fast(self, b):
         """:meth:`visit` on the free nodes only, bit for bit (the constant
@@ -294,7 +293,8 @@ class ExponentGrid(BlockGrid):
         vector holds the block's free nodes, then the constants they read,
         then the ring cells they read converted into the block's units
         (:func:`convert_mantissa`; the clamp flag from the whole ring, as
-        the reference's); each Jacobi iteration is four gathers from it."""
+        the reference's), as Python integers; a Jacobi iteration sums each
+        free node's four entries."""
         cells, consts, rings, quads = self.gather[b]
         flat, p, e = self.flat, self.p, int(self.E[b])
         parts = [flat[cells], flat[consts]]
