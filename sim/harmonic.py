@@ -19,9 +19,12 @@ block is padded with obstacles on the bottom and right, which changes
 nothing in the solution (outside the map already reads as an obstacle).
 
 The planner runs the paper's block-synchronous algorithm (section 4
-pseudo-code): up to I iterations per block while the block changes, sweeps
-over all blocks until none changes, then the next precision of the schedule
-while local maxima remain.  Schedule default 16:16:256 (p = 16, 32, ... 256);
+pseudo-code) with still blocks (issue 19, the RTL's default schedule): up to
+I iterations per block while the block changes, sweeps over the blocks that
+may still change (their own nodes or a facing border changed since their
+last stable visit) until none is left, then the next precision of the
+schedule while local maxima remain.  The field is the paper's schedule's
+bit for bit; only the cycles are fewer.  Schedule default 16:16:256 (p = 16, 32, ... 256);
 the RTL engines run arithmetic schedules only (P1:STEP:PMAX), build one
 design per map size and p_max, and simulate slowly (thousands of cycles per
 second): use them on small maps.  Free cells no goal can reach cannot get a
