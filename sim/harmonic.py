@@ -48,15 +48,16 @@ exact local maxima of the final field.  --e-max: the largest exponent, the
 Planner's exponent register 0..e_max (default "map": 2 x the longest BFS
 distance to a goal, what the exact field can need, issue 22:
 models.harmonic.exponent_bound, at least 255, the 8-bit default; the RTL
-engines refuse a map that needs more than 65535); the summary names the bound, its register width and the
-blocks that end at it.  The model runs its fast visit (bit for bit the
-reference's, tested).
+engines refuse a map that needs more than 65535); the summary names the
+bound, its register width and the blocks that end at it.  The model runs
+its fast visit (bit for bit the reference's, tested).
 
 Trajectories: steepest 4-neighbour ascent from each start (ties to the
 first of N, E, W, S) until a goal, on the final field.  With
 --block-exponents the trajectories are the Decision module's instead
-(models.harmonic.decision_step: the RTL's steepest triangle, one step
-along its larger gradient component), the path the hardware gives; each
+(models.harmonic.decision_step: the RTL's steepest triangle's gradient,
+the step closest to it among the higher neighbours), the path the
+hardware gives; each
 is compared with the exact ascent and the summary names where they part
 ("ascent" in the JSON holds the exact ascent's path, "differs_at" the
 first step where they part, or null).
