@@ -59,6 +59,18 @@ MAP = ROOT / "maps" / "maze512-1-0.map"
 SCEN = ROOT / "maps" / "maze512-1-0-longest.scen"
 CROPS = (64, 128, 256)
 SAMPLE = 1000
+# The fit flow's result for the exponent planner (scripts/fit.py harmonic_planner n=6 m=12 br=2 bc=2
+# p_max=254 depth=1024 block_exponents=1 --part LFE5U-85F): its clock gives the hardware time.
+FIT = ROOT / "build" / "fit" / "harmonic_planner_bc2_block_exponents1_br2_depth1024_m12_n6_pmax254--LFE5U-85F.json"
+
+
+def fit_clock():
+    """(MHz, part) of the exponent planner's fit, or None when it was not run or did not fit."""
+    import json
+    if not FIT.exists():
+        return None
+    fit = json.loads(FIT.read_text())
+    return (fit["fmax_mhz"], fit["part"]) if fit.get("fits") and fit.get("fmax_mhz") else None
 
 
 def jobs():
@@ -142,6 +154,7 @@ def measure(key, obstacle, goal, scenario, run_planner, log=print):
 
 def section(planner=("64", "128"), log=print):
     t0 = time.time()
+    clock = fit_clock()
     rows, labels = [], {}
     for key, label, obstacle, goal, scenario in jobs():
         labels[key] = label
@@ -157,8 +170,10 @@ def section(planner=("64", "128"), log=print):
         "longest distance); ascent: the exact steepest ascent; Decision: the Decision module's paths "
         "(decision_paths). Node RAM: the planner's cluster RAMs at that p (4 clusters a 6x12 block, each "
         "B x (p+2) words of 18 bits; an ECP5-85 has 3.7 Mbit of block RAM). Hardware time: cycles over the "
-        "exponent planner's clock on a part it fits: not measured (no fit of a planner this size was run; the "
-        "2x2-block exponent planner does not fit the iCE40-HX8K).",
+        "exponent planner's clock from the fit flow, "
+        + (f"{clock[0]} MHz on the {clock[1]} (scripts/fit.py: the 2x2-block exponent planner, p_max 254, "
+           "e_max 255; the instances that run these jobs, with more blocks and wider exponents, were not placed)"
+           if clock else "not measured (build/fit has no fit of the exponent planner)") + ".",
         "",
         "| map | reachable cells | longest BFS distance | float64 spsolve: cells at exactly 0 | log-space: time, "
         "sweeps, ascent reaches goal | p the blocks need (estimate; spread) | planner: converged, p, e_b range "
@@ -177,7 +192,8 @@ def section(planner=("64", "128"), log=print):
             plan_col = (f"{conv}, p = {r['p']:,}, e_b {r['e_lo']}..{r['e_hi']:,} (e_max {r['e_max']:,}, "
                         f"{r['e_max'].bit_length()} bits" + (f", {r['at_e_max']} blocks at it" if r["at_e_max"] else "")
                         + ")")
-            rest = (f"{r['cycles']:,} | {r['ram_mbit']:.1f} Mbit | not measured | {r['planner_seconds']:.0f} s | "
+            hw = f"{r['cycles'] / (clock[0] * 1e6):.3g} s" if clock else "not measured"
+            rest = (f"{r['cycles']:,} | {r['ram_mbit']:.1f} Mbit | {hw} | {r['planner_seconds']:.0f} s | "
                     f"{r['ascent_reached']:,} / "
                     f"{r['decision_reached']:,} of {r['starts']:,} ({r['decision_differs']})")
         else:
