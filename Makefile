@@ -1,5 +1,6 @@
 # Every target bootstraps what it needs: a .venv with navcores installed in it
-# (editable, with the `ip` extra: FuseSoC for tb/ip; the targets that
+# (editable, with the `ip` extra: FuseSoC for tb/ip, and `dev`: pyflakes for
+# tb/test_pyflakes.py; the targets that
 # synthesize or place and route add the `fpga` extra: yosys and nextpnr from
 # PyPI), and Icarus Verilog / g++ through apt-get when missing and running as
 # root (otherwise a message says what to install).

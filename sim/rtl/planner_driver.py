@@ -15,7 +15,6 @@ command line (``python -m sim harmonic --engine icarus|verilator``).
 """
 
 import json
-import os
 import tempfile
 from pathlib import Path
 
@@ -221,6 +220,3 @@ def exponent_params(params, e_max=E_MAX):
     its exponent registers holding 0 .. ``e_max``."""
     return {**params, "block_exponents": 1, **({"e_max": int(e_max)} if e_max != E_MAX else {})}
 
-
-def job_env():
-    return os.environ.get("PLANNER_JOB"), os.environ.get("PLANNER_RESULT")
