@@ -615,15 +615,14 @@ def study_sections():
     bits, _ = bench_harmonic.bits_section()
     out.append(("Harmonic planner: block-synchronous schedule against one block (paper 4.5.2)", "\n".join(lines)))
     out.append(("Harmonic planner: bits of precision against the longest distance (paper 3.2.2)", "\n".join(bits)))
-    try:
-        import bench_exponents
-    except ImportError:
-        bench_exponents = None
-    if bench_exponents is not None:
-        text, _ = bench_exponents.comparison()
-        out.append(("Harmonic planner: fixed point against block exponents", text))
+    import bench_exponents
+    text, _ = bench_exponents.comparison()
+    out.append(("Harmonic planner: fixed point against block exponents", text))
     import bench_edt_tiled
     out.append((bench_edt_tiled.SECTION, bench_edt_tiled.section(arrays=bench_edt_tiled.BENCH_ARRAYS)))
+    import bench_float
+    text, _ = bench_float.section()
+    out.append((bench_float.TITLE, text))
     return out
 
 

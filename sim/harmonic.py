@@ -2,7 +2,7 @@
 
     python -m sim harmonic MAP (--goal R,C | --goal-xy X,Y) [...] [--start R,C | --start-xy X,Y ...]
         [--block NxM] [--iters I] [--schedule P1,P2,... | P1:STEP:PMAX]
-        [--engine model|icarus|verilator] [--block-exponents]
+        [--engine model|icarus|verilator] [--block-exponents [--e-max N|map]]
         [--cell METRES] [--unknown obstacle|free] [--json OUT] [--csv OUT] [--plot OUT.png]
 
 MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free),
@@ -44,10 +44,23 @@ values, the cycles include the clamp scans and shift visits); the RTL
 engines build Planner(..., block_exponents=True).  "precision" is then the
 word's p; the JSON gains "exponents" (the final e_b per block, BR x BC) and
 "frac_bits" (p + max e_b: the potential's resolution); "maxima" counts the
-exact local maxima of the final field.
+exact local maxima of the final field.  --e-max: the largest exponent, the
+Planner's exponent register 0..e_max (default "map": 2 x the longest BFS
+distance to a goal, what the exact field can need, issue 22:
+models.harmonic.exponent_bound, at least 255, the 8-bit default; the RTL
+engines refuse a map that needs more than 65535); the summary names the
+bound, its register width and the blocks that end at it.  The model runs
+its fast visit (bit for bit the reference's, tested).
 
 Trajectories: steepest 4-neighbour ascent from each start (ties to the
-first of N, E, W, S) until a goal, on the final field.
+first of N, E, W, S) until a goal, on the final field.  With
+--block-exponents the trajectories are the Decision module's instead
+(models.harmonic.decision_step: the RTL's steepest triangle's gradient,
+the step closest to it among the higher neighbours), the path the
+hardware gives; each
+is compared with the exact ascent and the summary names where they part
+("ascent" in the JSON holds the exact ascent's path, "differs_at" the
+first step where they part, or null).
 
 Output: a summary on stdout; --json writes height, width (of MAP, before
 padding), engine, precision, converged, sweeps, block_iterations,
@@ -104,7 +117,15 @@ def add_arguments(parser):
     parser.add_argument("--block-exponents", action="store_true",
                         help="one exponent per block (issue 10, beyond the paper; every engine): "
                              "the word length follows the block, not the map")
+    parser.add_argument("--e-max", type=e_max_arg, default="map", metavar="N|map",
+                        help="with --block-exponents: the largest block exponent (default map: 2 x the "
+                             "longest BFS distance to a goal, at least 255)")
     add_outputs(parser, csv=True, plot_help="plot map, potential (log scale) and trajectories")
+
+
+def e_max_arg(text):
+    """--e-max: "map" or an integer >= 0."""
+    return "map" if text == "map" else integer(0, None)(text)
 
 
 def estimate(grid, goals, engine):
@@ -127,7 +148,7 @@ def estimate(grid, goals, engine):
                                        f"simulated a second on {engine}")
 
 
-def check_rtl(engine, shape, block, schedule, block_exponents):
+def check_rtl(engine, shape, block, schedule, block_exponents, e_max=None):
     """Refuse, before anything runs, what the planner RTL cannot run: a
     schedule that is not arithmetic, blocks that are not whole clusters, a
     map larger than a Planner's declared bounds (hdl/harmonic/planner.py)."""
@@ -137,13 +158,13 @@ def check_rtl(engine, shape, block, schedule, block_exponents):
     try:
         params = planner_params(shape, block, p_max=arithmetic(schedule)[2])
         if block_exponents:
-            params = exponent_params(params)
+            params = exponent_params(params, e_max)
         check(Planner.PARAMS, Planner.CONSTRAINTS, **{**{p.name: p.default for p in Planner.PARAMS}, **params})
     except ValueError as e:
         raise CliError(f"--engine {engine}: {e}") from None
 
 
-def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=False, progress=None):
+def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=False, progress=None, e_max=None):
     """Plan with the model or the RTL; returns a dict with the PlanResult
     fields (h and unreachable on the unpadded map).  With block exponents
     also ``exponents`` (BR x BC) and ``frac_bits`` (h is then on
@@ -156,14 +177,14 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
             # With block exponents every engine runs the planner RTL's variant
             # (rtl=True: converted Maximum, scan and shift-visit cycles), so
             # the model and the RTL engines give the same JSON.
-            opts = {"block_exponents": True, "rtl": True} if block_exponents else {}
+            opts = {"block_exponents": True, "rtl": True, "fast": True, "e_max": e_max} if block_exponents else {}
             r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule), progress=progress,
                      **opts)
         except ValueError as e:
             raise CliError(str(e)) from None
         out = {k: getattr(r, k) for k in keys}
         if block_exponents:
-            out["exponents"], out["frac_bits"] = r.exponents, r.frac_bits
+            out["exponents"], out["frac_bits"], out["mantissa"] = r.exponents, r.frac_bits, r.mantissa
             # exact local maxima of the final field (the RTL engines count the same)
             out["maxima"] = _maxima(obstacle, goals, block, r.padded_h)
         return out
@@ -171,6 +192,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
     with Ticker(f"planner RTL on {engine}") as ticker:
         try:
             out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine, block_exponents=block_exponents,
+                                  **({"e_max": e_max} if block_exponents else {}),
                                   progress=lambda st: ticker.status(f"p = {st.get('p')}, {st.get('sweeps')} sweeps, "
                                                                     f"{st.get('cycles')} cycles"))
         except ValueError as e:
@@ -189,7 +211,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
             for bc in range(E.shape[1]):
                 full[br * n:br * n + n, bc * m:bc * m + m] <<= frac - int(out["p"]) - int(E[br, bc])
         res["h"] = full[:obstacle.shape[0], :obstacle.shape[1]].copy()
-        res["exponents"], res["frac_bits"] = E, frac
+        res["exponents"], res["frac_bits"], res["mantissa"] = E, frac, out["padded_h"]
         res["maxima"] = _maxima(obstacle, goals, block, full)
         return res
     res["maxima"] = _maxima(obstacle, goals, block, out["padded_h"])
@@ -207,25 +229,37 @@ def _maxima(obstacle, goals, block, padded_h):
 
 
 def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_exponents=False, frame=None,
-             progress=None):
+             progress=None, e_max="map"):
     """The whole command without I/O: returns the JSON-ready dict and the
     field (h at precision p, unpadded map; with block exponents h is on the
     common scale 2**-frac_bits and p is that scale)."""
-    from navcores.models.harmonic import ascent_next, pad_to_blocks, reachable, trajectory
+    from navcores.models.harmonic import ascent_next, decision_paths, e_max_for, pad_to_blocks, reachable, trajectory
 
     height, width = grid.shape
     padded = pad_to_blocks(grid, block)
     reach = reachable(grid, goals)
-    res = run_engine(engine, grid, goals, block, iters, schedule, block_exponents, progress)
+    if block_exponents and e_max == "map":
+        e_max = e_max_for(grid, goals)
+    res = run_engine(engine, grid, goals, block, iters, schedule, block_exponents, progress, e_max)
     h, p = np.asarray(res["h"], dtype=object)[:height, :width], int(res["p"])
     scale = int(res["frac_bits"]) if block_exponents else p
     goal_mask = np.zeros(grid.shape, dtype=bool)
     for g in goals:
         goal_mask[g] = True
     nxt = ascent_next(h)
+    if block_exponents:     # the Decision module's paths (the hardware's), on the padded mantissas
+        pad_goal = np.zeros(padded.shape, dtype=bool)
+        pad_goal[:height, :width] = goal_mask
+        decided = decision_paths(res["mantissa"], res["exponents"], block, p, pad_goal, starts)
     trajectories = []
-    for s in starts:
+    for k, s in enumerate(starts):
         tr = trajectory(h, goal_mask, s, nxt=nxt).as_dict()
+        if block_exponents:
+            path, reached = decided[k]
+            path, ascent = [list(c) for c in path], tr["path"]
+            parted = next((i for i, (a, b) in enumerate(zip(path, ascent)) if a != b),
+                          None if len(path) == len(ascent) else min(len(path), len(ascent)))
+            tr.update(path=path, reached_goal=reached, ascent=ascent, differs_at=parted)
         tr["reachable"] = bool(reach[s])
         if frame is not None:
             tr["path_xy"] = path_xy(frame, tr["path"])
@@ -248,6 +282,7 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
     if block_exponents:
         out["exponents"] = [[int(e) for e in row] for row in res["exponents"]]
         out["frac_bits"] = scale
+        out["e_max"] = int(e_max)
     return out, (h, scale)
 
 
@@ -309,8 +344,12 @@ def run(args):
     block = parse_block(args.block)
     schedule = parse_schedule(args.schedule)
     bexp = bool(args.block_exponents)
+    e_max = args.e_max
+    if bexp and e_max == "map":
+        from navcores.models.harmonic import e_max_for
+        e_max = e_max_for(grid, goals)
     if args.engine != "model":
-        check_rtl(args.engine, grid.shape, block, schedule, bexp)
+        check_rtl(args.engine, grid.shape, block, schedule, bexp, e_max)
 
     seconds, basis = estimate(grid, goals, args.engine)
     announce("sim harmonic", seconds, f"planning {grid.shape[0]}x{grid.shape[1]} on the {args.engine}", basis)
@@ -318,7 +357,8 @@ def run(args):
     with Progress(f"harmonic {args.engine}") as bar:
         result, _ = plan_map(grid, goals, starts, block, args.iters, schedule, args.engine, bexp, frame,
                              progress=lambda res, p, cycles: bar.update(
-                                 note=f"p = {p}, {res.sweeps} sweeps, {res.block_iterations} block iterations"))
+                                 note=f"p = {p}, {res.sweeps} sweeps, {res.block_iterations} block iterations"),
+                             e_max=e_max)
     seconds = time.time() - t0
 
     name = Path(args.map).name
@@ -336,19 +376,28 @@ def run(args):
     ]
     if bexp:
         ex = result["exponents"]
-        lines.append(f"block exponents e_b: {min(map(min, ex))}..{max(map(max, ex))} "
-                     f"(fraction bits {result['precision']}..{result['frac_bits']})")
+        top = max(map(max, ex))
+        at = sum(e == result["e_max"] for row in ex for e in row)
+        lines.append(f"block exponents e_b: {min(map(min, ex))}..{top} "
+                     f"(fraction bits {result['precision']}..{result['frac_bits']}); e_max {result['e_max']} "
+                     f"({int(result['e_max']).bit_length()}-bit exponent registers)"
+                     + (f", {at} block(s) at e_max: a larger --e-max may converge" if at else ""))
     if result["unreachable"]:
         lines.append(f"{len(result['unreachable'])} free cell(s) no goal can reach (no gradient there)")
     for tr in result["trajectories"]:
         s = tuple(tr["start"])
+        how = ""
+        if "ascent" in tr:
+            how = (" by the Decision module, the exact ascent's path" if tr["differs_at"] is None else
+                   f" by the Decision module, parting from the exact ascent ({len(tr['ascent']) - 1} steps) "
+                   f"at step {tr['differs_at']}, {tuple(tr['path'][min(tr['differs_at'], len(tr['path']) - 1)])}")
         if tr["reached_goal"]:
-            lines.append(f"start {s}: reaches goal {tuple(tr['path'][-1])} in {len(tr['path']) - 1} steps")
+            lines.append(f"start {s}: reaches goal {tuple(tr['path'][-1])} in {len(tr['path']) - 1} steps{how}")
         elif not tr["reachable"]:
             lines.append(f"start {s}: no goal can reach this cell (walled off): no trajectory")
         else:
             lines.append(f"start {s}: STUCK at {tuple(tr['path'][-1])} after {len(tr['path']) - 1} steps "
-                         "(local maximum: more precision needed)")
+                         f"(local maximum: more precision needed){how}")
     if args.json:
         write_text(args.json, json.dumps(result))
         lines.append(f"wrote {args.json}")

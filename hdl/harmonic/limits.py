@@ -27,6 +27,10 @@ CLUSTERS_WHY = ("elaborating takes about 10 MB and 5 s a cluster (measured): at 
 # The blocks of a map: B * (p_max + 2) <= depth <= 2**20 with p_max >= 2.
 MAX_BLOCKS_SIDE = 1 << 18
 BLOCKS_WHY = "br * bc * (p_max + 2) <= depth <= 2**20 words: at most 2**18 blocks"
-# A 16-bit exponent register per block (the default e_max, 255, is 8 bits).
+# A 16-bit exponent register per block (the default e_max, 255, is 8 bits).  A
+# map needs e_max = 2 x its longest BFS distance to a goal (issue 22,
+# models.harmonic.exponent_bound: the exact field falls by at most 4 a step):
+# 65535 serves paths of 32767 steps; maze512-1-0 needs 10288 (14 bits).
 MAX_E = (1 << 16) - 1
-E_WHY = "a 16-bit exponent register per block: 2**-65535 is far below any potential a host uses"
+E_WHY = ("a 16-bit exponent register per block: a map needs 2 x its longest distance to a goal "
+         "(models.harmonic.exponent_bound), so 65535 serves paths of 32767 steps")

@@ -36,6 +36,8 @@ explore.py        the schedule study (4.5): :func:`plan_explore` with block
                   orders, still blocks or the paper's visits
 exponents.py      block exponents (issue 10): ``ExponentGrid``,
                   :func:`plan_exponents`, :func:`shift_iterations`,
+                  the exponent width a map needs (:func:`exponent_bound`,
+                  :func:`e_max_for`) and the word (:func:`precision_estimate`),
                   :data:`E_MAX`, :data:`REPICK_HEADROOM`, :data:`SHIFT_STEP`
 ================  ==============================================================
 
@@ -46,10 +48,11 @@ are all re-exported here.  Each module states its number format and rounding.  T
 nothing of the project outside ``models.harmonic``.
 """
 
-from .decision import TRIANGLES, decision, decision_exponents, steepest_triangle
+from .decision import TRIANGLES, decision, decision_exponents, decision_paths, decision_step, steepest_triangle
 from .explore import plan_explore
-from .exponents import E_MAX, REPICK_HEADROOM, SHIFT_STEP, plan_exponents, shift_iterations
-from .grid import pad_to_blocks, reachable
+from .exponents import (E_MAX, REPICK_HEADROOM, SHIFT_STEP, e_max_for, exponent_bound, plan_exponents,
+                        precision_estimate, shift_iterations)
+from .grid import distances, pad_to_blocks, reachable
 from .node import local_max, neighbours, one, relax, step, update
 from .planner import plan
 from .ram import (P_MIN, convert_mantissa, counters, from_ram_image, iteration_cycles, pads, ram_image, read_offset,
@@ -66,5 +69,5 @@ __all__ = [
     "ASCENT_MOVES", "ascent_next", "Trajectory", "trajectory", "ascent_reaches",
     "plan_explore",
     "E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "decision_exponents", "plan_exponents",
-    "shift_iterations",
+    "shift_iterations", "exponent_bound", "e_max_for", "precision_estimate", "distances", "decision_step", "decision_paths",
 ]

@@ -15,7 +15,7 @@ import numpy as np
 
 from .ram import convert_mantissa
 
-__all__ = ["TRIANGLES", "decision", "steepest_triangle", "decision_exponents"]
+__all__ = ["TRIANGLES", "decision", "steepest_triangle", "decision_exponents", "decision_step", "decision_paths"]
 
 # The four triangles of a node and two consecutive neighbours, in this order
 # (the tie-break: the first of equal slopes wins).
@@ -98,3 +98,61 @@ def decision_exponents(mantissa, exponents, block, p, r, c):
          for d, x in _neighbour_cells(mantissa.shape, r, c).items()}
     t, g = steepest_triangle(int(mantissa[r, c]), v)
     return t, g, e
+
+
+# The Decision's candidate moves, in tie-break order (N, E, W, S, as the ascent's).
+_STEPS = ((-1, 0), (0, 1), (0, -1), (1, 0))
+
+
+def decision_step(mantissa, exponents, block, p, r, c):
+    """The cell the Decision module sends a robot at node (r, c) to (issue
+    22): the steepest triangle's gradient (g_row, g_col)
+    (:func:`decision_exponents`, the RTL's), then the 4-neighbour step
+    closest to it, the one with the largest projection (-g_row N, g_row
+    S, -g_col W, g_col E; ties in N, E, W, S order), among the neighbours
+    whose exact value (v / 2**(p + e_b)) is strictly above the node's:
+    the direction is the hardware's, the cell grid and the rising values
+    a robot's (so a path never repeats a cell, and on a converged field,
+    where every free node has a higher neighbour, it ends on a goal).
+    ``None`` where no neighbour is higher.  Where the Decision's direction
+    is closest to a higher neighbour that is not the highest, the path
+    parts from the exact ascent (:func:`~models.harmonic.trajectory`)."""
+    n, m = block
+    _, (g_row, g_col), _ = decision_exponents(mantissa, exponents, block, p, r, c)
+    here, e_here = int(mantissa[r, c]), int(exponents[r // n][c // m])
+    best, best_proj = None, None
+    for dr, dc in _STEPS:
+        rr, cc = r + dr, c + dc
+        if not (0 <= rr < mantissa.shape[0] and 0 <= cc < mantissa.shape[1]):
+            continue
+        there, e_there = int(mantissa[rr, cc]), int(exponents[rr // n][cc // m])
+        top = max(e_here, e_there)            # exact comparison on the finer of the two scales
+        if (there << (top - e_there)) <= (here << (top - e_here)):
+            continue
+        proj = dr * g_row + dc * g_col
+        if best is None or proj > best_proj:
+            best, best_proj = (rr, cc), proj
+    return best
+
+
+def decision_paths(mantissa, exponents, block, p, goals, starts):
+    """Paths by :func:`decision_step` from each of ``starts`` until a goal
+    (``goals``: bool mask of the mantissa's shape) or a stop: a list of
+    (path, reached_goal).  Steps are memoized, so many starts on one
+    field cost one Decision per cell visited."""
+    mantissa = np.asarray(mantissa, dtype=object)
+    memo = {}
+    out = []
+    for start in starts:
+        r, c = (int(x) for x in start)
+        path = [(r, c)]
+        while not goals[r, c]:
+            if (r, c) not in memo:
+                memo[r, c] = decision_step(mantissa, exponents, block, p, r, c)
+            nxt = memo[r, c]
+            if nxt is None:
+                break
+            r, c = nxt
+            path.append(nxt)
+        out.append((path, bool(goals[r, c])))
+    return out

@@ -27,12 +27,13 @@ block's mantissas, exact by construction).
 
 import numpy as np
 
-from .grid import BlockGrid
+from .grid import BlockGrid, distances, pad_to_blocks
 from .node import local_max
 from .ram import SHIFT_STEP, convert_mantissa
 from .schedule import control, run, visit_cycles
 
-__all__ = ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "shift_iterations", "ExponentGrid", "plan_exponents"]
+__all__ = ["E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "shift_iterations", "exponent_bound", "e_max_for",
+           "precision_estimate", "ExponentGrid", "plan_exponents"]
 
 E_MAX = 255             # default exponent bound: an 8-bit exponent register per block
 REPICK_HEADROOM = 1     # default h: a re-pick leaves the top h mantissa bits empty
@@ -53,6 +54,68 @@ def shift_iterations(d):
     return max(1, -(-int(d) // SHIFT_STEP))
 
 
+def exponent_bound(obstacle, goals):
+    """The e_max a map needs (issue 22): ``2 * d_max``, d_max the longest
+    BFS distance (4-connected steps) from a reachable cell to its nearest
+    goal; at least 1.
+
+    Why it suffices: the exact potential of a free node is the mean of its
+    four neighbours (eq. 1), so it is at least a quarter of its neighbour
+    one step nearer the goal, and a node d steps from the goal holds at
+    least 4**-d (the goal is 1).  The re-pick raises e_b only while the
+    largest value block b holds or sees, in its units, stays below
+    2**(p+1-h): at the exact field that value is at least 4**-d_max, so
+    e_b <= 2 * d_max - h: the exponent never needs more, whatever p is
+    (p only sets how many bits below a block's top it resolves).  A
+    run's exponents can still reach e_max transiently (a block that first
+    sees one LSB of its neighbour's word re-picks by about p); the cap is
+    part of the rule and keeps every proof of :func:`plan_exponents`.
+    The exponent register is ``e_max.bit_length()`` bits."""
+    d = distances(obstacle, goals)
+    return max(1, 2 * int(d.max()))
+
+
+def e_max_for(obstacle, goals):
+    """``e_max="map"``: :func:`exponent_bound`, at least :data:`E_MAX` (the
+    8-bit default: a small map keeps the default registers, and the RTL
+    build they share)."""
+    return max(E_MAX, exponent_bound(obstacle, goals))
+
+
+def precision_estimate(obstacle, goals, block, headroom=REPICK_HEADROOM):
+    """The word precision p block exponents need on a map (an estimate to
+    choose the schedule, issue 22): ``2 * spread + headroom + 2``, spread
+    the largest difference, over the blocks of ``block``, between the BFS
+    distance of a reachable cell of the block and the smallest distance of
+    a reachable cell the block holds or sees (its nodes and its four border
+    rings).  One exponent serves the whole block, whose top is set by the
+    largest value it holds or sees and whose farthest node is about
+    4**-spread below it (the exact field decays by at most 4 a step, by
+    2 - sqrt(3) ~ 0.27 along a corridor: 1.9 bits a step), so its word
+    needs about 2 bits a step of that spread: in a maze, two corridors of
+    one block can be thousands of steps apart, and then no exponent helps.
+    Returns (p, spread)."""
+    n, m = block
+    d = distances(obstacle, goals).astype(float)
+    d[d < 0] = np.nan
+    padded = np.full(pad_to_blocks(obstacle, block).shape, np.nan)
+    padded[:d.shape[0], :d.shape[1]] = d
+    rows, cols = padded.shape
+    view = np.full((rows + 2, cols + 2), np.nan)
+    view[1:-1, 1:-1] = padded
+    spread = 0
+    with np.errstate(all="ignore"):
+        for r0 in range(0, rows, n):
+            for c0 in range(0, cols, m):
+                own = padded[r0:r0 + n, c0:c0 + m]
+                if np.isnan(own).all():
+                    continue
+                ring = view[r0:r0 + n + 2, c0:c0 + m + 2].copy()
+                ring[0, 0] = ring[0, -1] = ring[-1, 0] = ring[-1, -1] = np.nan   # corners: not seen
+                spread = max(spread, int(np.nanmax(own) - np.nanmin(ring)))
+    return 2 * spread + int(headroom) + 2, spread
+
+
 class ExponentGrid(BlockGrid):
     """The padded map with mantissas (``pad``/``hv``) and one exponent per
     block (``E``): the schedule's hooks for :func:`plan_exponents`.  ``visit``
@@ -61,7 +124,7 @@ class ExponentGrid(BlockGrid):
     blocks; with ``rtl`` the costs of the planner RTL's option."""
 
     def __init__(self, obstacle, goals, block, iters, schedule, headroom=REPICK_HEADROOM, e_max=E_MAX,
-                 repick="visit", ceiling=False, rtl=False):
+                 repick="visit", ceiling=False, rtl=False, fast=False):
         if rtl and (repick != "visit" or ceiling):
             raise ValueError("rtl=True: the RTL re-picks after every visit (repick='visit'), no ceiling")
         if repick not in ("visit", "stable", "check"):
@@ -79,6 +142,10 @@ class ExponentGrid(BlockGrid):
         self.sat = np.zeros((self.BR, self.BC), dtype=bool)
         self.ceiling = np.full((self.BR, self.BC), self.e_max, dtype=np.int64)
         self._block_masks()
+        self.fast = bool(fast)
+        if self.fast:
+            self.visit = self._visit_fast
+            self._gathers()
 
     def _block_masks(self):
         n, m = self.n, self.m
@@ -90,6 +157,7 @@ class ExponentGrid(BlockGrid):
         neighbour's facing row or column, the neighbour block) or None
         outside the map."""
         super()._views()
+        self.flat = self.pad.reshape(-1)        # the fast visit's gathers index it
         n, m, hv = self.n, self.m, self.hv
         self.rings = {}
         for br, bc in self.blocks:
@@ -138,6 +206,8 @@ class ExponentGrid(BlockGrid):
         self.sat[...] = False
         self.ceiling[...] = self.e_max
         self._block_masks()
+        if self.fast:
+            self._gathers()
 
     def visit(self, b):
         """Up to I Jacobi iterations of block ``b`` against its ring
@@ -155,6 +225,97 @@ class ExponentGrid(BlockGrid):
                 break
             loc[1:-1, 1:-1] = new
         self.block(b)[...] = loc[1:-1, 1:-1]
+        return count, stable
+
+    # --- the fast visit (fast=True): the same visit on the free nodes only --
+
+    def _gathers(self):
+        """Per block, the index arrays of :meth:`_visit_fast` into the flat
+        padded field: its free nodes, the constants its free nodes read (its
+        own constant nodes, the 0 ring outside the map), per side the ring
+        cells its free nodes read, the whole ring (for the clamp flag) and
+        the neighbour block, and per free node where its N, S, W, E
+        neighbours sit in the visit's vector [free nodes, constants,
+        converted ring]."""
+        n, m, S = self.n, self.m, self.cols + 2
+        const = self.const
+        self.gather = {}
+        for br, bc in self.blocks:
+            r0, c0 = br * n, bc * m
+            cells = [(r, c) for r in range(r0, r0 + n) for c in range(c0, c0 + m) if not const[r, c]]
+            slot = {rc: k for k, rc in enumerate(cells)}
+            const_slot, side_slot = {}, [{} for _ in _SIDES]
+            refs = []                       # per free node, per direction: ("x"|"c"|side, key)
+            for r, c in cells:
+                row = []
+                for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+                    rr, cc = r + dr, c + dc
+                    inside = r0 <= rr < r0 + n and c0 <= cc < c0 + m
+                    nb = (rr // n if 0 <= rr < self.rows else -1, cc // m if 0 <= cc < self.cols else -1)
+                    if inside and not const[rr, cc]:
+                        row.append(("x", slot[rr, cc]))
+                    elif inside or min(nb) < 0:         # own constant, or outside the map: 0
+                        row.append(("c", const_slot.setdefault((rr, cc), len(const_slot))))
+                    else:
+                        k = next(i for i, ((sr, sc), _) in enumerate(_SIDES)
+                                 if (br + sr, bc + sc) == nb)
+                        row.append((k, side_slot[k].setdefault((rr, cc), len(side_slot[k]))))
+                refs.append(row)
+            consts = sorted(const_slot, key=const_slot.get)
+            sides = [sorted(d, key=d.get) for d in side_slot]
+            f, base = len(cells), [len(cells) + len(consts)]
+            for k in range(len(_SIDES) - 1):
+                base.append(base[-1] + len(sides[k]))
+
+            def flat(rcs):
+                return np.array([(r + 1) * S + c + 1 for r, c in rcs], dtype=np.int64)
+
+            def where(kind, key):
+                return key if kind == "x" else f + key if kind == "c" else base[kind] + key
+            rings = []
+            for k, ring in enumerate(self.rings[br, bc]):
+                if ring is None:
+                    continue
+                (dr, dc), _ = _SIDES[k]
+                if dr:
+                    rr = r0 - 1 if dr < 0 else r0 + n
+                    full = [(rr, c) for c in range(c0, c0 + m)]
+                else:
+                    cc = c0 - 1 if dc < 0 else c0 + m
+                    full = [(r, cc) for r in range(r0, r0 + n)]
+                rings.append((flat(sides[k]), flat(full), ring[1]))
+            quads = [tuple(where(*ref) for ref in row) for row in refs]
+            self.gather[br, bc] = (flat(cells), flat(consts), rings, quads)
+
+    def _visit_fast(self, b):
+        """:meth:`visit` on the free nodes only, bit for bit (the constant
+        nodes keep their values there anyway; tested against it): one
+        vector holds the block's free nodes, then the constants they read,
+        then the ring cells they read converted into the block's units
+        (:func:`convert_mantissa`; the clamp flag from the whole ring, as
+        the reference's), as Python integers; a Jacobi iteration sums each
+        free node's four entries."""
+        cells, consts, rings, quads = self.gather[b]
+        flat, p, e = self.flat, self.p, int(self.E[b])
+        parts = [flat[cells], flat[consts]]
+        for seen, full, nb in rings:
+            s = e - int(self.E[nb])
+            vals = flat[seen]
+            if s > 0:
+                lim = ((1 << (p + 1)) - 1) >> s if s <= p + 1 else 0
+                self.sat[b] |= bool(flat[full].max() > lim)
+            parts.append(vals if s == 0 else convert_mantissa(vals, s, p)[0])
+        vec = np.concatenate(parts).tolist()    # Python ints: faster than object arrays
+        f = len(cells)
+        stable, count = False, self.iters
+        for i in range(1, self.iters + 1):
+            new = [(vec[a] + vec[b] + vec[c] + vec[d]) >> 2 for a, b, c, d in quads]
+            if new == vec[:f]:
+                stable, count = True, i
+                break
+            vec[:f] = new
+        if f:
+            flat[cells] = vec[:f] if flat.dtype == object else np.array(vec[:f], dtype=flat.dtype)
         return count, stable
 
     def scan_cycles(self, b):
@@ -241,6 +402,8 @@ class ExponentGrid(BlockGrid):
         out.mantissa = np.array(self.hv, dtype=object)
         out.exponents = self.E.copy()
         out.frac_bits = self.frac_bits()
+        out.e_max = self.e_max
+        out.at_e_max = int((self.E == self.e_max).sum())
         out.padded_h = self.common()
         out.h = out.padded_h[:self.H, :self.W].copy()
         return out
@@ -327,7 +490,7 @@ class ExponentGrid(BlockGrid):
 
 def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), headroom=REPICK_HEADROOM,
                    e_max=E_MAX, repick="visit", ceiling=False, trace=None, rtl=False, events=(),
-                   progress=None, paper_schedule=False):
+                   progress=None, paper_schedule=False, fast=False):
     """The block-synchronous planner (:func:`~models.harmonic.plan`) with one exponent per block.
 
     Number format: block b's node with stored mantissa v (p+1 bits, the word
@@ -382,6 +545,17 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     run still ends.  Tested by :mod:`test_model_exponents` (x never falls,
     exponents in bounds, the end a fixed point of F).
 
+    ``e_max``: an int, or ``"map"``: :func:`e_max_for` the map
+    (:func:`exponent_bound`: 2 * its longest BFS distance to a goal, what
+    the exact field can need; at least :data:`E_MAX`); the result's ``e_max`` is the bound used and ``at_e_max``
+    counts the blocks that end at it (then the bound may have held the
+    field back: a larger one is worth a try).
+
+    ``fast=True``: the block visit on the free nodes only
+    (:meth:`ExponentGrid._visit_fast`), the same field, exponents and
+    cycles as the reference visit (tested), several times faster on mazes
+    and at large p; no ``trace`` difference either.
+
     Cycles: the timing model of :func:`~models.harmonic.plan` at word
     precision p (a visit of K iterations is K*L + VISIT_OVERHEAD, L =
     iteration_cycles(p); a check
@@ -419,7 +593,11 @@ def plan_exponents(obstacle, goals, block=(6, 12), iters=6, schedule=(16, 32), h
     skipped (with ``repick="visit"`` it never moves: the sweep before it
     re-picked every block and changed nothing; asserted here).
     """
-    grid = ExponentGrid(obstacle, goals, block, iters, schedule, headroom, e_max, repick, ceiling, rtl)
+    if isinstance(e_max, str):
+        if e_max != "map":
+            raise ValueError(f"e_max={e_max!r}: an integer >= 0 or 'map'")
+        e_max = e_max_for(obstacle, goals)
+    grid = ExponentGrid(obstacle, goals, block, iters, schedule, headroom, e_max, repick, ceiling, rtl, fast)
     grid.res.paper_schedule = bool(paper_schedule)
     visits, timing = control(grid, paper_schedule)
     return run(grid, events=events, visits=visits, timing=timing, trace=trace, progress=progress)

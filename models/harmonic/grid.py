@@ -28,7 +28,7 @@ import numpy as np
 from .node import local_max, one
 from .schedule import PlanResult, check_schedule
 
-__all__ = ["pad_to_blocks", "reachable", "BlockGrid"]
+__all__ = ["pad_to_blocks", "distances", "reachable", "BlockGrid"]
 
 _INT64_P_MAX = 60       # 4 * 2**60 < 2**63: int64 arithmetic is exact up to here
 
@@ -74,22 +74,31 @@ def goal_mask(goals, shape):
     return mask
 
 
-def reachable(obstacle, goals):
-    """Free cells 4-connected to a goal (goals included): a bool mask.
+def distances(obstacle, goals):
+    """BFS distance (4-connected steps) of every free cell to its nearest
+    goal, -1 where no goal reaches (obstacles included): an int array.
 
     ``goals``: a bool mask or a list of (row, col)."""
     free = ~np.asarray(obstacle, dtype=bool)
     goal = goal_mask(goals, free.shape) & free
-    seen = goal.copy()
+    dist = np.where(goal, 0, -1)
     queue = deque(map(tuple, np.argwhere(goal)))
     rows, cols = free.shape
     while queue:
         r, c = queue.popleft()
+        d = dist[r, c] + 1
         for rr, cc in ((r - 1, c), (r, c + 1), (r, c - 1), (r + 1, c)):
-            if 0 <= rr < rows and 0 <= cc < cols and free[rr, cc] and not seen[rr, cc]:
-                seen[rr, cc] = True
+            if 0 <= rr < rows and 0 <= cc < cols and free[rr, cc] and dist[rr, cc] < 0:
+                dist[rr, cc] = d
                 queue.append((rr, cc))
-    return seen
+    return dist
+
+
+def reachable(obstacle, goals):
+    """Free cells 4-connected to a goal (goals included): a bool mask.
+
+    ``goals``: a bool mask or a list of (row, col)."""
+    return distances(obstacle, goals) >= 0
 
 
 class BlockGrid:

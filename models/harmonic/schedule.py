@@ -320,6 +320,8 @@ class PlanResult:
     mantissa: np.ndarray = None
     repicks: int = 0
     saturated: int = 0
+    e_max: int = None
+    at_e_max: int = 0
 
     def potential(self):
         """Values as floats in [0, 1]."""

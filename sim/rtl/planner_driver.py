@@ -22,7 +22,7 @@ import numpy as np
 
 from navcores.hdl.harmonic.cluster import COLS, ROWS
 from navcores.hdl.harmonic.planner import Code, Op, command_layout, response_layout
-from navcores.models.harmonic import pad_to_blocks, reachable
+from navcores.models.harmonic import E_MAX, pad_to_blocks, reachable
 
 from .clock import PERIOD_NS
 from .stream import Streams, pauses
@@ -158,7 +158,7 @@ def planner_params(shape, block=(6, 12), p_max=30, depth=None):
 
 
 def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), sim="verilator",
-                    progress=None, work=None, events=(), block_exponents=False):
+                    progress=None, work=None, events=(), block_exponents=False, e_max=E_MAX):
     """Run the Planner RTL on a whole map through cocotb; return a dict with
     the fields of :class:`models.harmonic.PlanResult` (h, const, p,
     converged, sweeps, block_iterations, check_iterations, clear_passes,
@@ -175,7 +175,8 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     during pass s-1 (the driver watches the pass count).  ``progress(status)``
     is called from the job's STATUS polls (through the job's log, after the
     run, when the simulator runs in a subprocess: it gets the last status).
-    ``block_exponents``: the Planner's exponent option (:func:`exponent_params`);
+    ``block_exponents``: the Planner's exponent option (:func:`exponent_params`,
+    its largest exponent ``e_max``);
     ``h``/``padded_h`` are then the mantissas and ``exponents``
     (BR x BC) the block exponents (models.harmonic.plan(..., rtl=True)).
     """
@@ -196,9 +197,9 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
             "params": params, "obstacle": (padded | unreachable).tolist(), "goal": goal.tolist(),
             "schedule": [p1, step, p_last], "iters": int(iters),
             "events": [[int(s), [int(r), int(c)], str(k)] for s, (r, c), k in events],
-            "exponents": bool(block_exponents),
+            "exponents": bool(block_exponents), "e_max": int(e_max),
         }))
-        run("harmonic_planner", exponent_params(params) if block_exponents else params, sim,
+        run("harmonic_planner", exponent_params(params, e_max) if block_exponents else params, sim,
             "navcores.sim.rtl.planner_job",
             env={"PLANNER_JOB": job, "PLANNER_RESULT": result}, log_file=work / "sim.log")
         out = json.loads(result.read_text())
@@ -214,7 +215,8 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     return res
 
 
-def exponent_params(params):
-    """The emitted Planner's parameters with its block-exponent option on."""
-    return {**params, "block_exponents": 1}
+def exponent_params(params, e_max=E_MAX):
+    """The emitted Planner's parameters with its block-exponent option on,
+    its exponent registers holding 0 .. ``e_max``."""
+    return {**params, "block_exponents": 1, **({"e_max": int(e_max)} if e_max != E_MAX else {})}
 

@@ -15,6 +15,8 @@ from pathlib import Path
 import cocotb
 import numpy as np
 
+from navcores.models.harmonic import E_MAX
+
 from .clock import start
 from .planner_driver import Code, Op, PlannerDriver
 
@@ -22,7 +24,7 @@ from .planner_driver import Code, Op, PlannerDriver
 async def run_job(dut, job):
     prm = job["params"]
     driver = PlannerDriver(dut, prm["n"], prm["m"], (prm["br"], prm["bc"]), prm["p_max"],
-                         exponents=bool(job.get("exponents")))
+                         exponents=bool(job.get("exponents")), e_max=job.get("e_max", E_MAX))
     obstacle = np.array(job["obstacle"], dtype=bool)
     goal = np.array(job["goal"], dtype=bool)
     out = await run_map(driver, obstacle, goal, job["schedule"], job["iters"], job.get("events", []))

@@ -20,6 +20,13 @@ the exponents), and DIRECTIONs whose neighbours were shifted left, right
 and clamped.  ``bounded`` (the
 Planner's e_max = 10 and headroom = 0): one random map on which exponents
 stop at e_max, against the model with the same bounds.
+``underflow`` (issue 22: 1x8 blocks, p_max 16, e_max from the map,
+exponent_bound: 94): a straight corridor of 48 cells whose field a 64-bit
+fixed point loses after 33 cells (the fixed-point words at p = 62 are 0
+there: test_corridor_underflows_fixed_point) converges at p = 16, bit for
+bit with the model.  ``wide`` (PLANNER_EXP_WIDE=1 only: 1x26 blocks, its
+Verilator build took 12 minutes on this machine): the same corridor, 156
+cells, e_max 310 (9-bit exponent registers), exponents above 255.
 PLANNER_EXP_ONLY=0,2 runs only those maps of the default set.  The host
 streams run with random idle cycles before each command and random
 back-pressure on the responses (seeded: SEED= replays): the counters and
@@ -33,7 +40,7 @@ import cocotb
 import numpy as np
 import pytest
 
-from navcores.models.harmonic import convert_mantissa, decision_exponents, plan
+from navcores.models.harmonic import convert_mantissa, decision_exponents, exponent_bound, plan
 from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.planner_driver import Code, Op, PlannerDriver, arithmetic, exponent_params
 from navcores.sim.rtl.planner_job import run_map
@@ -41,6 +48,16 @@ from navcores.sim.rtl.runner import SIMULATORS, run
 from tb.harmonic.planner_maps import MAPS
 
 PARAMS = dict(n=3, m=6, br=3, bc=3, p_max=14, depth=256)
+GEOMETRY = ("br", "bc", "p_max", "depth")       # a set's build parameters that are not the model's bounds
+STRAIGHT = dict(br=1, bc=8, p_max=16, depth=256)
+WIDE = dict(br=1, bc=26, p_max=16, depth=512)
+
+
+def _straight(geometry):
+    """The straight corridor of a 1 x bc build with its e_max from the map."""
+    return {**geometry, "e_max": exponent_bound(*MAPS["straight"](3, 6 * geometry["bc"], 0))}
+
+
 # name: (extra Planner parameters, [(map, seed, schedule, I, orders)], what the runs must exercise)
 SETS = {
     "default": ({}, [("random", 1, (6, 10, 14), 3, ()), ("random", 3, (6, 10, 14), 3, ()),
@@ -49,12 +66,15 @@ SETS = {
                 ("repick", "coarsen", "converged", "not_converged", "left", "right", "clamped", "orders")),
     "bounded": ({"e_max": 10, "headroom": 0}, [("random", 1, (6, 10, 14), 3, ())],
                 ("at_e_max", "coarsen", "left", "right")),
+    "underflow": (_straight(STRAIGHT), [("straight", 0, (8, 12, 16), 3, ())], ("repick", "converged")),
 }
+if os.environ.get("PLANNER_EXP_WIDE") == "1":
+    SETS["wide"] = (_straight(WIDE), [("straight", 0, (8, 12, 16), 3, ())], ("repick", "converged", "wide"))
 ONLY = os.environ.get("PLANNER_EXP_ONLY")
 
 
-def _model(name, seed, sched, iters, events, bounds):
-    ob, goals = MAPS[name](9, 18, seed)
+def _model(name, seed, sched, iters, events, bounds, shape=(9, 18)):
+    ob, goals = MAPS[name](*shape, seed)
     res = plan(ob, goals, block=(3, 6), iters=iters, schedule=sched, events=events, block_exponents=True,
                rtl=True, **bounds)
     return ob, goals, res
@@ -62,18 +82,19 @@ def _model(name, seed, sched, iters, events, bounds):
 
 @cocotb.test()
 async def planner_exponents_against_model(dut):
-    P = PARAMS
-    bounds, runs, claims = SETS[os.environ["PLANNER_EXP_SET"]]
+    extra, runs, claims = SETS[os.environ["PLANNER_EXP_SET"]]
+    P = {**PARAMS, **extra}
+    bounds = {k: v for k, v in extra.items() if k not in GEOMETRY}
     await start(dut)
     drv = PlannerDriver(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"], exponents=True,
                         e_max=bounds.get("e_max", 255), rng=random.Random(cocotb.RANDOM_SEED),
                         idle=0.3, back_pressure=0.5)
     seen = dict.fromkeys(("repick", "coarsen", "converged", "not_converged", "at_e_max", "orders", "nodes",
-                          "directions", "left", "right", "clamped"), 0)
-    if ONLY and not bounds:
+                          "directions", "left", "right", "clamped", "wide"), 0)
+    if ONLY and not extra:
         runs = [runs[int(i)] for i in ONLY.split(",")]
     for name, seed, sched, iters, events in runs:
-        ob, goals, res = _model(name, seed, sched, iters, events, bounds)
+        ob, goals, res = _model(name, seed, sched, iters, events, bounds, (P["br"] * P["n"], P["bc"] * P["m"]))
         goal = np.zeros(ob.shape, dtype=bool)
         for r, c in goals:
             goal[r, c] = True
@@ -98,6 +119,7 @@ async def planner_exponents_against_model(dut):
         seen["converged" if res.converged else "not_converged"] += 1
         seen["at_e_max"] += int((res.exponents == bounds.get("e_max")).sum())
         seen["orders"] += res.clear_passes
+        seen["wide"] += int(res.exponents.max() > 255)       # an exponent an 8-bit register cannot hold
     dut._log.info(f"compared: {seen}; {drv.commands} commands, {drv.cmd.idle} idle cycles, "
                   f"{drv.resp.stalls} response stalls")
     assert drv.cmd.idle > 0 and drv.resp.stalls > 0, "the host streams stalled"
@@ -133,6 +155,23 @@ async def _directions(dut, drv, res, tag, seen):
 def test_planner_exponents(sim, name):
     run("harmonic_planner", exponent_params({**PARAMS, **SETS[name][0]}), sim, "test_planner_exponents",
         env={"PLANNER_EXP_SET": name})
+
+
+@pytest.mark.parametrize("geometry,zeros,top", [(STRAIGHT, 10, 64), (WIDE, 100, 256)])
+def test_corridor_underflows_fixed_point(geometry, zeros, top):
+    """The underflow (and wide) set's map: a 64-bit fixed-point word (p =
+    62, the word p+2 bits) holds 0 in the far cells of the straight
+    corridor and does not converge; block exponents converge at p = 16 (the
+    RTL's p_max), with exponents at least ``top`` (wide: more than an 8-bit
+    register holds), within the map's e_max."""
+    ob, goals = MAPS["straight"](3, 6 * geometry["bc"], 0)
+    fixed = plan(ob, goals, block=(3, 6), iters=3, schedule=(62,))
+    assert not fixed.converged and (fixed.h[1] == 0).sum() > zeros, fixed.h[1]
+    e_max = _straight(geometry)["e_max"]
+    assert e_max == 2 * (6 * geometry["bc"] - 1)
+    res = plan(ob, goals, block=(3, 6), iters=3, schedule=(8, 12, 16), block_exponents=True, rtl=True,
+               e_max=e_max)
+    assert res.converged and res.p <= geometry["p_max"] and top <= res.exponents.max() <= e_max
 
 
 def test_exponent_option_is_checked_and_default_off():

@@ -259,3 +259,37 @@ def test_block_exponents_subprocess(tmp_path):
     bad = _sub(ROOM, "--goal", "3,3", "--engine", "verilator", "--block-exponents", "--schedule", "4,8,16")
     assert bad.returncode == 2 and "Traceback" not in bad.stderr
     assert len(bad.stderr.strip().splitlines()) == 1 and "arithmetic schedules only" in bad.stderr
+
+
+def test_block_exponents_decision_trajectories(tmp_path, capsys):
+    """Issue 22: with --block-exponents the trajectories are the Decision
+    module's (models.harmonic.decision_paths), each beside the exact ascent
+    and the step where they part; e_max from the map (at least 255) in the
+    JSON and the summary; --e-max sets it (a bound the run reaches is named)."""
+    from navcores.models.harmonic import decision_paths, e_max_for, plan, trajectory
+    from navcores.models.maps import load_map
+    out = tmp_path / "d.json"
+    args = [RANDOM, "--goal", "29,6", "--start", "0,0", "--start", "31,31", "--block", "6x12", "--schedule", "16",
+            "--block-exponents", "--json", str(out)]
+    rc, text, _ = _run(args, capsys)
+    assert rc == 0, text
+    r = json.loads(out.read_text())
+    grid = load_map(RANDOM)
+    assert r["e_max"] == e_max_for(grid, [(29, 6)]) == 255 and "e_max 255 (8-bit exponent registers)" in text
+    res = plan(grid, [(29, 6)], block=(6, 12), schedule=(16,), block_exponents=True, rtl=True)
+    goal = np.zeros(res.mantissa.shape, dtype=bool)
+    goal[29, 6] = True
+    want = decision_paths(res.mantissa, res.exponents, res.block, res.p, goal, [(0, 0), (31, 31)])
+    parted = 0
+    for tr, (path, ok) in zip(r["trajectories"], want):
+        assert tr["path"] == [list(c) for c in path] and tr["reached_goal"] == ok is True
+        assert tr["ascent"] == [list(c) for c in trajectory(res.h, [(29, 6)], tr["start"]).path]
+        k = tr["differs_at"]
+        assert (k is None) == (tr["path"] == tr["ascent"])
+        if k is not None:
+            assert tr["path"][:k] == tr["ascent"][:k] and tr["path"][k] != tr["ascent"][k]
+            assert f"parting from the exact ascent ({len(tr['ascent']) - 1} steps) at step {k}" in text
+            parted += 1
+    assert parted == 2, "on this map the Decision's paths part from the exact ascent (both starts)"
+    rc, text, _ = _run([*args[:-2], "--e-max", "20"], capsys)
+    assert "e_max 20 (5-bit exponent registers)" in text and "block(s) at e_max" in text
