@@ -1,0 +1,158 @@
+"""The cores behind the board bridge: one job per core over
+:class:`navcores.hdl.board.protocol.Link`, written once and run by the host
+on a serial port (``--engine serial:PORT``, sim/serial_engine.py) and by
+the board tests on the simulated UART (:mod:`.board_driver`).
+
+Each job is a coroutine awaiting only the protocol's I/O operations:
+
+* :func:`open_core`: INFO (the board runs the expected core; its
+  parameters), then RESET (a clean core, DATA numbering from 0).
+* :func:`harmonic`: load a map, START, poll STATUS until idle, READ every
+  node: (status, h, const) as the planner RTL engine's job returns them.
+* :func:`dflc`: samples through the DFLC, up to the bridge's window in
+  flight: [(y, zero)].
+* :func:`edt`: one EDT/BFS job: the decoded results of
+  :class:`.edt_bfs_driver.EdtBfsDriver`, with the iterations and the job's
+  cycles from the status word.
+
+A core's own error (the planner's ``code``, the EDT/BFS ``start_err``) is a
+:class:`CoreError`; the bridge's refusals are ``protocol.BridgeError``.
+"""
+
+import types
+
+import numpy as np
+
+from navcores.hdl.board.cores import edt_status_layout
+from navcores.hdl.board.protocol import ProtocolError
+from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
+
+from .edt_bfs_driver import EdtBfsDriver, pack, unpack
+from .planner_driver import Code, Op, PlannerDriver
+
+__all__ = ["CoreError", "open_core", "RemotePlanner", "harmonic", "dflc", "edt"]
+
+MAX_POLLS = 1_000_000       # STATUS polls of one planner run (a run that never ends is a fault)
+
+
+class CoreError(ProtocolError):
+    """The core answered with an error of its own."""
+
+
+async def open_core(link, core):
+    """INFO and RESET; the INFO dict.  ProtocolError if the board runs another core."""
+    info = await link.read_info()
+    if info.get("core") != core:
+        raise ProtocolError(f"the board runs {info.get('core')!r}, not {core!r} (load the {core} bitstream)")
+    await link.reset()
+    return info
+
+
+# --- harmonic planner ------------------------------------------------------------------
+
+class _NoPins:
+    """PlannerDriver's constructor idles the streams' pins: here the bridge holds them."""
+
+    def __getattr__(self, name):
+        return types.SimpleNamespace(value=0)
+
+
+class RemotePlanner(PlannerDriver):
+    """:class:`.planner_driver.PlannerDriver` over the link: the same command
+    packing, map loading and read-back; each command is a WRITE of sink 0
+    and its response the next DATA beat of source 0.  ``check``: a response
+    whose code is not OK raises :class:`CoreError`."""
+
+    def __init__(self, link, check=True):
+        i = link.info
+        super().__init__(_NoPins(), i["n"], i["m"], (i["br"], i["bc"]), i["p_max"])
+        self.link, self.check = link, check
+
+    async def command(self, op, **fields):
+        await self.link.write(0, self.pack(op=int(op.value), **fields))
+        resp = self.unpack(await self.link.read(0))
+        self.commands += 1
+        if resp["op"] != op:
+            raise ProtocolError(f"the planner answered {resp['op'].name} to {op.name}")
+        if self.check and resp["code"] != Code.OK:
+            raise CoreError(f"the planner refused {op.name} {fields}: {resp['code'].name}")
+        return resp
+
+    async def wait_idle(self, poll=None, limit=MAX_POLLS, progress=None):
+        for _ in range(limit):
+            st = await self.command(Op.STATUS)
+            if not st["busy"]:
+                return st
+            if progress:
+                progress(st)
+        raise CoreError(f"the planner is still busy after {limit} STATUS polls")
+
+
+async def harmonic(link, obstacle, goal, schedule, iters, progress=None):
+    """Plan on the board: ``obstacle`` / ``goal`` of the board's whole map
+    (BR*n x BC*m), ``schedule`` = (p1, step, p_last).  Returns (status, h,
+    const) as sim/rtl/planner_job.py's run_map."""
+    drv = RemotePlanner(link)
+    await drv.load_map(np.asarray(obstacle, dtype=bool), np.asarray(goal, dtype=bool))
+    p1, step, p_last = schedule
+    await drv.command(Op.START, p1=p1, step=step, p_last=p_last, iters=iters)
+    status = await drv.wait_idle(progress=progress)
+    h, const = await drv.read_all(np.shape(obstacle))
+    return status, h, const
+
+
+# --- DFLC ----------------------------------------------------------------------------
+
+async def dflc(link, rows, ip_sz, op_sz):
+    """``rows`` of input codes through the DFLC; [(y, zero)] in order.  The
+    samples go out as fast as the bridge's window allows; their ACKs and the
+    results are collected as they come."""
+    from .dflc_driver import pack as pack_codes
+    seqs = [await link.write(0, pack_codes(r, ip_sz), wait=False) for r in rows]
+    for s in seqs:
+        await link.reply(s)
+    out = []
+    for _ in rows:
+        v = await link.read(0)
+        out.append((v & ((1 << op_sz) - 1), bool(v >> op_sz)))
+    return out
+
+
+# --- EDT/BFS ---------------------------------------------------------------------------
+
+async def edt(link, img, goals, start, dfar):
+    """One EDT/BFS job on the board's array (the image its size): the
+    decoded results (:meth:`EdtBfsDriver.job`'s dict), ``cycles`` from the
+    status word.  ``start`` None: no path."""
+    h, w = link.info["height"], link.info["width"]
+    img = np.asarray(img, dtype=bool)
+    if img.shape != (h, w):
+        raise ValueError(f"the board's array is {h}x{w}; the image is {img.shape[0]}x{img.shape[1]}")
+    drv = EdtBfsDriver(None, h, w)          # its layouts and its decoder (no pins)
+    dfar = min(int(dfar), (1 << drv.widths["di"]) - 1)
+    sr, sc = start if start is not None else (0, 0)
+    await link.write(0, pack(command_layout(drv.widths), {"dfar": dfar, "start_row": sr, "start_col": sc,
+                                                          "path": int(start is not None)}))
+    goal = np.zeros((h, w), dtype=bool)
+    for r, c in goals:
+        goal[r, c] = True
+    # the first column to go in is the rightmost (the load pipeline shifts right)
+    seqs = [await link.write(1, pack(image_layout(h), {"obst": _column(img, c), "goal": _column(goal, c)}),
+                             wait=False) for c in reversed(range(w))]
+    for s in seqs:
+        await link.reply(s)
+    layout = result_layout(drv.widths)
+    beats = []
+    while not beats or not beats[-1]["last"]:
+        beats.append(unpack(layout, await link.read(0)))
+    out = drv._decode(beats)
+    st = unpack(edt_status_layout(h, w), await link.status())
+    if st["start_err"]:
+        raise CoreError(f"start {start} is outside the board's {h}x{w} array")
+    out.update(cycles=st["cycles"], iterations_edt=st["iterations_edt"], iterations_bfs=st["iterations_bfs"],
+               path_found_flag=st["path_found"], start_err=st["start_err"])
+    return out
+
+
+def _column(mask, c):
+    return sum(int(mask[r, c]) << r for r in range(mask.shape[0]))
