@@ -1,7 +1,7 @@
 """EDT/NNT + BFS path planning on a map (paper 004): distance map, cfr, path.
 
     python -m sim edt MAP --dfar D (--goal R,C | --goal-xy X,Y) [...] [--start R,C | --start-xy X,Y]
-        [--engine model|icarus|verilator] [--cell METRES] [--unknown obstacle|free]
+        [--engine model|icarus|verilator|serial:PORT[@BAUD]] [--cell METRES] [--unknown obstacle|free]
         [--json OUT] [--csv OUT] [--plot OUT.png]
 
 Runs Parallel_Path_Plan on MAP (.map, .txt, .pgm/.png or a ROS map's .yaml,
@@ -11,7 +11,10 @@ from the goal(s) (repeatable) and the path from the one start to the
 nearest goal.  --engine model uses models/edt_bfs.py; icarus / verilator run
 the RTL core (an array as large as the map, built on demand; at most 32x32
 = 1024 cells on Icarus and 16x16 = 256 on Verilator, whose build grows with
-the cell count) and check it against the model.  Start and goal may lie on
+the cell count) and check it against the model; serial:PORT[@BAUD] runs the
+job on a board with the EDT/BFS bitstream (make bitstream CORE=edt_bfs;
+the map must be the size of its array, 8x8 on the ULX3S-85F) and checks
+it against the model.  Start and goal may lie on
 an obstacle (the core takes any pixel): there is then no path.  The model's
 work grows with the cells times the iterations (about the map's height plus
 width): a run estimated at more than 10 minutes says so first, and a
@@ -21,13 +24,15 @@ JSON (--json): height, width, engine, iterations_edt, iterations_bfs, cycles,
 distance (d_i; 0 on obstacles, -1 where never reached, i.e. a map without
 obstacles), nearest ([r, c] of the nearest obstacle, null where none), cfr
 (0/1), path ([r, c] from start to goal), path_xy (the path in metres in the
-map frame), path_found, frame, rtl_matches_model (RTL engines); --csv: the
+map frame), path_found, frame, rtl_matches_model (RTL and serial engines); --csv: the
 path as rows row,col,x,y; --plot: the distance map (obstacles and
 unreached cells in their own colours) and the cfr with the path.
 
 Exit status: 0 done (a path found, or no start given); 1 ran, but no path
 from the start (no path in the cfr, or start or goal on an obstacle or
-outside the cfr), or an RTL engine differs from the model; 2 bad input.
+outside the cfr), or an RTL engine or the board differs from the model; 2
+bad input (for the serial engine also a port or a board that does not
+answer, runs another core or an array of another size).
 """
 
 import json
@@ -38,6 +43,7 @@ import numpy as np
 
 from navcores.models.edt_bfs import plan_path, widths
 
+from . import serial_engine
 from .cli import (CliError, add_engine, add_map, add_outputs, add_place, integer, load_map_arg, path_csv,
                   path_xy, places, save_figure, write_text)
 from .progress import Progress, Ticker, announce
@@ -56,11 +62,13 @@ def add_arguments(p):
                    help="d_far: robot radius in pixels (cfr: d_i > d_far)")
     add_place(p, "goal", many=True, required=True, help="goal")
     add_place(p, "start", help="start (without it: no path read-out)")
-    add_engine(p, "the EDT/BFS core's RTL in that simulator (maps up to 1024 / 256 cells)")
+    add_engine(p, "the EDT/BFS core's RTL in that simulator (maps up to 1024 / 256 cells)", serial=True)
     add_outputs(p, csv=True, plot_help="plot distance map, cfr and path")
 
 
 def _check_args(args):
+    if serial_engine.is_serial(args.engine):
+        serial_engine.check(args.engine)        # the port exists, before any work
     gm, frame = load_map_arg(args)
     grid = gm.obstacle
     h, w = grid.shape
@@ -72,7 +80,7 @@ def _check_args(args):
     if not goals:
         raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
     starts = places(args, "start", grid, frame, free=False)
-    if args.engine != "model":
+    if args.engine in RTL_LIMIT:
         if h * w > RTL_LIMIT[args.engine] or min(h, w) < MIN_SIDE:
             raise CliError(f"the map is {h}x{w}: --engine {args.engine} supports maps of {MIN_SIDE}x{MIN_SIDE} "
                            f"up to {RTL_LIMIT[args.engine]} cells (the array is as large as the map); "
@@ -184,9 +192,13 @@ def run(args):
         model = plan_path(grid, goals, start, args.dfar,
                           progress=lambda stage, k: bar.update(k, f"{stage}"))
     data = to_json(model, "model", h, w)
-    if args.engine != "model":
+    if serial_engine.is_serial(args.engine):
+        with Ticker(f"EDT/BFS on the board ({args.engine})"):
+            rtl = serial_engine.run_edt(args.engine, grid, goals, start, args.dfar)
+    elif args.engine != "model":
         with Ticker(f"EDT/BFS RTL on {args.engine}"), tempfile.TemporaryDirectory(prefix="sim_edt_") as tmp:
             rtl = run_rtl(grid, goals, start, args.dfar, args.engine, Path(tmp))
+    if args.engine != "model":
         data = to_json(rtl, args.engine, h, w)
         data["rtl_matches_model"] = bool(_matches(rtl, model))
     data["path_xy"] = path_xy(frame, data["path"])

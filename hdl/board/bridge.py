@@ -1,8 +1,8 @@
 """The bridge between a UART and a core's valid/ready streams (docs/protocol.md)."""
 
-from amaranth.hdl import Cat, Const, Module, Signal, Value
+from amaranth.hdl import Cat, Module, Signal
 from amaranth.lib import stream, wiring
-from amaranth.lib.fifo import SyncFIFO
+from amaranth.lib.fifo import SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out
 
 from ..params import Param, check
@@ -96,7 +96,8 @@ class StreamBridge(wiring.Component):
         word_bytes = max(PB, status_bytes, 2, *map(P.beat_bytes, self.sources))
 
         # Receive: UART -> FIFO (a lost byte marks the next one) -> frames.
-        m.submodules.fifo = fifo = SyncFIFO(width=9, depth=self.fifo_depth)
+        # (buffered: a synchronous read port, so the FIFO maps to block RAM)
+        m.submodules.fifo = fifo = SyncFIFOBuffered(width=9, depth=self.fifo_depth)
         m.submodules.frx = frx = FrameRx(PB, self.gap_cycles)
         lost = Signal()
         with m.If(self.rx_error):
@@ -111,13 +112,25 @@ class StreamBridge(wiring.Component):
         # Transmit: replies first, then the sources' beats, as frames.
         m.submodules.ftx = ftx = FrameTx(word_bytes, self.info)
         wiring.connect(m, ftx.o_stream, wiring.flipped(self.tx))
-        reply = Signal.like(ftx.i_stream.payload)
+        # The reply: its kind and length in registers; its payload straight
+        # from the held frame (ECHO), the status word or the NAK's code and
+        # command (the frame stays held until the transmitter took the reply).
         reply_valid = Signal()
+        reply_kind, reply_rom = Signal(8), Signal()
+        reply_len = Signal.like(ftx.i_stream.payload.length)
+        reply_src = Signal(2)                   # the payload: 0 none / ROM, 1 ECHO, 2 status, 3 NAK
+        nak_code = Signal(8)
+        f = frx.o_stream.payload
+        words = [0, frx.payload, self.status if self.status_width else 0, Cat(nak_code, f.cmd)]
         data_seq = [Signal(8, name=f"data_seq_{k}") for k in range(len(self.sources))]
         req = ftx.i_stream.payload
         m.d.comb += ftx.i_stream.valid.eq(reply_valid)
         with m.If(reply_valid):
-            m.d.comb += req.eq(reply)
+            m.d.comb += [req.kind.eq(reply_kind), req.seq.eq(f.seq), req.length.eq(reply_len), req.rom.eq(reply_rom)]
+            with m.Switch(reply_src):
+                for i, word in enumerate(words):
+                    with m.Case(i):
+                        m.d.comb += req.word.eq(word)
         for k in reversed(range(len(self.sources))):     # the lowest number wins
             src = getattr(self, f"source_{k}")
             with m.If(~reply_valid & src.valid & ~Cat(getattr(self, f"source_{j}").valid for j in range(k)).any()):
@@ -130,22 +143,20 @@ class StreamBridge(wiring.Component):
             m.d.sync += reply_valid.eq(0)
 
         # Execute one request at a time.
-        f = frx.o_stream.payload
         sink_k = Signal(range(max(2, len(self.sinks))))     # (a zero-width signal is not Verilog)
         timer = Signal(range(self.accept_cycles + 1))
 
-        def answer(kind, length=0, word=0, rom=0):
-            m.d.sync += [reply_valid.eq(1), reply.kind.eq(kind), reply.seq.eq(f.seq), reply.length.eq(length),
-                         reply.word.eq(word), reply.rom.eq(rom)]
+        def answer(kind, length=0, src=0, rom=0):
+            m.d.sync += [reply_valid.eq(1), reply_kind.eq(kind), reply_len.eq(length), reply_src.eq(src),
+                         reply_rom.eq(rom)]
 
         def ack(**kw):
             answer(P.ACK | f.cmd, **kw)
             m.d.sync += self.frame_ok.eq(1)
 
         def nak(error):
-            code = Value.cast(error)                  # the NAK's [error, command] bytes
-            answer(P.NAK, length=2, word=Cat(code, Const(0, 8 - len(code)), f.cmd))
-            m.d.sync += self.frame_error.eq(1)
+            answer(P.NAK, length=2, src=3)
+            m.d.sync += [nak_code.eq(error), self.frame_error.eq(1)]
 
         m.d.sync += [self.core_rst.eq(0), self.frame_ok.eq(0), self.frame_error.eq(0)]
         with m.FSM():
@@ -161,12 +172,12 @@ class StreamBridge(wiring.Component):
                             nak(P.Error.BAD_LENGTH)
                     with m.Elif(f.cmd == P.Cmd.ECHO):
                         with m.If(f.length <= PB):
-                            ack(length=f.length, word=frx.payload)
+                            ack(length=f.length, src=1)
                         with m.Else():
                             nak(P.Error.BAD_LENGTH)
                     with m.Elif(f.cmd == P.Cmd.STATUS):
                         with m.If(f.length == 0):
-                            ack(length=status_bytes, word=self.status if self.status_width else 0)
+                            ack(length=status_bytes, src=2)
                         with m.Else():
                             nak(P.Error.BAD_LENGTH)
                     with m.Elif(f.cmd == P.Cmd.RESET):

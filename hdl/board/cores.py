@@ -86,7 +86,7 @@ def _dflc_info(core, params):
     fll = resolve_fll(params.get("fll", "table1"))
     c = core.config
     return {"fll": fll.stem.removeprefix("dflc_"), "sha": fll_digest(fll), "inputs": c.n, "ip_sz": c.ip_sz,
-            "op_sz": c.op_sz, "div": c.div_type, "par": int(core.parallel)}
+            "op_sz": c.op_sz, "divider": c.div_type, "par": int(core.parallel)}
 
 
 CORES = {

@@ -208,9 +208,13 @@ def info_text(core, params, sinks, sources, status, fifo, echo, gap_bits, accept
     return text.encode()
 
 
+TEXT_KEYS = ("core", "fll", "sha", "divider")      # INFO values that stay text (a digest may be all digits)
+
+
 def parse_info(payload):
     """INFO payload -> dict (``version``, ``core`` and every key, numbers as
-    int, stream widths as tuples); ProtocolError if it is not navcores'."""
+    int but :data:`TEXT_KEYS`, stream widths as tuples); ProtocolError if it
+    is not navcores'."""
     try:
         words = payload.decode("ascii").split()
     except UnicodeDecodeError:
@@ -222,6 +226,8 @@ def parse_info(payload):
         key, _, value = w.partition("=")
         if key in ("sinks", "sources"):
             out[key] = tuple(int(v) for v in value.split(",") if v)
+        elif key in TEXT_KEYS:
+            out[key] = value
         else:
             try:
                 out[key] = int(value)

@@ -99,7 +99,7 @@ class SerialTop(wiring.Component):
 
         # The core: same clock, reset also by the bridge's RESET.
         m.domains.core = core_cd = ClockDomain("core", local=True)
-        m.d.comb += [core_cd.clk.eq(ClockSignal("sync")), core_cd.rst.eq(ResetSignal("sync") | br.core_rst)]
+        m.d.comb += [core_cd.clk.eq(ClockSignal("sync")), core_cd.rst.eq(ResetSignal("sync", allow_reset_less=True) | br.core_rst)]
         core = self.core
         m.submodules.core = DomainRenamer("core")(core)
         for k, name in enumerate(self.spec.sinks):

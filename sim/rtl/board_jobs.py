@@ -30,7 +30,7 @@ from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_la
 from .edt_bfs_driver import EdtBfsDriver, pack, unpack
 from .planner_driver import Code, Op, PlannerDriver
 
-__all__ = ["CoreError", "open_core", "RemotePlanner", "harmonic", "dflc", "edt"]
+__all__ = ["CoreError", "open_core", "RemotePlanner", "harmonic", "harmonic_differences", "dflc", "edt"]
 
 MAX_POLLS = 1_000_000       # STATUS polls of one planner run (a run that never ends is a fault)
 
@@ -78,6 +78,27 @@ class RemotePlanner(PlannerDriver):
             raise CoreError(f"the planner refused {op.name} {fields}: {resp['code'].name}")
         return resp
 
+    async def read_all(self, shape):
+        """Every node's value and flag, the READs pipelined: as many in
+        flight as the bridge's window holds (the planner takes the next one
+        as soon as the bridge has its response)."""
+        cells = [(r, c) for r in range(shape[0]) for c in range(shape[1])]
+        seqs = []
+        for r, c in cells:
+            b, x, y = self.locate(r, c)
+            seqs.append(await self.link.write(0, self.pack(op=Op.READ.value, block=b, row=x, col=y), wait=False))
+        for s in seqs:
+            await self.link.reply(s)
+        h = np.zeros(shape, dtype=object)
+        const = np.zeros(shape, dtype=bool)
+        for r, c in cells:
+            resp = self.unpack(await self.link.read(0))
+            if (resp["op"], resp["code"]) != (Op.READ, Code.OK):
+                raise CoreError(f"READ ({r}, {c}): the planner answered {resp['op'].name} {resp['code'].name}")
+            h[r, c], const[r, c] = resp["value"], bool(resp["const"])
+        self.commands += len(cells)
+        return h, const
+
     async def wait_idle(self, poll=None, limit=MAX_POLLS, progress=None):
         for _ in range(limit):
             st = await self.command(Op.STATUS)
@@ -99,6 +120,22 @@ async def harmonic(link, obstacle, goal, schedule, iters, progress=None):
     status = await drv.wait_idle(progress=progress)
     h, const = await drv.read_all(np.shape(obstacle))
     return status, h, const
+
+
+STATUS_KEYS = ("p", "converged", "sweeps", "block_iterations", "check_iterations", "clear_passes", "cycles")
+
+
+def harmonic_differences(status, h, const, model):
+    """How the board's plan (:func:`harmonic`) differs from ``model``, the
+    PlanResult of models.harmonic.plan on the same padded map: [] when bit
+    for bit equal (every node's value and flag, the counters, the cycles)."""
+    out = [f"{k}: board {int(status[k])}, model {int(getattr(model, k))}"
+           for k in STATUS_KEYS if int(status[k]) != int(getattr(model, k))]
+    bad = np.argwhere((np.asarray(h, dtype=object) != model.padded_h) | (np.asarray(const) != model.padded_const))
+    if len(bad):
+        r, c = bad[0]
+        out.append(f"{len(bad)} nodes differ, first ({r}, {c}): board {h[r, c]}, model {model.padded_h[r, c]}")
+    return out
 
 
 # --- DFLC ----------------------------------------------------------------------------
