@@ -44,6 +44,7 @@ COMMANDS = {
     "dflc": f"{__package__}.dflc",
     "track": f"{__package__}.track",
     "navigate": f"{__package__}.navigate",
+    "board": f"{__package__}.board",
 }
 
 ENGINES = ("model", *SIMULATORS)

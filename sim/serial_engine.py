@@ -23,7 +23,7 @@ import numpy as np
 
 from .cli import SERIAL, CliError
 
-__all__ = ["PREFIX", "DEFAULT_BAUD", "is_serial", "parse", "check", "SerialTransport", "session",
+__all__ = ["PREFIX", "DEFAULT_BAUD", "is_serial", "parse", "check", "SerialTransport", "session", "loopback",
            "run_dflc", "run_edt", "run_harmonic"]
 
 PREFIX = SERIAL
@@ -41,10 +41,10 @@ def parse(engine):
     body = engine[len(PREFIX):]
     port, at, baud = body.rpartition("@") if "@" in body else (body, "", "")
     if not port:
-        raise CliError(f"--engine {engine}: give the board's serial port, e.g. serial:/dev/ttyUSB0[@115200]")
+        raise CliError(f"{engine}: give the board's serial port, e.g. serial:/dev/ttyUSB0[@115200]")
     if at:
         if not baud.isdigit() or not BAUD_RANGE[0] <= int(baud) <= BAUD_RANGE[1]:
-            raise CliError(f"--engine {engine}: baud {baud!r} must be an integer in "
+            raise CliError(f"{engine}: baud {baud!r} must be an integer in "
                            f"{BAUD_RANGE[0]}..{BAUD_RANGE[1]} (the bitstream's, default {DEFAULT_BAUD})")
         return port, int(baud)
     return port, DEFAULT_BAUD
@@ -54,7 +54,7 @@ def check(engine):
     """Refuse, before any work, an engine spec whose port does not exist."""
     port, baud = parse(engine)
     if port.startswith("/") and not os.path.exists(port):
-        raise CliError(f"--engine {engine}: no serial port {port} (is the board plugged in? "
+        raise CliError(f"{engine}: no serial port {port} (is the board plugged in? "
                        "ls /dev/ttyUSB* /dev/ttyACM*)")
     return port, baud
 
@@ -96,28 +96,45 @@ def session(engine, core, job, check_info=None):
     ``check_info(info)`` may refuse it with a CliError), run
     ``job(link, info)`` (a board_jobs coroutine) and return its result.
     Link faults become one-line CliErrors."""
-    from navcores.hdl.board.protocol import Link, LinkTimeout, ProtocolError, run_blocking
     from .rtl.board_jobs import open_core
 
-    port, baud = check(engine)
-    transport = SerialTransport(port, baud)
-    link = Link()
-
-    async def whole():
+    async def whole(link, transport, baud):
         info = await open_core(link, core)
         if check_info:
             check_info(info)
-        # the bridge may hold a beat for its accept timeout: wait longer than that
-        transport.timeout = max(FIRST_TIMEOUT, 2 * info["accept"] / baud + 0.5)
+        transport.timeout = _timeout(info, baud)
         return await job(link, info)
 
+    return _on_port(engine, whole, f"the {core} bitstream")
+
+
+def loopback(engine):
+    """The bring-up checks (board_jobs.bridge_checks) on any board: (info, checks)."""
+    from .rtl.board_jobs import bridge_checks
+
+    async def whole(link, transport, baud):
+        return await bridge_checks(link)
+
+    return _on_port(engine, whole, "a navcores bitstream")
+
+
+def _timeout(info, baud):
+    """The bridge may hold a beat for its accept timeout: wait longer than that."""
+    return max(FIRST_TIMEOUT, 2 * info["accept"] / baud + 0.5)
+
+
+def _on_port(engine, whole, what):
+    from navcores.hdl.board.protocol import Link, LinkTimeout, ProtocolError, run_blocking
+
+    port, baud = check(engine)
+    transport = SerialTransport(port, baud)
     try:
-        return run_blocking(whole(), transport)
+        return run_blocking(whole(Link(), transport, baud), transport)
     except LinkTimeout:
-        raise CliError(f"--engine {engine}: no answer from the board (is the {core} bitstream loaded, built for "
+        raise CliError(f"{engine}: no answer from the board (is {what} loaded, built for "
                        f"{baud} Bd? make bitstream ... BAUD={baud}; docs/boards.md)") from None
     except ProtocolError as e:
-        raise CliError(f"--engine {engine}: {e}") from None
+        raise CliError(f"{engine}: {e}") from None
     finally:
         transport.close()
 

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from amaranth.hdl import Cat, Elaboratable, Module, Signal
 
 from .serial_top import SerialTop
+from .uart_rx import MIN_DIVISOR
 
 __all__ = ["Board", "BOARDS", "CONFIGS", "BAUDS", "BoardTop", "divisor_for"]
 
@@ -74,14 +75,18 @@ MAX_BAUD_ERROR = 0.02       # the UART samples mid-bit: 2 % over ten bits leaves
 
 def divisor_for(clock_hz, baud):
     """Clocks per bit for ``baud`` on ``clock_hz`` (ValueError beyond 2 % error)."""
-    div = round(clock_hz / baud)
-    err = abs(clock_hz / div - baud) / baud if div else 1.0
-    if div < 4 or err > MAX_BAUD_ERROR:
+    def error(b):
+        d = round(clock_hz / b)
+        return abs(clock_hz / d - b) / b if d >= MIN_DIVISOR else None
+
+    err = error(baud)
+    if err is None or err > MAX_BAUD_ERROR:
+        why = (f"fewer than {MIN_DIVISOR} clocks a bit" if err is None
+               else f"{clock_hz / round(clock_hz / baud):.0f} Bd, {err:.1%} off")
+        fine = [str(b) for b in BAUDS if (e := error(b)) is not None and e <= MAX_BAUD_ERROR]
         raise ValueError(f"baud {baud}: a {clock_hz / 1e6:g} MHz clock divides it {clock_hz / baud:.2f} times "
-                         f"({err:.1%} off); pick one of " + ", ".join(
-                             str(b) for b in BAUDS if abs(clock_hz / round(clock_hz / b) - b) / b <= MAX_BAUD_ERROR
-                             and round(clock_hz / b) >= 4))
-    return div
+                         f"({why}); pick one of {', '.join(fine)}")
+    return round(clock_hz / baud)
 
 
 class BoardTop(Elaboratable):

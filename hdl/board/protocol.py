@@ -126,16 +126,17 @@ def _escape(data):
     return bytes(out)
 
 
-def frame(kind, seq, payload=b""):
-    """The line bytes of one frame: END, escaped body + CRC, END."""
+def frame(kind, seq, payload=b"", damage=False):
+    """The line bytes of one frame: END, escaped body + CRC, END
+    (``damage``: one bit of the CRC flipped, for the refusal checks)."""
     body = bytes((kind & 0xFF, seq & 0xFF)) + bytes(payload)
-    crc = crc16(body)
+    crc = crc16(body) ^ int(bool(damage))
     return bytes((END,)) + _escape(body + bytes((crc >> 8, crc & 0xFF))) + bytes((END,))
 
 
-def request(cmd, seq, payload=b""):
+def request(cmd, seq, payload=b"", damage=False):
     """A request frame (host -> board)."""
-    return frame(cmd, seq, payload)
+    return frame(cmd, seq, payload, damage)
 
 
 class Frame:
@@ -333,11 +334,12 @@ class Link:
     def _in_flight(self):
         return sum(n for _, _, n in self.pending)
 
-    async def send(self, cmd, payload=b""):
-        """Send one request as soon as the window allows; returns its seq."""
+    async def send(self, cmd, payload=b"", damage=False):
+        """Send one request as soon as the window allows; returns its seq
+        (``damage``: with a wrong CRC, which the bridge must refuse)."""
         seq = self.seq
         self.seq = (self.seq + 1) & 0xFF
-        line = request(cmd, seq, payload)
+        line = request(cmd, seq, payload, damage)
         limit = self.window or 0
         while self.pending and self._in_flight() + len(line) > limit:
             await self._pump()

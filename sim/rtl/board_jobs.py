@@ -24,13 +24,14 @@ import types
 import numpy as np
 
 from navcores.hdl.board.cores import edt_status_layout
-from navcores.hdl.board.protocol import ProtocolError
+from navcores.hdl.board.protocol import WRITE, BridgeError, Cmd, Error, ProtocolError
 from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
 
 from .edt_bfs_driver import EdtBfsDriver, pack, unpack
 from .planner_driver import Code, Op, PlannerDriver
 
-__all__ = ["CoreError", "open_core", "RemotePlanner", "harmonic", "harmonic_differences", "dflc", "edt"]
+__all__ = ["CoreError", "open_core", "bridge_checks", "RemotePlanner", "harmonic", "harmonic_differences", "dflc",
+           "edt"]
 
 MAX_POLLS = 1_000_000       # STATUS polls of one planner run (a run that never ends is a fault)
 
@@ -46,6 +47,40 @@ async def open_core(link, core):
         raise ProtocolError(f"the board runs {info.get('core')!r}, not {core!r} (load the {core} bitstream)")
     await link.reset()
     return info
+
+
+async def bridge_checks(link):
+    """The bring-up checks of any board top (``python -m sim board``):
+    INFO, ECHO of every byte value, STATUS, RESET, and the refusals of a
+    damaged frame, an unknown command, a missing sink and a wrong length.
+    Returns (info, [(check, passed, what came)]); the core is left reset."""
+    info = await link.read_info()
+    checks = [("INFO", True, " ".join(f"{k}={v}" for k, v in info.items()))]
+    values, echo = bytes(range(256)), info["echo"]
+    got = b"".join([await link.echo(values[i:i + echo]) for i in range(0, 256, echo)])
+    checks.append((f"ECHO of the 256 byte values in {-(-256 // echo)} frames", got == values,
+                   "all equal" if got == values else f"first difference at byte {_first_difference(got, values)}"))
+    status = await link.call(Cmd.STATUS)
+    checks.append(("STATUS", len(status) == -(-info["status"] // 8), f"{len(status)} bytes: {status.hex() or '-'}"))
+    await link.reset()
+    checks.append(("RESET", True, "acknowledged"))
+    refusals = (("a damaged frame (CRC)", Cmd.STATUS, b"", True, Error.BAD_CRC),
+                ("an unknown command 0x0F", 0x0F, b"", False, Error.UNKNOWN_CMD),
+                (f"a WRITE to sink {len(info['sinks'])} (none)", WRITE + len(info["sinks"]), b"\0", False,
+                 Error.UNKNOWN_CMD),
+                ("INFO with a payload", Cmd.INFO, b"x", False, Error.BAD_LENGTH))
+    for what, cmd, payload, damage, want in refusals:
+        try:
+            await link.reply(await link.send(cmd, payload, damage=damage))
+            checks.append((f"{what}: NAK {want.name}", False, "acknowledged"))
+        except BridgeError as e:
+            came = Error(e.code).name if e.code in Error._value2member_map_ else str(e.code)
+            checks.append((f"{what}: NAK {want.name}", e.code == want, f"NAK {came}"))
+    return info, checks
+
+
+def _first_difference(a, b):
+    return next((i for i, (x, y) in enumerate(zip(a, b)) if x != y), min(len(a), len(b)))
 
 
 # --- harmonic planner ------------------------------------------------------------------

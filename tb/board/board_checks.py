@@ -161,8 +161,9 @@ def rng_from_env():
     return random.Random(seed)
 
 
-async def host_command(dut, line, argv, timeout_s=300):
-    """``python -m sim ARGV --engine serial:<pty>`` against the simulated
+async def host_command(dut, line, argv, timeout_s=300, option="--engine"):
+    """``python -m sim ARGV --engine serial:<pty>`` (``option`` None: the
+    port as the last positional argument) against the simulated
     board top: the command opens a pseudo-terminal as its serial port (with
     pyserial, as on a board), and this coroutine carries its bytes to and
     from the UART line.  Returns (exit status, stdout, stderr)."""
@@ -182,7 +183,8 @@ async def host_command(dut, line, argv, timeout_s=300):
     # simulator's PYTHONPATH (whose test folders hold a module named serial)
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
     with open(os.devnull, "rb") as null:
-        proc = subprocess.Popen([os.environ["HOST_PYTHON"], "-m", "sim", *argv, "--engine", f"serial:{port}"],
+        proc = subprocess.Popen([os.environ["HOST_PYTHON"], "-m", "sim", *argv, *([option] if option else []),
+                                 f"serial:{port}"],
                                 cwd=os.environ["HOST_ROOT"], env=env, stdin=null, stdout=subprocess.PIPE,
                                 stderr=subprocess.PIPE, text=True)
     running = True
@@ -215,3 +217,33 @@ async def host_command(dut, line, argv, timeout_s=300):
         os.close(slave)
     out, err = proc.communicate()
     return proc.returncode, out, err
+
+
+async def host_matches_model(dut, line, argv, work):
+    """``python -m sim ARGV`` on the board (``host_command``) and on the model:
+    the same JSON but for ``engine``, ``rtl_matches_model`` (true) and
+    ``model_differences`` (empty); returns the board's JSON."""
+    import json
+    import os
+    import subprocess
+
+    rc, out, err = await host_command(dut, line, [*argv, "--json", str(work / "serial.json")])
+    assert rc == 0 and not err, (rc, out, err)
+    board = json.loads((work / "serial.json").read_text())
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    model = subprocess.run([os.environ["HOST_PYTHON"], "-m", "sim", *argv, "--json", str(work / "model.json")],
+                           cwd=os.environ["HOST_ROOT"], env=env, capture_output=True, text=True)
+    assert model.returncode == 0, model.stderr
+    model = json.loads((work / "model.json").read_text())
+    assert board.pop("rtl_matches_model") is True and not board.pop("model_differences", [])
+    assert board.pop("engine").startswith("serial:") and model.pop("engine") == "model"
+    assert board == model, [k for k in model if board.get(k) != model[k]]
+    return board
+
+
+def host_env(tmp_path):
+    """What the host tests need from pytest: the interpreter, the tree, a folder."""
+    import sys
+
+    from navcores.sim.rtl.runner import ROOT
+    return {"HOST_PYTHON": sys.executable, "HOST_ROOT": ROOT, "HOST_WORK": tmp_path}

@@ -14,28 +14,26 @@ in simulation, driven through the host's protocol module and job.
 * ``host_engine``: ``python -m sim dflc --engine serial:PORT`` with a
   pseudo-terminal as its port, carried to this board top's UART: the same
   JSON as the model engine, plus ``rtl_matches_model``; another core's
-  command refused with one line, exit status 2.
+  command refused with one line, exit status 2; ``python -m sim board``
+  (the bring-up test) passes every check.
 
 The same build runs on Icarus and Verilator, at 4 clocks a bit.
 """
 
-import json
 import os
-import subprocess
-import sys
 from pathlib import Path
 
 import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, host_command, protocol_suite, rng_from_env
+from board_checks import connect, host_command, host_env, host_matches_model, protocol_suite, rng_from_env
 from navcores.hdl.board.serial_top import SerialTop
 from navcores.hdl.dflc.top import config_for
 from navcores.models.dflc import Dflc
 from navcores.sim.rtl.board_driver import UartLine, perform, start
 from navcores.sim.rtl.board_jobs import dflc
-from navcores.sim.rtl.runner import ROOT, SIMULATORS, run
+from navcores.sim.rtl.runner import SIMULATORS, run
 
 # A simulation-friendly line: 4 clocks a bit, short timeouts, a small FIFO.
 PARAMS = {"core": "dflc", "fll": "table1", "divisor": 4, "fifo": 32, "gap_bits": 40, "accept_bits": 400}
@@ -86,27 +84,23 @@ async def samples(dut):
 async def host_engine(dut):
     """``python -m sim dflc --engine serial:PORT`` on this board top (its port
     a pseudo-terminal): the same JSON as the model engine, the outputs
-    checked against the model; ``sim edt`` on it: refused (another core)."""
+    checked against the model; ``sim edt`` on it: refused (another core);
+    ``sim board`` on it: every check passes."""
     await start(dut)
     line = UartLine(dut, PARAMS["divisor"], timeout_bits=4000)
     work = Path(os.environ["HOST_WORK"])
     rows = [(-170, 30), (0, 0), (12.5, -3), (90, 179), (400, -190)]
     (work / "in.csv").write_text("phi1,phi2\n" + "".join(f"{a},{b}\n" for a, b in rows))
-    args = ["dflc", "--input", str(work / "in.csv")]
-    rc, out, err = await host_command(dut, line, [*args, "--json", str(work / "serial.json")])
-    assert rc == 0 and not err, (rc, out, err)
-    board = json.loads((work / "serial.json").read_text())
-    model = subprocess.run([os.environ["HOST_PYTHON"], "-m", "sim", *args, "--json", str(work / "model.json")],
-                           cwd=os.environ["HOST_ROOT"], capture_output=True, text=True)
-    assert model.returncode == 0, model.stderr
-    model = json.loads((work / "model.json").read_text())
-    assert board.pop("rtl_matches_model") is True and board.pop("engine").startswith("serial:")
-    assert board == {k: v for k, v in model.items() if k != "engine"}, (board, model)
+    board = await host_matches_model(dut, line, ["dflc", "--input", str(work / "in.csv")], work)
+    assert len(board["codes"]) == len(rows)
     rc, out, err = await host_command(dut, line, ["edt", "maps/room-32-32-4.map", "--goal", "3,3", "--dfar", "1"])
     assert rc == 2 and err.count("\n") == 1 and "the board runs 'dflc', not 'edt_bfs'" in err, (rc, err)
+    # the bring-up test of docs/boards.md
+    rc, out, err = await host_command(dut, line, ["board"], option=None)
+    assert rc == 0 and not err and out.splitlines()[-1] == "8 of 8 checks passed", (rc, out, err)
+    assert out.startswith("serial:") and ": dflc board, fll=table1 " in out.splitlines()[0], out
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_board_dflc(sim, tmp_path):
-    env = {"HOST_PYTHON": sys.executable, "HOST_ROOT": ROOT, "HOST_WORK": tmp_path}
-    assert run("board_dflc", PARAMS, sim, "test_board_dflc", factory=SerialTop, env=env) == 3
+    assert run("board_dflc", PARAMS, sim, "test_board_dflc", factory=SerialTop, env=host_env(tmp_path)) == 3

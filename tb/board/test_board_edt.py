@@ -13,15 +13,22 @@ through the host's protocol module and job (sim/rtl/board_jobs.py).
   taken: NAK CORE_TIMEOUT after the accept timeout; a start outside the
   5x5 array (its row field holds 0..7) is the core's start_err, a
   CoreError for the host; the next job is exact.
+* ``host_engine``: ``python -m sim edt --engine serial:PORT`` with a
+  pseudo-terminal as its port, carried to this board top's UART: the
+  model engine's JSON (the cycle count too) and ``rtl_matches_model``; a
+  map of another size refused with one line, exit status 2.
 
 A 5x5 array at 4 clocks a bit.
 """
+
+import os
+from pathlib import Path
 
 import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, protocol_suite, rng_from_env
+from board_checks import connect, host_command, host_env, host_matches_model, protocol_suite, rng_from_env
 from images import FAMILIES, free_cells
 from navcores.hdl.board import protocol as P
 from navcores.hdl.board.serial_top import SerialTop
@@ -99,6 +106,21 @@ async def core_errors(dut):
     assert model.path_found
 
 
+@cocotb.test()
+async def host_engine(dut):
+    """``python -m sim edt MAP --engine serial:PORT`` on this board top (its
+    port a pseudo-terminal): the model engine's JSON, the cycles included."""
+    await start(dut)
+    line = UartLine(dut, PARAMS["divisor"], timeout_bits=20_000)
+    work = Path(os.environ["HOST_WORK"])
+    (work / "map.txt").write_text("..#..\n..#..\n.....\n.#...\n.....\n")
+    data = await host_matches_model(dut, line, ["edt", str(work / "map.txt"), "--dfar", "0", "--goal", "0,4",
+                                                "--start", "0,0"], work)
+    assert data["path_found"] and data["cycles"] > H * W
+    rc, out, err = await host_command(dut, line, ["edt", "maps/room-32-32-4.map", "--goal", "3,3", "--dfar", "1"])
+    assert rc == 2 and err.count("\n") == 1 and "array is 5x5; the map is 32x32" in err, (rc, err)
+
+
 @pytest.mark.parametrize("sim", SIMULATORS)
-def test_board_edt(sim):
-    assert run("board_edt", PARAMS, sim, "test_board_edt", factory=SerialTop) == 3
+def test_board_edt(sim, tmp_path):
+    assert run("board_edt", PARAMS, sim, "test_board_edt", factory=SerialTop, env=host_env(tmp_path)) == 4

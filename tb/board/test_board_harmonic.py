@@ -9,15 +9,22 @@ driven through the host's protocol module and job (sim/rtl/board_jobs.py).
   (board_jobs.harmonic_differences, the host's check).
 * ``core_error``: a READ of a node outside the block is the planner's
   BAD_NODE (a CoreError for the host), and the next command works.
+* ``host_engine``: ``python -m sim harmonic --engine serial:PORT`` with a
+  pseudo-terminal as its port, carried to this board top's UART: the model
+  engine's JSON and ``rtl_matches_model``; a block size the board's
+  planner does not have refused with one line, exit status 2.
 
 A 3x12 map in two 3x6 blocks, p_max 16, at 4 clocks a bit.
 """
+
+import os
+from pathlib import Path
 
 import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, protocol_suite, rng_from_env
+from board_checks import connect, host_command, host_env, host_matches_model, protocol_suite, rng_from_env
 from navcores.hdl.board.serial_top import SerialTop
 from navcores.models.harmonic import plan
 from navcores.sim.rtl.board_driver import UartLine, perform, start
@@ -85,6 +92,23 @@ async def core_error(dut):
     assert st["code"] == Code.OK and not st["busy"], st
 
 
+@cocotb.test()
+async def host_engine(dut):
+    """``python -m sim harmonic MAP --engine serial:PORT`` on this board top
+    (its port a pseudo-terminal): the model engine's JSON, trajectories
+    included; a block size the board's planner does not have: refused."""
+    await start(dut)
+    line = UartLine(dut, PARAMS["divisor"], timeout_bits=20_000)
+    work = Path(os.environ["HOST_WORK"])
+    (work / "map.txt").write_text("......#.....\n..##..#..#..\n.........#..\n")
+    args = ["harmonic", str(work / "map.txt"), "--goal", "2,11", "--start", "0,0", "--block", "3x6",
+            "--schedule", "8:8:16", "--iters", "2"]
+    data = await host_matches_model(dut, line, args, work)
+    assert data["converged"] and data["trajectories"][0]["reached_goal"]
+    rc, out, err = await host_command(dut, line, [*args[:-6], "--block", "6x12"])
+    assert rc == 2 and err.count("\n") == 1 and "the board's planner has 3x6 blocks" in err, (rc, err)
+
+
 @pytest.mark.parametrize("sim", SIMULATORS)
-def test_board_harmonic(sim):
-    assert run("board_harmonic", PARAMS, sim, "test_board_harmonic", factory=SerialTop) == 3
+def test_board_harmonic(sim, tmp_path):
+    assert run("board_harmonic", PARAMS, sim, "test_board_harmonic", factory=SerialTop, env=host_env(tmp_path)) == 4
