@@ -1,5 +1,6 @@
 # Every target bootstraps what it needs: a .venv with navcores installed in it
-# (editable, with the `ip` extra: FuseSoC for tb/ip; the targets that
+# (editable, with the `ip` extra: FuseSoC for tb/ip, and `dev`: pyflakes for
+# tb/test_pyflakes.py; the targets that
 # synthesize or place and route add the `fpga` extra: yosys and nextpnr from
 # PyPI), and Icarus Verilog / g++ through apt-get when missing and running as
 # root (otherwise a message says what to install).
@@ -24,7 +25,7 @@ all: test
 $(STAMP): pyproject.toml
 	@$(PYTHON) -c 'import sys; sys.exit(sys.version_info < (3, 11))' || { echo "Python >= 3.11 is needed ($(PYTHON) is older)"; exit 1; }
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install -q -e '.[ip]'
+	$(BIN)/python -m pip install -q -e '.[ip,dev]'
 	touch $@
 venv: $(STAMP)
 $(FPGA): $(STAMP)

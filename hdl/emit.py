@@ -6,7 +6,7 @@ module: the file and module names carry the parameters
 
     python -m hdl.emit --list [--json]                  # tops, parameters, types, defaults, ranges
     python -m hdl.emit TOP [name=value ...] [-o DIR]    # DIR/<module>.v + DIR/<module>.json
-    python -m hdl.emit [OUT_DIR]                        # every top at its listed sets (make verilog)
+    python -m hdl.emit [OUT_DIR]                        # every top at its default sets (make verilog)
     python -m hdl.emit --manifests docs/manifests       # only their manifests (the committed copies)
 
 The parameters' types, defaults and ranges are the components' own
@@ -17,7 +17,8 @@ its direction and width, the stream it belongs to and its role (valid,
 ready, payload with the payload's fields and bit ranges), clock and reset,
 and the cycle figures of the component's ``timing()``; emitting checks it
 against the port list of the Verilog it wrote.  Bad parameters print the
-component's one-line message and exit with status 2.
+component's one-line message and exit with status 2.  The default sets are
+the catalog's (:mod:`hdl.catalog`, with the papers' figures).
 """
 
 if __name__ == "__main__":
@@ -42,17 +43,21 @@ from amaranth.back import verilog  # noqa: E402
 from amaranth.hdl import Const, Shape, ValueCastable  # noqa: E402
 from amaranth.lib import data, stream, wiring  # noqa: E402
 
+# The sets `make verilog` emits (the tests emit their own): the catalog's.
+from .catalog import DEFAULT_SETS  # noqa: E402
 from .dflc.core import DflcCore  # noqa: E402
 from .dflc.top import DflcStream, core_from_params  # noqa: E402
 from .edt_bfs.array import EdtArray  # noqa: E402
 from .edt_bfs.cell import EdtCell  # noqa: E402
 from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
+from .harmonic.border import Border  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
+from .harmonic.decision import Decision  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
 from .harmonic.planner import Planner  # noqa: E402
 from .harmonic.block import Block  # noqa: E402
-from .params import REQUIRED, Param, check, parse  # noqa: E402
+from .params import REQUIRED, Param, check, parse, unelaborated  # noqa: E402
 
 __all__ = ["TOPS", "DEFAULT_SETS", "SPECS", "top_name", "emit", "manifest", "params_of", "main"]
 
@@ -61,6 +66,10 @@ TOPS = {
     "harmonic_node": Node,
     "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
+    "harmonic_decision": Decision,
+    # the border storage of an n x m block, for its unit test and synthesis
+    "harmonic_border": lambda n, m, br=1, bc=1, p_max=30, exponents=0, e_max=255: Border(
+        n, m, (br, bc), p_max, bool(exponents), e_max),
     "harmonic_block": lambda n, m, br=1, bc=1, p_max=30, depth=1024, exponents=0, e_max=255: Block(
         n, m, (br, bc), p_max, depth, bool(exponents), e_max),
     "harmonic_planner": lambda n=6, m=12, br=2, bc=2, p_max=30, depth=1024, block_exponents=0, e_max=255,
@@ -78,28 +87,13 @@ TOPS = {
 
 # The class whose PARAMS / CONSTRAINTS a factory above takes (when it is not a class).
 SPECS = {
+    "harmonic_border": Border,
     "harmonic_block": Block,
     "harmonic_planner": Planner,
     "dflc_core": DflcStream,
     "edt_array": EdtArray,
     "edt_bfs": EdtBfs,
 }
-
-# Parameter sets `make verilog` emits (the tests emit their own on demand).
-DEFAULT_SETS = [
-    ("harmonic_node", {}),
-    ("harmonic_counters", {"p_max": 1022}),
-    ("harmonic_cluster", {"depth": 1024}),
-    ("harmonic_cluster", {"depth": 1024, "p_max": 255}),
-    ("harmonic_block", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024}),
-    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}),
-    ("dflc_stream", {"fll": "table1"}),
-    ("dflc_core", {"fll": "table1"}),
-    ("dflc_core", {"fll": "table1", "par": 1}),
-    ("edt_cell", {"height": 32, "width": 32}),
-    ("edt_bfs", {"height": 16, "width": 16}),
-    ("edt_bfs", {"height": 32, "width": 32}),
-]
 
 _SHORT = {"p_max": "pmax", "fll": ""}
 
@@ -257,8 +251,7 @@ def _value(component, p, params):
 def manifest(name, params, component=None, factory=None):
     """The manifest of ``name`` at ``params`` (a dict; JSON-ready); ``factory`` as in :func:`build`."""
     if component is None:
-        component = build(name, params, factory)
-        _silence(component)         # only its signature is read
+        component = unelaborated(build(name, params, factory))     # only described
     decl, constraints = params_of(name, factory)
     timing = component.timing() if hasattr(component, "timing") else {}
     ports = ports_of(component)
@@ -276,14 +269,6 @@ def manifest(name, params, component=None, factory=None):
         "timing": timing,
         "doc": inspect.getdoc(type(component)).split("\n\n")[0],
     }
-
-
-def _silence(component):
-    """No "created but never used" warning for a component (and the parts its
-    constructor built) that is only described, not elaborated."""
-    for obj in (component, *vars(component).values()):
-        if hasattr(obj, "elaborate"):
-            obj._MustUse__silence = True
 
 
 _TOP_ATTR = "(* top =  1  *)\n"          # as yosys' write_verilog prints the attribute
@@ -310,7 +295,7 @@ def emit(name, params, out_dir, with_manifest=True, factory=None, before_work=No
         try:
             before_work()
         except BaseException:
-            _silence(component)             # refused before any work: never elaborated
+            unelaborated(component)         # refused before any work: never elaborated
             raise
     man = manifest(name, params, component, factory) if with_manifest else None
     text = verilog_text(component, module)

@@ -10,11 +10,21 @@ and its ``__init__`` checks its arguments with :func:`check` (same messages as
 before: the component's own one-line errors).  ``python -m hdl.emit --list``
 and the manifests read the very same declarations, so the ranges a user sees
 are the ranges the component enforces, never a second copy.
+
+Amaranth warns about an elaboratable that is "created but never used".  A
+component whose ``__init__`` refuses its parameters was never a design:
+:func:`checked_init` on that ``__init__`` silences the half-built object
+(and the parts it had built).  A component built only to be described (its
+signature, parameters, ``timing()``), as ``hdl.emit``'s manifests do, is
+marked with :func:`unelaborated`.
 """
 
+import functools
 from dataclasses import dataclass, field
 
-__all__ = ["Param", "Constraint", "REQUIRED", "check", "describe", "parse"]
+from amaranth.hdl import Elaboratable
+
+__all__ = ["Param", "Constraint", "REQUIRED", "check", "describe", "parse", "checked_init", "unelaborated"]
 
 
 class _Required:
@@ -163,3 +173,44 @@ def parse(params, assignments):
             raise ValueError(f"parameter {name} given twice")
         out[name] = by_name[name].parse(text)
     return out
+
+
+def unelaborated(component):
+    """Mark ``component``, and every elaboratable it holds in its attributes
+    (lists, tuples and dicts of them too), as built on purpose without being
+    elaborated: no "created but never used" warning.  Returns ``component``."""
+    seen = set()
+
+    def mark(obj):
+        if id(obj) in seen:
+            return
+        seen.add(id(obj))
+        if isinstance(obj, (list, tuple)):
+            parts = obj
+        elif isinstance(obj, dict):
+            parts = obj.values()
+        elif isinstance(obj, Elaboratable):
+            obj._MustUse__silence = True        # the switch of Amaranth's warning (amaranth._unused)
+            parts = vars(obj).values()
+        else:
+            return
+        for part in parts:
+            mark(part)
+
+    mark(component)
+    return component
+
+
+def checked_init(init):
+    """Decorator of a component's ``__init__`` that checks its parameters: when
+    it refuses them (raises), the half-built component, which Amaranth
+    created before ``__init__`` ran, is no design, so it leaves no "created
+    but never used" warning behind (:func:`unelaborated`)."""
+    @functools.wraps(init)
+    def __init__(self, *args, **kwargs):
+        try:
+            init(self, *args, **kwargs)
+        except Exception:
+            unelaborated(self)
+            raise
+    return __init__

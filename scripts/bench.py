@@ -60,6 +60,7 @@ import fmax as fmax_mod  # noqa: E402
 import software  # noqa: E402
 import synth  # noqa: E402
 import toolchain  # noqa: E402
+from navcores.hdl import catalog  # noqa: E402
 from navcores.hdl.emit import emit, top_name  # noqa: E402
 from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
@@ -70,30 +71,10 @@ CLOCK_PART = fmax_mod.part("iCE40-HX8K")     # the part of the clock column
 PY = sys.executable
 PARTS = ("hardware", "harmonic", "dflc", "edt", "simspeed", "study")
 
-# (key, core, emitted top, params, yosys family, hierarchical synth, paper's figures)
-TOPS = [
-    ("node", "harmonic", "harmonic_node", {}, "xc2v", False,
-     "11 FF, 22 LUT4, 361 MHz (XC2V6000-5, Table 1)"),
-    ("cluster", "harmonic", "harmonic_cluster", {"depth": 1024}, "xc2v", False,
-     "198 FF, 398 LUT4 + 1 BRAM, 300 MHz (Table 2)"),
-    ("block", "harmonic", "harmonic_block",
-     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024}, "xc2v", False,
-     "48x96 block: 50699 FF, 101396 LUT4, 150 MHz (Table 3)"),
-    ("planner", "harmonic", "harmonic_planner",
-     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}, "xc2v", False,
-     "Control 844 slices, Decision 3p+682 slices"),
-    ("planner_exp", "harmonic", "harmonic_planner",
-     {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256, "block_exponents": 1}, "xc2v", False,
-     "(beyond the paper: the block-exponent option, issue 10)"),
-    ("dflc", "dflc", "dflc_core", {"fll": "table1"}, "xc3s", False,
-     "1303 LUT4, 8 MULT18X18, 12 ROM64X1 + 54 ROM256X1, 85 MHz (core alone)"),
-    ("dflc_par", "dflc", "dflc_core", {"fll": "table1", "par": 1}, "xc3s", False,
-     "(beyond the paper)"),
-    ("edt_cell", "edt_bfs", "edt_cell", {"height": 16, "width": 16}, "xc2v", False,
-     "1188 gates (Table II, 'BFS and NNT'), 232 MHz (Table I)"),
-    ("edt_8x8", "edt_bfs", "edt_array", {"height": 8, "width": 8}, "xc2v", True, "-"),
-    ("edt_16x16", "edt_bfs", "edt_array", {"height": 16, "width": 16}, "xc2v", True, "-"),
-]
+# (key, core, emitted top, params, yosys family, hierarchical synth, paper's figures):
+# the catalog's synthesized sets (hdl/catalog.py).
+TOPS = [(s.name, "edt_bfs" if s.top.startswith("edt") else s.top.split("_")[0], s.top, s.params, s.family,
+         s.hierarchical, s.paper_text()) for s in catalog.SYNTHESIZED]
 
 
 def log(msg):
@@ -123,7 +104,7 @@ def synthesize(top):
 
 # Place-and-route parameters where the synthesized ones do not fit the HX8K's
 # 32 block RAMs: the clock does not depend on the RAM depth beyond its address width.
-FMAX_PARAMS = {"block": {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256}}
+FMAX_PARAMS = {"block": catalog.PLANNER}
 
 
 def place(top, lut4):
@@ -156,9 +137,8 @@ def hardware(jobs=2):
 
 # Tops that do not fit the HX8K, and the placed top whose clock their jobs use.
 CLOCK_FROM = {
-    "planner": ("block", "the planner top does not fit the HX8K (its multipliers become LUTs: the iCE40 HX has "
-                         "no DSP), so its jobs use the 6x12 block's clock, the array every iteration runs on; "
-                         "Control and Decision are not timed"),
+    "planner": ("block", "the planner top does not fit the HX8K, so its jobs use the 6x12 block's clock, "
+                         "the array every iteration runs on; Control and Decision are not timed"),
     "planner_exp": ("block", "as the planner top: the 6x12 block's clock (the exponent option's Control "
                              "and border conversion are not timed)"),
     "edt_8x8": ("edt_cell", "the arrays do not fit the HX8K: their jobs use the cell's clock (its inputs are "
@@ -259,21 +239,22 @@ def harmonic_jobs(hw, speeds, problems):
     # One iteration at the paper's p = 128, measured on the cluster RTL.
     start, res = time.time(), OUT / "iteration.json"
     log("cluster RTL: cycles per iteration at p = 128 (icarus)")
-    run("harmonic_cluster", {"depth": 1024}, "icarus", "tb.harmonic.iteration_job",
+    cluster = catalog.get("cluster").params
+    run("harmonic_cluster", cluster, "icarus", "tb.harmonic.iteration_job",
         env={"ITER_P": 128, "ITER_N": 4, "ITER_RESULT": res}, log_file=OUT / "iteration.log")
     done = json.loads(res.read_text())["done_cycles"]
     gaps = sorted(set(np.diff(done).tolist()))
     per_iter = gaps[0] if len(gaps) == 1 else None
     if per_iter != 130:
         problems.append(f"cluster iteration at p=128 took {gaps} cycles, not p+2 = 130")
-    _job_speed(speeds, sim_speed_from(start, "icarus", "harmonic_cluster_depth1024"), "icarus",
-               "harmonic_cluster", {"depth": 1024})
+    _job_speed(speeds, sim_speed_from(start, "icarus", top_name("harmonic_cluster", cluster)), "icarus",
+               "harmonic_cluster", cluster)
     rng = np.random.default_rng(36)
     block = rng.random((36, 66)) < 0.1
     sw = software.jacobi_iteration(block, [(35, 65)])
     rows.append(row(hw, "harmonic", "one iteration, 36x66 block, p = 128", "block", per_iter,
                     "cluster RTL (icarus), done-to-done", sw["software"] + " (10% random obstacles)",
-                    sw["sw_seconds"], "100 us/iteration on a 2 GHz Pentium 4; p+2 cycles at 150 MHz; 'up to 100x'",
+                    sw["sw_seconds"], catalog.PAPER_JOBS["harmonic_iteration"],
                     "clock: the 6x12 block top's (a 36x66 block is the same array, larger)"))
     # Whole maps: the model's cycles (cycle-exact), one confirmed on the RTL below.
     for name in HARMONIC_MAPS:
@@ -285,7 +266,7 @@ def harmonic_jobs(hw, speeds, problems):
                         "planner", r.cycles if r.converged else None,
                         f"model (cycle-exact), {HARMONIC_BLOCK[0]}x{HARMONIC_BLOCK[1]} blocks, I = {HARMONIC_I}, "
                         f"p 16:16:{r.p}, {r.block_iterations} block iterations", sw["software"], sw["sw_seconds"],
-                        "100x to 400x (270x: 9500-node maze, 4 blocks, p = 255)",
+                        catalog.PAPER_JOBS["harmonic_map"],
                         "resources: the synthesized planner top's (6x12 blocks, 2x2, depth 256); this map "
                         "needs more blocks and a deeper RAM"))
     # The model's cycle count confirmed on the planner RTL (3x6 blocks: it simulates in minutes).
@@ -338,7 +319,7 @@ def dflc_jobs(hw, speeds, problems):
         what = "parallel option" if par else "Table 1 controller"
         src = (f"DFLC stream RTL (icarus, verilator): {cps} clocks/sample, latency {lat}"
                + ("" if all(g == (want_cps, want_lat) for g in got.values()) else " DIFFERENT"))
-        paper = "-" if par else "4 clocks/sample (78.3 ns at 51.1 MHz in the SoC), 9 pipeline stages"
+        paper = "-" if par else catalog.PAPER_JOBS["dflc_sample"]
         rows.append(row(hw, "dflc", f"one sample, {what}, single call", key, cps, src,
                         sw["software"] + " (one call per sample)", sw["sw_seconds"], paper))
         rows.append(row(hw, "dflc", f"one sample, {what}, vectorized", key, cps, src,
@@ -400,11 +381,11 @@ def edt_jobs(hw, speeds, problems):
         rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): whole job", "edt_16x16",
                         model.cycles, f"model (cycle-exact): EDT {model.iterations_edt} + cfr 1 + BFS "
                         f"{model.iterations_bfs} iterations, path {len(model.path)}, load and read-out",
-                        sw["software"], sw["sw_seconds"], "43.1 us at 232 MHz (Table I, BFS)",
+                        sw["software"], sw["sw_seconds"], catalog.PAPER_JOBS["edt_job"],
                         EDT_BIG_NOTE))
         rows.append(row(hw, "edt_bfs", f"{name[:-4]} ({ob.shape[0]}x{ob.shape[1]}): EDT + cfr + BFS only", "edt_16x16",
                         compute, "model (cycle-exact): the computing cycles, without load, path and read-out",
-                        sw["software"], sw["sw_seconds"], "43.1 us at 232 MHz (Table I, BFS)",
+                        sw["software"], sw["sw_seconds"], catalog.PAPER_JOBS["edt_job"],
                         EDT_BIG_NOTE))
     return rows
 
@@ -418,11 +399,12 @@ def probe_tops():
     from navcores.models.dflc import load_fll
     from navcores.sim.rtl.planner_driver import planner_params
     table1 = load_fll(ROOT / "models" / "dflc_table1.fll")
-    return [("harmonic_node", {}), ("harmonic_cluster", {"depth": 1024}), ("harmonic_block", TOPS[2][3]),
+    node, cluster, block, cell = (catalog.get(k) for k in ("node", "cluster", "block", "edt_cell"))
+    return [(node.top, node.params), (cluster.top, cluster.params), (block.top, block.params),
             ("harmonic_planner", planner_params((16, 16), (3, 6), HARMONIC_SCHEDULE[-1])),
             ("dflc_stream", rtl_params(ROOT / "models" / "dflc_table1.fll", table1, "lut", False)),
             ("dflc_stream", rtl_params(ROOT / "models" / "dflc_table1.fll", table1, "lut", True)),
-            ("edt_cell", {"height": 16, "width": 16}),
+            (cell.top, cell.params),
             *(("edt_bfs", {"height": s, "width": s}) for s in EDT_SIZES)]
 
 

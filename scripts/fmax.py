@@ -41,7 +41,7 @@ import toolchain
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 # The project's code, imported here only (fit.py, synth.py and bench.py use these names).
-from navcores.hdl.emit import TOPS, emit, manifest, params_of, top_name  # noqa: E402,F401
+from navcores.hdl.emit import TOPS, emit, manifest, params_of, top_name, verilog_ports  # noqa: E402,F401
 from navcores.hdl.params import parse  # noqa: E402,F401
 
 ROOT = toolchain.ROOT
@@ -95,15 +95,9 @@ def part(name):
 
 # -- the harness
 
-_PORT = re.compile(r"^\s*(input|output)\s+(?:\[(\d+):(\d+)\]\s+)?(\w+)\s*;", re.M)
-
-
 def ports(verilog_text, module):
-    """``[(direction, name, width)]`` of ``module`` in Amaranth's Verilog."""
-    start = verilog_text.index(f"module {module}(")
-    end = verilog_text.index("endmodule", start)
-    head = verilog_text[start:end]
-    return [(d, name, int(hi) - int(lo) + 1 if hi else 1) for d, hi, lo, name in _PORT.findall(head)]
+    """``[(direction, name, width)]`` of ``module`` in Amaranth's Verilog (hdl.emit's port parser)."""
+    return [(d, name, w) for name, (d, w) in verilog_ports(verilog_text, module).items()]
 
 
 def harness(verilog_text, module, clock="clk"):

@@ -48,41 +48,35 @@ from pathlib import Path
 import fmax
 import toolchain
 from fmax import emit
+from navcores.hdl import catalog
 
 ROOT = Path(__file__).resolve().parent.parent
 OUT_DIR = Path("build/synth")
 NODES = 18
-TOPS = [  # (name, params, paper FF / LUT4 / MHz)
-    ("harmonic_node", {}, "11 / 22 / 361 (Table 1)"),
-    ("harmonic_cluster", {"depth": 1024}, "198 / 398 / 300 (Table 2, without RAM)"),
-    # 6x12 block (4 clusters) of a 2x2-block map at p_max = 254 (16 * 256 = 1024 words)
-    ("harmonic_block", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 254, "depth": 1024},
-     "- (paper: 36x66 grid; 48x96 block 50699 / 101396 / 150, Table 3)"),
-    # the planner top: that block + Control + Decision + host streams, p_max = 62
-    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256},
-     "- (paper: Control 844 slices, Decision 3p+682 slices)"),
-    # the same planner with the block-exponent option (issue 10, beyond the paper)
-    ("harmonic_planner", {"n": 6, "m": 12, "br": 2, "bc": 2, "p_max": 62, "depth": 256, "block_exponents": 1},
-     "- (beyond the paper: block exponents, issue 10)"),
-    # EDT/BFS (paper 004): synthesized with the hierarchy kept, see EDT_TOPS.
-]
-# EDT/BFS arrays (paper 004; Table II: 1188 gates for "BFS and NNT", Table I:
-# 232 MHz; hdl/edt_bfs/README.md compares).  Not flattened: the array is n*m
-# instances of one cell module, which yosys then synthesizes once; the total
-# is glue + cells x count (flattening took yosys 0.23 six minutes for 8x8).
-# Without flattening the edge cells keep the logic of their absent
-# neighbours (constant inputs), so the totals are an upper bound of the
-# flattened ones (compared once in the README).  -nowidelut only.
-EDT_TOPS = [
-    ("edt_cell", {"height": 16, "width": 16}, "1188 gates / - / 232 (Tables I-II, per cell?)"),
-    ("edt_array", {"height": 8, "width": 8}, "- (64 cells)"),
-    ("edt_array", {"height": 16, "width": 16}, "- (256 cells)"),
-]
-DFLC_TOPS = [  # (name, params, paper figures), Spartan-3, paper 003 section 7
-    ("dflc_core", {"fll": "table1"},
-     "1303 LUT4, 8 MULT18X18, 12 ROM64X1 + 54 ROM256X1, 85 MHz, 4 clocks/sample"),
-    ("dflc_core", {"fll": "table1", "par": 1}, "(beyond the paper: 1 clock/sample)"),
-]
+
+
+def _paper(s):
+    """The harmonic table's paper column: FF / LUT4 / MHz of the same module, else the figures in words."""
+    f = s.paper
+    if f is None:
+        return "- " + s.paper_text()
+    if f.ff is None or f.lut4 is None or f.of:
+        return f"- (paper: {f.text()})"
+    return f"{f.ff} / {f.lut4} / {f.mhz:g} ({f.where}{', without RAM' if f.bram else ''})"
+
+
+# The catalog's synthesized sets (hdl/catalog.py): (name, params, paper figures).
+TOPS = [(s.top, s.params, _paper(s)) for s in catalog.SYNTHESIZED if s.top.startswith("harmonic")]
+# EDT/BFS (paper 004; the cell's figures are Tables I-II's, hdl/edt_bfs/README.md
+# compares).  Not flattened: the array is n*m instances of one cell module,
+# which yosys then synthesizes once; the total is glue + cells x count
+# (flattening took yosys 0.23 six minutes for 8x8).  Without flattening the
+# edge cells keep the logic of their absent neighbours (constant inputs), so
+# the totals are an upper bound of the flattened ones (compared once in the
+# README).  -nowidelut only.
+EDT_TOPS = [(s.top, s.params, s.paper_text()) for s in catalog.SYNTHESIZED if s.top.startswith("edt")]
+# DFLC, Spartan-3, paper 003 section 7
+DFLC_TOPS = [(s.top, s.params, s.paper_text()) for s in catalog.SYNTHESIZED if s.family == "xc3s"]
 # The tops counted for the fit flow's parts (the flattened tops above).
 FABRIC_TOPS = [(name, params) for name, params, _ in TOPS + DFLC_TOPS + EDT_TOPS[:1]]
 VARIANTS = ("", "-nowidelut")  # extra synth_xilinx flags
@@ -150,8 +144,9 @@ def report(results, version, elapsed):
         bram = " + ".join(f"{n} × {c}" for c, n in parts.get("BRAM", [])) or "0"
         lines.append(f"| {label} | {s['FF']} | {s['LUT']} | {bram} | {job['paper']} |")
         if job["name"] == "harmonic_cluster":
-            lines.append(f"| ↳ per node (/{NODES}) | {s['FF'] / NODES:.1f} | "
-                         f"{s['LUT'] / NODES:.1f} | | 11.0 / 22.1 / 300 (Table 2 / {NODES}) |")
+            t2 = catalog.PAPER["cluster"]
+            lines.append(f"| ↳ per node (/{NODES}) | {s['FF'] / NODES:.1f} | {s['LUT'] / NODES:.1f} | | "
+                         f"{t2.ff / NODES:.1f} / {t2.lut4 / NODES:.1f} / {t2.mhz:g} ({t2.where} / {NODES}) |")
         notes.append(f"- {label}: " + "; ".join(
             f"{g}: " + ", ".join(f"{c} {n}" for c, n in parts[g]) for g, _ in GROUPS if g in parts))
     lines += ["", "Cells by group (LUT4 column = LUT1..LUT4 + INV; FF = all FD*; "

@@ -8,6 +8,7 @@ them), draws the samples with a fixed seed (plus the corners), and runs
 35 bits: [9:0] input 0 code, [19:10] input 1 code, [33:20] y, [34] zero.
 """
 
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,9 @@ from navcores.hdl.dflc.top import config_for, split_params
 from navcores.models.dflc import Dflc
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))   # examples/golden_files.py
+from golden_files import run, write_or_check  # noqa: E402
+
 N = 24
 SEED = 2024
 
@@ -45,16 +49,8 @@ def main(check=False):
         lines.append(f"{word:09x}")
     files["golden.hex"] = ("\n".join(lines) + "\n")
     print(f"golden.hex: {len(codes)} samples, {int(zero.sum())} with zero strength")
-    if check:
-        stale = [n for n, text in files.items() if (HERE / n).read_text() != text]
-        if stale:
-            print(f"stale: {', '.join(stale)} (rerun without --check)")
-        return not stale
-    for name, text in files.items():
-        (HERE / name).write_text(text)
-    return True
+    return write_or_check(HERE, files, check)
 
 
 if __name__ == "__main__":
-    import sys
-    sys.exit(0 if main(check="--check" in sys.argv[1:]) else 1)
+    run(main)

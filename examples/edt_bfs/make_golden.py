@@ -13,6 +13,7 @@ the manifest edt_bfs_height8_width8.json describes the stream payloads:
 * meta.hex: beats, EDT iterations, BFS iterations, job cycles.
 """
 
+import sys
 from pathlib import Path
 
 import yaml
@@ -23,6 +24,9 @@ from navcores.models.edt_bfs import plan_path
 from navcores.models.maps import load_grid
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parent))   # examples/golden_files.py
+from golden_files import run, write_or_check  # noqa: E402
+
 MAX_BEATS = 128         # tb_edt_bfs.v's memory
 GOAL, START, DFAR = (0, 7), (7, 0), 0
 
@@ -74,16 +78,8 @@ def main(check=False):
     print(f"path of {len(m.path)} pixels {m.path}; {len(beats)} beats; "
           f"{m.iterations_edt} EDT + {m.iterations_bfs} BFS iterations, {m.cycles} cycles")
     print(f"payload widths: command {cmd.size}, column {col.size}, result {res.size}")
-    if check:
-        stale = [n for n, text in files.items() if (HERE / n).read_text() != text]
-        if stale:
-            print(f"stale: {', '.join(stale)} (rerun without --check)")
-        return not stale
-    for name, text in files.items():
-        (HERE / name).write_text(text)
-    return True
+    return write_or_check(HERE, files, check)
 
 
 if __name__ == "__main__":
-    import sys
-    sys.exit(0 if main(check="--check" in sys.argv[1:]) else 1)
+    run(main)

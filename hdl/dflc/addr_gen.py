@@ -4,6 +4,8 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
+
 __all__ = ["AddrGen"]
 
 
@@ -22,6 +24,7 @@ class AddrGen(wiring.Component):
     k : Out(n), active : Out(1), first : Out(1), last : Out(1), ready : Out(1)
     """
 
+    @checked_init
     def __init__(self, n):
         if not 1 <= n <= 4:
             raise ValueError(f"ip_no = {n}: must be 1 to 4")

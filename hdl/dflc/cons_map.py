@@ -1,10 +1,11 @@
 """Consequent map of the DFLC (paper 003 Fig. 8 cons_map_p and the singleton ROM s_rom)."""
 
-from amaranth.hdl import Module, Signal
+from amaranth.hdl import Module
 from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
 from .mf_gen import bits_for
 from .pipe import check_pipe, delay
 
@@ -33,6 +34,7 @@ class ConsMap(wiring.Component):
     none : Out(1)         no rule for this combination (its weight must be 0)
     """
 
+    @checked_init
     def __init__(self, config, cpr=1):
         check_pipe({"cpr2_no": cpr})
         self.config, self.cpr = config, cpr

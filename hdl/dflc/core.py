@@ -4,7 +4,7 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param
+from ..params import Param, checked_init
 from .addr_gen import AddrGen
 from .cons_map import ConsMap
 from .divider import Divider
@@ -150,6 +150,7 @@ class DflcCore(wiring.Component):
                          doc=f"pipeline registers, Table 2 {k[:-3].upper()}")
                    for k in PIPE_KEYS)
 
+    @checked_init
     def __init__(self, config, parallel=False, **pipe):
         c = config
         self.pipe = check_pipe(pipe, op_sz=c.op_sz)

@@ -5,7 +5,7 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from .mf_gen import bits_for
+from ..params import checked_init
 from .pipe import check_pipe
 
 __all__ = ["Divider", "DIV_TYPES"]
@@ -39,6 +39,7 @@ class Divider(wiring.Component):
     y : Out(op_sz), zero : Out(1), v_out : Out(1)
     """
 
+    @checked_init
     def __init__(self, config, sw_w, swc_w, cpr=1):
         if config.div_type not in DIV_TYPES:
             raise ValueError(f"div_type = {config.div_type!r}: expected one of {DIV_TYPES}")

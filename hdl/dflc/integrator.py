@@ -4,6 +4,7 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
 from .pipe import check_pipe, delay
 
 __all__ = ["Integrator"]
@@ -28,6 +29,7 @@ class Integrator(wiring.Component):
     sw : Out(bits(2^n full)), swc : Out(...), done : Out(1)
     """
 
+    @checked_init
     def __init__(self, w_w, wc_w, sw_w, swc_w, cpr_uns=0, cpr_sig=0):
         check_pipe({"cpr7_no": cpr_uns, "cpr8_no": cpr_sig})
         self.sw_w, self.swc_w, self.cpr_uns, self.cpr_sig = sw_w, swc_w, cpr_uns, cpr_sig

@@ -1,9 +1,10 @@
 """MF degree generator of one input (paper 003 Fig. 8 trap_gen_p)."""
 
-from amaranth.hdl import Array, Const, Module, Signal, signed, unsigned
+from amaranth.hdl import Array, Const, Module, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
 from .pipe import check_pipe, delay
 
 __all__ = ["MfGen", "bits_for"]
@@ -59,6 +60,7 @@ class MfGen(wiring.Component):
     v_out : Out(1)         new degrees this cycle
     """
 
+    @checked_init
     def __init__(self, spec, ip_sz, dy_ip, psr=1, cpr=1):
         check_pipe({"psr1_no": psr, "cpr3_no": cpr})
         self.spec, self.ip_sz, self.dy_ip, self.psr, self.cpr = spec, ip_sz, dy_ip, psr, cpr

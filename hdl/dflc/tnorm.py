@@ -4,6 +4,8 @@ from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
+from ..params import checked_init
+
 __all__ = ["Tnorm", "SEL_OPS"]
 
 SEL_OPS = ("min", "prod", "max", "probor")
@@ -23,6 +25,7 @@ class Tnorm(wiring.Component):
     w : Out(dy_ip)             firing strength
     """
 
+    @checked_init
     def __init__(self, n, dy_ip, sel_op):
         if sel_op not in SEL_OPS:
             raise ValueError(f"sel_op = {sel_op!r}: expected one of {SEL_OPS}")

@@ -1,6 +1,5 @@
 """DFLC stream top (paper 003 Fig. 8 flc_ip wrapper; FSL = a FIFO stream)."""
 
-import re
 from pathlib import Path
 
 from amaranth.hdl import Module, Shape, Signal
@@ -10,7 +9,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.dflc import DEFAULT_FLL, DIV_TYPES, SEL_OPS, WIDTH_LIMITS, load_fll
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 
 from .core import DflcCore, latency, result_layout, sample_layout
 from .pipe import PIPE_KEYS, check_pipe
@@ -120,6 +119,7 @@ class DflcStream(wiring.Component):
                    "op_sz = {op_sz} < MF_op_sz = {mf_op_sz}: the output must hold a singleton code"),
     )
 
+    @checked_init
     def __init__(self, config=None, parallel=False, pipe=None, **kw):
         if config is None:
             check(self.PARAMS, self.CONSTRAINTS, **{**{p.name: p.default for p in self.PARAMS}, **kw})
@@ -169,7 +169,3 @@ class DflcStream(wiring.Component):
         wiring.connect(m, fifo.r_stream, wiring.flipped(self.o_stream))
         m.d.sync += inflight.eq(inflight + accept - core.o_stream.valid)
         return m
-
-
-def module_name_ok(name):
-    return re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name) is not None

@@ -8,7 +8,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
-from ..params import check
+from ..params import check, checked_init
 from .cell import EdtCell, cell_widths, result_layout, state_layout
 
 __all__ = ["EdtArray", "default_cell_module"]
@@ -65,6 +65,7 @@ class EdtArray(wiring.Component):
     PARAMS = tuple(replace(p, lo=3, message="array {name} {value!r}: must be an integer in {lo}..{hi}")
                    for p in EdtCell.PARAMS)
 
+    @checked_init
     def __init__(self, height, width, cell_module=None):
         self.height, self.width = height, width
         check(self.PARAMS, height=height, width=width)

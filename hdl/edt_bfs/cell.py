@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS, widths
 
-from ..params import Param, check
+from ..params import Param, check, checked_init
 
 __all__ = ["EdtCell", "cell_widths", "state_layout", "result_layout"]
 
@@ -102,6 +102,7 @@ class EdtCell(wiring.Component):
                          message="array {name} {value!r}: must be an integer in {lo}..{hi}")
                    for n in ("height", "width"))
 
+    @checked_init
     def __init__(self, height, width):
         self.height, self.width = height, width
         w = self.w = cell_widths(height, width)

@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
-from ..params import check
+from ..params import check, checked_init
 from .array import EdtArray, default_cell_module
 from .cell import EdtCell, cell_widths
 
@@ -88,6 +88,7 @@ class EdtBfs(wiring.Component):
 
     PARAMS = EdtArray.PARAMS        # the array's (it is elaborated inside)
 
+    @checked_init
     def __init__(self, height, width, cell_module=None):
         self.height, self.width = height, width
         check(self.PARAMS, height=height, width=width)

@@ -1,10 +1,10 @@
 """An n x m block of 3x6 clusters with its border nodes (paper 000, 5.1, 5.4)."""
 
-from amaranth.hdl import Cat, Module, Signal, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .border import Border, BorderExponentsSignature
 from .cluster import COLS, NODES, ROWS, Cluster
 from .limits import (BLOCKS_WHY, CLUSTERS_WHY, DEPTH_WHY, E_WHY, MAX_BLOCKS_SIDE, MAX_CLUSTERS, MAX_DEPTH, MAX_E,
@@ -103,7 +103,9 @@ class BlockHostSignature(wiring.Signature):
         Word address and cluster (k = i*CC + j for cluster (i, j)).
     wdata : Out(18); we : Out(1)
         Write the cluster's word (18 nodes' bits); a write also updates the
-        border storage of the block's edge nodes.
+        border storage of the block's edge nodes, one cycle later (keep the
+        clusters from writing in that cycle: a run writes from its
+        iteration's cycle 2 on).
     rdata : In(18)
         The addressed cluster's word, one cycle after the address.
     """
@@ -203,6 +205,7 @@ class Block(wiring.Component):
                               "w": (p["n"] // ROWS) * (p["m"] // COLS) * p["depth"]}, why=WORDS_WHY),
     )
 
+    @checked_init
     def __init__(self, n, m, blocks=(1, 1), p_max=30, depth=1024, exponents=False, e_max=255):
         BR, BC = blocks
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=BR, bc=BC, p_max=p_max, depth=depth,
@@ -230,9 +233,9 @@ class Block(wiring.Component):
         n, mm, CR, CC, S = self.n, self.m, self.CR, self.CC, self.stride
         ctl, host = self.control, self.host
         if self.exponents:
-            border = Border(n, mm, (self.BR, self.BC), S, exponents=True, e_max=self.e_max)
+            border = Border(n, mm, (self.BR, self.BC), self.p_max, exponents=True, e_max=self.e_max)
         else:
-            border = Border(n, mm, (self.BR, self.BC), S)
+            border = Border(n, mm, (self.BR, self.BC), self.p_max)
         m.submodules.border = border
         ekw = {"exponents": True} if self.exponents else {}
         cl = [[Cluster(depth=self.depth, p_max=self.p_max, **ekw) for _ in range(CC)] for _ in range(CR)]
@@ -287,16 +290,24 @@ class Block(wiring.Component):
             border.cntR.eq(c0.cntR), border.r_cnt.eq(c0.r_cnt),
         ]
 
-        # Border storage writes: the edge nodes' bits of the clusters' write
-        # port while iterating (all clusters write the same address), or of
-        # the host word for the one cluster the host writes.
-        idle = ~c0.busy
-        m.d.comb += border.w_addr.eq(c0.w_addr)
-        with m.If(idle):
-            m.d.comb += border.w_addr.eq(host.addr)
-        # The border RAMs' segments: each cluster edge that faces another
-        # block, with the word bits of its nodes (top/bottom rows, left/right
-        # columns of the block).
+        # Border storage writes, whole edge words (every lane of the four
+        # edges): while iterating, the edge nodes' bits of the clusters'
+        # write port (all clusters write the same address); after a host
+        # write, one cycle later, the edge words at its address: every
+        # cluster's port A read that address in the write's cycle (the host
+        # port's read while idle), the written cluster's word is the host's.
+        # So LOAD, one cluster at a time, keeps the lane words whole.
+        fill = Signal()
+        fill_addr, fill_k = Signal.like(host.addr), Signal.like(host.cluster)
+        fill_data = Signal.like(host.wdata)
+        m.d.sync += fill.eq(~c0.busy & host.we)
+        with m.If(~c0.busy & host.we):
+            m.d.sync += [fill_addr.eq(host.addr), fill_k.eq(host.cluster), fill_data.eq(host.wdata)]
+        m.d.comb += [border.w_addr.eq(Mux(fill, fill_addr, c0.w_addr)),
+                     border.w_en.eq(fill | (c0.busy & c0.w_en))]
+        # The border nodes by cluster edge segment: each cluster edge that
+        # faces another block, with the word bits of its nodes (top/bottom
+        # rows, left/right columns of the block).
         segments = []
         for j in range(CC):
             cols = slice(COLS * j, COLS * (j + 1))
@@ -308,13 +319,9 @@ class Block(wiring.Component):
                          ("right", i, CC - 1, rows, [bit(r, COLS - 1) for r in range(ROWS)])]
         for side, i, j, sl, bits in segments:
             c = cl[i][j]
-            en = getattr(border, f"en_{side}")[sl]
-            d = getattr(border, f"w_{side}")[sl]
-            with m.If(idle):
-                m.d.comb += [d.eq(Cat(host.wdata[b] for b in bits)),
-                             en.eq(Cat([host.we & (host.cluster == i * CC + j)] * len(bits)))]
-            with m.Else():
-                m.d.comb += [d.eq(Cat(c.w_data[b] for b in bits)), en.eq(Cat([c.w_en] * len(bits)))]
+            word = Mux(fill_k == i * CC + j, fill_data, c.host_rdata)
+            m.d.comb += getattr(border, f"w_{side}")[sl].eq(
+                Mux(fill, Cat(word[b] for b in bits), Cat(c.w_data[b] for b in bits)))
         if self.exponents:
             self._exponents(m, border, [c for row in cl for c in row], base)
         return m

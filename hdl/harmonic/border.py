@@ -6,9 +6,12 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..params import REQUIRED, Param, check, checked_init
+
 __all__ = ["Border", "BorderExponentsSignature", "SIDES"]
 
 SIDES = ("N", "S", "W", "E")        # the border sides, in the order of the per-side fields
+LANE = 18                           # border nodes per RAM word: the 1Kx18 block RAM's width
 
 
 class BorderExponentsSignature(wiring.Signature):
@@ -59,12 +62,23 @@ class BorderExponentsSignature(wiring.Signature):
 class Border(wiring.Component):
     """The border nodes around an n x m block of a map of BR x BC blocks.
 
-    Four RAMs, stored like the clusters' (one bit per address, word of block
-    b at base ``b*stride``, flag first then value bits MSB first), keep every
-    block's edges: ``top`` (row 0, m bits wide), ``bottom`` (row n-1),
-    ``left`` (column 0, n bits) and ``right`` (column m-1).  They are written
-    with the clusters' write port while the block that holds those nodes is
-    computed (its base and ``cntW``), and by the host port at load.  While
+    Four edge stores keep every block's edges: ``top`` (row 0, m border
+    nodes), ``bottom`` (row n-1), ``left`` (column 0, n nodes) and ``right``
+    (column m-1).  Each is packed like the clusters' RAMs (one bit per
+    address, block b's words at base ``b*stride``, flag first then value
+    bits MSB first) with 18 border nodes per RAM word (:data:`LANE`, the
+    width of the paper's 1Kx18 block RAM): ceil(m/18) RAMs per row edge,
+    ceil(n/18) per column edge, each one true dual-port block RAM (port A
+    reads LSB first; port B reads MSB first or writes, never both in a
+    cycle, as in the cluster): 2*ceil(m/18) + 2*ceil(n/18) RAMs, 12 for the
+    paper's 36x66 block (its 204 border nodes in 12 block RAMs, 5.4), 18
+    for 48x96.  A lane word holds one edge of one block, so the four sides
+    read four blocks at once.
+
+    Every write writes all lanes of the four edges at one address: the
+    clusters' write port (all clusters write in lockstep) while the block
+    that holds those nodes is computed, and the whole edge words the
+    :class:`~hdl.harmonic.block.Block` assembles after a host write.  While
     block b = br*BC + bc is computed, the border nodes stream, with the
     clusters' read addresses and one cycle of RAM latency like them:
 
@@ -88,11 +102,8 @@ class Border(wiring.Component):
         Block rows and columns.
     blocks : (BR, BC)
         Block rows and columns of the map.
-    stride : int
-        RAM words per block (p_max + 2).
-    segment : (rows, cols)
-        The cluster size: each edge is stored as one RAM per cluster segment
-        (written whole; ``en_*`` is read once per segment, at its first bit).
+    p_max : int
+        Largest precision: ``stride`` = p_max + 2 RAM words per block.
     exponents : bool
         Block exponents (issue 10; default False: the ports and logic below
         do not exist and the module is the fixed-point one).  Each stream is
@@ -126,6 +137,9 @@ class Border(wiring.Component):
                  ``scan_busy`` is never high; the scan costs nothing)
     ===========  ==========================================================
 
+    With block exponents the MSB-first reads (scan, raw) also happen while
+    the block writes, so each RAM has a third port (yosys doubles it).
+
     Exponent ports: ``p`` In (the run's precision) and ``conversion``
     In(:class:`BorderExponentsSignature`): ``s.N .. s.E`` In(signed),
     ``scan`` In(1), ``scan_busy`` Out(1), ``scan_len`` Out (max over the
@@ -142,25 +156,35 @@ class Border(wiring.Component):
         Row and column of the block being computed (held during the visit).
     cntR, r_cnt : In
         The clusters' read address offsets (relative to a block base).
-    w_addr : In(range(depth)); w_top, w_bottom : In(m); w_left, w_right : In(n)
-    en_top, en_bottom : In(m); en_left, en_right : In(n)
-        Edge write: absolute address, bits and enables (one per segment,
-        given on each of its bits).
+    w_addr : In(range(depth)); w_en : In(1)
+    w_top, w_bottom : In(m); w_left, w_right : In(n)
+        Edge write: absolute address, enable, every edge node's bit.
     h_N, h_S, m_N, m_S : Out(m); h_W, h_E, m_W, m_E : Out(n)
         The border streams.
     """
 
-    def __init__(self, n, m, blocks, stride, segment=(3, 6), exponents=False, e_max=255):
+    # hdl.emit's names: br, bc are ``blocks`` = (BR, BC).
+    PARAMS = (
+        *(Param(k, int, default, lo=1, doc=doc, message=f"{k}={{value!r}}: must be an integer >= 1")
+          for k, default, doc in (("n", REQUIRED, "block rows"), ("m", REQUIRED, "block columns"),
+                                  ("br", 1, "block rows of the map (BR)"),
+                                  ("bc", 1, "block columns of the map (BC)"))),
+        Param("p_max", int, 30, lo=2, doc="largest precision (stride p_max + 2 words per block)",
+              message="precision p_max={value!r} is not supported: p must be at least 2"),
+        Param("exponents", bool, False, doc="block exponents (issue 10, beyond the paper)",
+              message="exponents={value!r}: must be True or False"),
+        Param("e_max", int, 255, lo=1, doc="largest block exponent (with exponents)",
+              message="e_max={value!r}: must be an integer >= 1"),
+    )
+
+    @checked_init
+    def __init__(self, n, m, blocks, p_max, exponents=False, e_max=255):
         BR, BC = blocks
-        self.seg_rows, self.seg_cols = segment
-        for name, v in (("n", n), ("m", m), ("BR", BR), ("BC", BC), ("stride", stride)):
-            if not isinstance(v, int) or v < 1:
-                raise ValueError(f"{name}={v!r}: must be an integer >= 1")
+        check(self.PARAMS, n=n, m=m, br=BR, bc=BC, p_max=p_max, exponents=exponents, e_max=e_max)
+        stride = p_max + 2
         self.n, self.m, self.BR, self.BC, self.stride = n, m, BR, BC, stride
         self.depth = BR * BC * stride
         self.exponents = bool(exponents)
-        if self.exponents and (not isinstance(e_max, int) or e_max < 1):
-            raise ValueError(f"e_max={e_max!r}: must be an integer >= 1")
         self.e_max = e_max
         extra = {}
         if self.exponents:
@@ -168,9 +192,8 @@ class Border(wiring.Component):
         super().__init__({
             "br": In(range(max(BR, 2))), "bc": In(range(max(BC, 2))),
             "cntR": In(range(stride)), "r_cnt": In(range(stride)),
-            "w_addr": In(range(self.depth)),
+            "w_addr": In(range(self.depth)), "w_en": In(1),
             "w_top": In(m), "w_bottom": In(m), "w_left": In(n), "w_right": In(n),
-            "en_top": In(m), "en_bottom": In(m), "en_left": In(n), "en_right": In(n),
             "h_N": Out(m), "h_S": Out(m), "h_W": Out(n), "h_E": Out(n),
             "m_N": Out(m), "m_S": Out(m), "m_W": Out(n), "m_E": Out(n),
             **extra,
@@ -182,39 +205,40 @@ class Border(wiring.Component):
         b = Signal(range(max(self.BR * BC, 2)))
         m.d.comb += b.eq(self.br * BC + self.bc)
         sides = (
-            # (RAM, width, data, enable, out side, source-block offset, valid)
-            ("bottom", self.m, self.w_bottom, self.en_bottom, "N", -BC, self.br != 0),
-            ("top", self.m, self.w_top, self.en_top, "S", BC, self.br != self.BR - 1),
-            ("right", self.n, self.w_right, self.en_right, "W", -1, self.bc != 0),
-            ("left", self.n, self.w_left, self.en_left, "E", 1, self.bc != BC - 1),
+            # (RAM, width, data, out side, source-block offset, valid)
+            ("bottom", self.m, self.w_bottom, "N", -BC, self.br != 0),
+            ("top", self.m, self.w_top, "S", BC, self.br != self.BR - 1),
+            ("right", self.n, self.w_right, "W", -1, self.bc != 0),
+            ("left", self.n, self.w_left, "E", 1, self.bc != BC - 1),
         )
-        for name, width, wdata, en, side, offset, valid in sides:
-            seg = self.seg_cols if name in ("top", "bottom") else self.seg_rows
+        for name, width, wdata, side, offset, valid in sides:
             src = Signal(range(self.depth), name=f"src_{side}")
             m.d.comb += src.eq(Mux(valid, (b + offset) * S, 0))
             # The validity of the data follows its address by one cycle.
             ok = Signal(name=f"ok_{side}")
             m.d.sync += ok.eq(valid)
-            # One RAM per cluster edge segment (6 columns / 3 rows): a cluster
-            # writes its whole segment at once (at load the host writes one
-            # cluster), so no per-bit write enables, which would split the
-            # storage into 1-bit-wide block RAMs.
             if self.exponents:
                 conv = self._shift(m, side, width, ok, valid)
-            for k in range(width // seg):
-                sl = slice(k * seg, (k + 1) * seg)
-                ram = Memory(shape=seg, depth=self.depth, init=[])
+            for k in range(-(-width // LANE)):
+                sl = slice(k * LANE, min((k + 1) * LANE, width))
+                ram = Memory(shape=sl.stop - sl.start, depth=self.depth, init=[])
                 m.submodules[f"ram_{name}_{k}"] = ram
-                wp = ram.write_port()
                 lsb, msb = ram.read_port(), ram.read_port()
-                m.d.comb += [wp.addr.eq(self.w_addr), wp.data.eq(wdata[sl]), wp.en.eq(en[k * seg])]
+                wp = ram.write_port()
+                m.d.comb += [wp.data.eq(wdata[sl]), wp.en.eq(self.w_en)]
                 if not self.exponents:
+                    # Port B: the MSB-first reads, or the write on the same
+                    # address (one physical port, as in the cluster).
                     m.d.comb += [
-                        lsb.addr.eq(src + self.cntR), msb.addr.eq(src + self.r_cnt),
+                        lsb.addr.eq(src + self.cntR),
+                        msb.addr.eq(Mux(self.w_en, self.w_addr, src + self.r_cnt)), wp.addr.eq(msb.addr),
                         getattr(self, f"h_{side}")[sl].eq(Mux(ok, lsb.data, 0)),
                         getattr(self, f"m_{side}")[sl].eq(Mux(ok, msb.data, 0)),
                     ]
                 else:
+                    # The scan and the raw reads use port B while the block
+                    # writes: a third port (yosys doubles the RAM).
+                    m.d.comb += wp.addr.eq(self.w_addr)
                     conv(src, sl, lsb, msb)
         if self.exponents:
             self._scan_control(m)

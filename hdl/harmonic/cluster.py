@@ -5,7 +5,7 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .counters import Counters
 from .limits import DEPTH_WHY, MAX_DEPTH
 from .node import Node
@@ -114,6 +114,7 @@ class Cluster(wiring.Component):
                    lambda p: {"w": p["p_max"] + 2}),
     )
 
+    @checked_init
     def __init__(self, depth=1024, p_max=None, exponents=False):
         check(self.PARAMS, depth=depth)
         if p_max is None:

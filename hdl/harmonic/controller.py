@@ -236,43 +236,41 @@ class Controller(wiring.Component):
             "mode", "first_ok", "changed", "br", "bc", "anymax", "pend"))
         idle_clear, step, p_last, latch_order = v["idle_clear"], v["step"], v["p_last"], v["latch_order"]
         BR, BC, X = self.BR, self.BC, self.exponents
-        if True:
-            if True:
-                with m.If((mode == Mode.UPDATE) & ~first_ok):
-                    m.d.sync += changed.eq(1)
-                with m.If(bc != BC - 1):
-                    m.d.sync += bc.eq(bc + 1)
-                with m.Elif(br != BR - 1):
-                    m.d.sync += [br.eq(br + 1), bc.eq(0)]
-                with m.Else():                              # the end of a pass
-                    m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
-                    with m.If(mode == Mode.UPDATE):
-                        m.d.sync += self.sweeps.eq(self.sweeps + 1)
-                    with m.If((mode == Mode.CLEAR) & self.running):
-                        m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
-                    with m.If(pend):
-                        latch_order()
-                        m.d.sync += mode.eq(Mode.CLEAR)
-                    with m.Elif(idle_clear):
-                        m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
-                        m.next = "IDLE"
-                    with m.Elif(mode == Mode.UPDATE):
-                        with m.If(~changed & first_ok):
-                            m.d.sync += mode.eq(Mode.CHECK)
-                    with m.Elif(mode == Mode.CLEAR):
-                        m.d.sync += mode.eq(Mode.UPDATE)
-                    with m.Else():                          # the end of a check pass
-                        m.d.sync += mode.eq(Mode.UPDATE)
-                        with m.If(~anymax):
-                            m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
-                            m.next = "IDLE"
-                        with m.Elif((step != 0) & (self.p + step <= p_last)):
-                            m.d.sync += self.p.eq(self.p + step)
-                            if X:
-                                self._rise(m, v)
-                        with m.Else():
-                            m.d.sync += [self.running.eq(0), self.busy.eq(0)]
-                            m.next = "IDLE"
+        with m.If((mode == Mode.UPDATE) & ~first_ok):
+            m.d.sync += changed.eq(1)
+        with m.If(bc != BC - 1):
+            m.d.sync += bc.eq(bc + 1)
+        with m.Elif(br != BR - 1):
+            m.d.sync += [br.eq(br + 1), bc.eq(0)]
+        with m.Else():                              # the end of a pass
+            m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
+            with m.If(mode == Mode.UPDATE):
+                m.d.sync += self.sweeps.eq(self.sweeps + 1)
+            with m.If((mode == Mode.CLEAR) & self.running):
+                m.d.sync += self.clear_passes.eq(self.clear_passes + 1)
+            with m.If(pend):
+                latch_order()
+                m.d.sync += mode.eq(Mode.CLEAR)
+            with m.Elif(idle_clear):
+                m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
+                m.next = "IDLE"
+            with m.Elif(mode == Mode.UPDATE):
+                with m.If(~changed & first_ok):
+                    m.d.sync += mode.eq(Mode.CHECK)
+            with m.Elif(mode == Mode.CLEAR):
+                m.d.sync += mode.eq(Mode.UPDATE)
+            with m.Else():                          # the end of a check pass
+                m.d.sync += mode.eq(Mode.UPDATE)
+                with m.If(~anymax):
+                    m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
+                    m.next = "IDLE"
+                with m.Elif((step != 0) & (self.p + step <= p_last)):
+                    m.d.sync += self.p.eq(self.p + step)
+                    if X:
+                        self._rise(m, v)
+                with m.Else():
+                    m.d.sync += [self.running.eq(0), self.busy.eq(0)]
+                    m.next = "IDLE"
 
     def _tail(self, m, v):
         # The clusters' run: start request in VSTART, then the command at each
@@ -307,7 +305,7 @@ class Controller(wiring.Component):
 
     def _exp_signals(self, m, v):
         BR, BC, B, p_max, e_max, h = self.BR, self.BC, self.BR * self.BC, self.p_max, self.e_max, self.headroom
-        br, bc, mode, fsm_state = v["br"], v["bc"], v["mode"], None
+        br, bc, mode = v["br"], v["bc"], v["mode"]
         x = self._x = {}
         x["E"] = E = [Signal(range(e_max + 1), name=f"E_{i}") for i in range(B)]
         Ea = Array(E)
@@ -326,7 +324,7 @@ class Controller(wiring.Component):
         with m.If(fsm_take := Signal(name="rep_take")):
             m.d.sync += [shd.eq(Mux(rem > 3, 3, rem)), rem.eq(rem - Mux(rem > 3, 3, rem))]
         x["rep_take"] = fsm_take
-        x["need_scan"] = need_scan = Signal(name="need_scan")
+        x["need_scan"] = Signal(name="need_scan")
         b = x["b"] = Signal(range(max(B, 2)), name="b_cur")
         m.d.comb += b.eq(br * BC + bc)
         e = x["e"] = Signal(range(e_max + 1), name="e_cur")
@@ -373,7 +371,7 @@ class Controller(wiring.Component):
         context of the ordinary VEND (update/check/clear visits without a
         re-pick, and a re-pick's shift visit, which then moves on)."""
         x = self._x
-        mode, rep, crs, d, b, shd = v["mode"], x["rep"], x["crs"], x["d"], x["b"], x["shd"]
+        mode, rep, crs, d, b = v["mode"], x["rep"], x["crs"], x["d"], x["b"]
         E, sat = x["E"], x["sat"]
         Ea = Array(E)
         with m.If(crs):                               # a coarsening visit ended

@@ -1,10 +1,10 @@
 """Counters unit shared by the 18 nodes of a cluster (paper 000, section 5.2)."""
 
-from amaranth.hdl import Module, Signal, unsigned
+from amaranth.hdl import Module, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Param, check
+from ..params import Param, check, checked_init
 from .limits import MAX_DEPTH
 
 __all__ = ["Counters"]
@@ -52,6 +52,7 @@ class Counters(wiring.Component):
                     message="p_max must be an integer in 2..{hi} (a word of p_max + 2 bits fills at most a "
                             "2**20-word RAM), not {value!r}"),)
 
+    @checked_init
     def __init__(self, p_max):
         check(self.PARAMS, p_max=p_max)
         self.p_max = p_max

@@ -7,14 +7,14 @@ from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
-from ..params import Constraint, Param, check
+from ..params import Constraint, Param, check, checked_init
 from .block import Block
 from .cluster import COLS, ROWS
 from .controller import Controller
 from .decision import NEIGHBOURHOOD, Decision, neighbourhood_layout
 from .limits import MAX_DEPTH
 
-__all__ = ["Planner", "Op", "Code", "command_layout", "response_layout"]
+__all__ = ["Planner", "Op", "Code", "command_layout", "response_layout", "direction_latency"]
 
 
 class Op(enum.Enum, shape=3):
@@ -34,6 +34,18 @@ class Code(enum.Enum, shape=3):
     BUSY = 4            # LOAD / START / READ / DIRECTION while a run or a clear pass is on
     BAD_OP = 5          # op 6 or 7
     BAD_ITERS = 6       # START with iters = 0
+
+
+def direction_latency(p, inside=4):
+    """DIRECTION's response latency at precision ``p`` (fixed point), in
+    cycles from the clock edge that takes the command to the one that
+    raises ``o_stream.valid``: the node and its ``inside`` neighbours in the
+    map are read serially (p+4 cycles each: the flag and p+1 value bits
+    through the host port, one cycle to start the read), a neighbour
+    outside the map costs 1 cycle, then 1 cycle starts the Decision, whose
+    2p+5 cycles (two serial passes) end with the response.  With block
+    exponents each value read adds its conversion: 1 + the shift cycles."""
+    return (1 + inside) * (p + 4) + (4 - inside) + 1 + (2 * p + 5)
 
 
 def _pw(p_max):
@@ -98,7 +110,8 @@ class Planner(wiring.Component):
     DIRECTION  block, row, col: ``triangle`` (0 NE, 1 ES, 2 SW, 3 WN) and the
                gradient (g_row, g_col) of :func:`models.harmonic.decision`
                (block exponents: of :func:`models.harmonic.decision_exponents`,
-               in the centre's units; ``exponent`` = its e_b).
+               in the centre's units; ``exponent`` = its e_b).  Response
+               after :func:`direction_latency` cycles (7p+26 inside the map).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
@@ -150,6 +163,7 @@ class Planner(wiring.Component):
                    Constraint("headroom <= p_max", lambda p: p["headroom"] <= p["p_max"],
                               "headroom={headroom!r}: leaves no mantissa bit at p_max={p_max}"))
 
+    @checked_init
     def __init__(self, n=6, m=12, blocks=(2, 2), p_max=30, depth=1024, block_exponents=False, e_max=255,
                  headroom=1):
         check(self.PARAMS, self.CONSTRAINTS, n=n, m=m, br=blocks[0], bc=blocks[1], p_max=p_max, depth=depth,
@@ -171,6 +185,8 @@ class Planner(wiring.Component):
         """The cycle figures hdl.emit puts in the manifest (see Controller's table)."""
         return {"iteration_cycles": "p+2", "block_visit_cycles": "K*(p+2)+6 for K iterations",
                 "response": "one o_stream beat per i_stream command, in order",
+                "direction_latency": "7p+26 cycles (a node with 4 neighbours in the map; "
+                                     "p+3 fewer per neighbour outside it: direction_latency())",
                 "run_cycles": "reported by STATUS (cycles field)"}
 
     def elaborate(self, platform):
@@ -269,7 +285,7 @@ class Planner(wiring.Component):
                     with m.Else():
                         m.d.comb += t_in.eq(0)
         _, _, t_ci, t_bit = locate(t_blk, t_row, t_col, "t")
-        m.d.comb += dec.h.eq(vals)
+        m.d.comb += [dec.h.eq(vals), dec.p.eq(ctl.p)]
 
         load_a = Signal(range(S + 1))
         p_bad = Signal()

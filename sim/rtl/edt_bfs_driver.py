@@ -1,78 +1,74 @@
 """Cocotb driver of the EDT/BFS core (hdl/edt_bfs/edt_bfs.py), shared by the tests and ``sim edt``.
 
-:class:`EdtBfsDriver` runs one job cycle by cycle: the command, the image
-columns (first beat = column W-1, as the load pipeline shifts right), and the
-result stream, with optional random stalls on the image source and the
-result sink.  It decodes the results into the arrays of
-:class:`models.edt_bfs.EdtBfsResult` and counts the job's cycles from the
-command handshake (exclusive) to the last result beat (inclusive).
+:class:`EdtBfsDriver` runs one job on the core's three streams
+(sim/rtl/stream.py): the command, the image columns (first beat = column
+W-1, as the load pipeline shifts right) and the results, optionally with
+random idle cycles on the two sources and random back-pressure on the
+result sink (:meth:`EdtBfsDriver.set_stalls`).  It decodes the results into
+the arrays of :class:`models.edt_bfs.EdtBfsResult` and counts the job's
+cycles from the command handshake (exclusive) to the last result beat
+(inclusive): ``models.edt_bfs.job_cycles`` with the image always valid and
+the results always ready; with stalls, that plus every cycle the core lost
+to them (``starved``: load cycles with no column, ``stalls``: result beats
+held back), since the core waits exactly those cycles and no other.
 """
 
 import numpy as np
-from amaranth.hdl import Shape
 from cocotb.clock import Clock
-from cocotb.triggers import ReadOnly, RisingEdge
+from cocotb.triggers import ClockCycles
 
 from navcores.hdl.edt_bfs.cell import cell_widths
 from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
 
 from .clock import PERIOD_NS
+from .stream import Streams, pauses
 
-__all__ = ["EdtBfsDriver", "compare", "pack", "unpack"]
-
-
-def pack(layout, values):
-    """``values`` (a dict of field -> int) packed into an integer of ``layout``."""
-    word = 0
-    for name, v in values.items():
-        f = layout[name]
-        word |= (int(v) & ((1 << f.width) - 1)) << f.offset
-    return word
-
-
-def unpack(layout, word):
-    """An integer of ``layout`` as a dict of field -> int (signed fields signed)."""
-    out = {}
-    for name, f in layout:
-        v = (word >> f.offset) & ((1 << f.width) - 1)
-        if Shape.cast(f.shape).signed and v >> (f.width - 1):
-            v -= 1 << f.width
-        out[name] = v
-    return out
+__all__ = ["EdtBfsDriver", "compare"]
 
 
 class EdtBfsDriver:
+    """An EDT/BFS core of ``height`` x ``width`` cells under cocotb.
+
+    ``cmd``, ``img``: the :class:`.stream.StreamSource` on ``c_stream`` /
+    ``i_stream``; ``res``: the :class:`.stream.StreamSink` on ``o_stream``.
+    """
+
     def __init__(self, dut, height, width):
         self.dut, self.h, self.w = dut, height, width
         wd = cell_widths(height, width)
         self.widths = wd
-        self.cmd = command_layout(wd)
-        self.img = image_layout(height)
-        self.res = result_layout(wd)
+        self.streams = Streams(dut)
+        self.cmd = self.streams.source("c_stream", command_layout(wd))
+        self.img = self.streams.source("i_stream", image_layout(height))
+        self.res = self.streams.sink("o_stream", result_layout(wd))
+
+    def set_stalls(self, rng=None, idle=0.0, back_pressure=0.0):
+        """Random idle cycles before each command and image column (probability
+        ``idle``) and ready low on the results (``back_pressure``), from
+        ``rng``; no arguments: none."""
+        self.cmd.pause = pauses(rng, idle)
+        self.img.pause = pauses(rng, idle)
+        self.res.set_pause(pauses(rng, back_pressure))
 
     async def start(self):
         Clock(self.dut.clk, PERIOD_NS, unit="ns").start()
         await self.reset()
 
     async def reset(self, cycles=2):
-        d = self.dut
-        d.rst.value = 1
-        d.c_stream__valid.value = 0
-        d.i_stream__valid.value = 0
-        d.o_stream__ready.value = 0
-        for _ in range(cycles):
-            await RisingEdge(d.clk)
-        d.rst.value = 0
-        await RisingEdge(d.clk)
+        """Synchronous reset (:meth:`.stream.Streams.apply_reset`): drops what
+        the sources hold and the results not yet read."""
+        await self.streams.apply_reset(cycles)
 
-    async def job(self, img, goals, start, dfar, *, rng=None, p_valid=1.0, p_ready=1.0,
-                  max_cycles=None, abort_after=None):
+    async def job(self, img, goals, start, dfar, *, max_cycles=None, abort_after=None):
         """Run one job; returns a dict of decoded results (None if aborted).
 
         ``start`` None sends ``path`` = 0.  ``dfar`` beyond the d_i width is
         clamped (exact: no d_i exceeds the largest width value).
-        ``abort_after``: stop driving after that many cycles and return None
-        (the caller then resets the core).
+        ``abort_after``: return None after that many cycles, the streams
+        left as they are (the caller then resets the core: :meth:`reset`).  Besides the results: ``cycles``
+        (command handshake, exclusive, to the last result beat, inclusive),
+        ``starved`` (load cycles the core waited for a column) and
+        ``stalls`` (cycles a result beat waited for ready).
         """
         d, h, w = self.dut, self.h, self.w
         img = np.asarray(img, dtype=bool)
@@ -82,52 +78,23 @@ class EdtBfsDriver:
             goal[r, c] = True
         dfar = min(int(dfar), (1 << self.widths["di"]) - 1)
         sr, sc = start if start is not None else (0, 0)
-        cmd = pack(self.cmd, {"dfar": dfar, "start_row": sr, "start_col": sc,
-                               "path": int(start is not None)})
-        cols = []
-        for j in range(w):
-            c = w - 1 - j
-            cols.append(pack(self.img, {
-                "obst": sum(int(img[r, c]) << r for r in range(h)),
-                "goal": sum(int(goal[r, c]) << r for r in range(h))}))
         if max_cycles is None:
             max_cycles = 20 * (h * w + w + 100) + 4 * h * w
-        stall = (lambda p: rng.random() < p) if rng is not None else (lambda p: True)
-
-        sent_cmd, j, cycle, t0 = False, 0, 0, None
+        starved, stalls = self.img.starved, self.res.stalls
+        self.cmd.put({"dfar": dfar, "start_row": sr, "start_col": sc, "path": int(start is not None)})
+        self.img.extend({"obst": sum(int(img[r, c]) << r for r in range(h)),
+                         "goal": sum(int(goal[r, c]) << r for r in range(h))} for c in reversed(range(w)))
+        if abort_after is not None:         # the streams stay as they are: the caller resets
+            await ClockCycles(d.clk, abort_after)
+            return None
+        deadline = self.streams.cycle + max_cycles
         beats = []
-        while True:
-            if abort_after is not None and cycle >= abort_after:
-                d.c_stream__valid.value = 0
-                d.i_stream__valid.value = 0
-                return None
-            cv = int(not sent_cmd)
-            d.c_stream__valid.value = cv
-            d.c_stream__payload.value = cmd
-            iv = int(sent_cmd and j < w and stall(p_valid))
-            d.i_stream__valid.value = iv
-            d.i_stream__payload.value = cols[j] if j < w else 0
-            orr = int(stall(p_ready))
-            d.o_stream__ready.value = orr
-            await ReadOnly()
-            fire_c = cv and int(d.c_stream__ready.value)
-            fire_i = iv and int(d.i_stream__ready.value)
-            fire_o = orr and int(d.o_stream__valid.value)
-            beat = unpack(self.res, int(d.o_stream__payload.value)) if fire_o else None
-            await RisingEdge(d.clk)
-            cycle += 1
-            if fire_c:
-                sent_cmd, t0 = True, cycle
-            if fire_i:
-                j += 1
-            if beat is not None:
-                beats.append(beat)
-                if beat["last"]:
-                    break
-            assert cycle < max_cycles, f"job did not finish in {max_cycles} cycles"
-        d.o_stream__ready.value = 0
+        while not beats or not beats[-1]["last"]:
+            beats.append(await self.res.recv(max(1, deadline - self.streams.cycle)))
         out = self._decode(beats)
-        out["cycles"] = cycle - t0
+        out["cycles"] = self.res.beats[-1][0] - self.cmd.beats[-1][0]
+        out["starved"] = self.img.starved - starved
+        out["stalls"] = self.res.stalls - stalls
         out["iterations_edt"] = int(d.iterations_edt.value)
         out["iterations_bfs"] = int(d.iterations_bfs.value)
         out["path_found_flag"] = int(d.path_found.value)
@@ -177,6 +144,8 @@ def compare(got, model, cycles=True):
     assert got["path_found"] == model.path_found == bool(got["path_found_flag"])
     assert got["iterations_edt"] == model.iterations_edt, (got["iterations_edt"], model.iterations_edt)
     assert got["iterations_bfs"] == model.iterations_bfs, (got["iterations_bfs"], model.iterations_bfs)
-    if cycles:
-        assert got["cycles"] == model.cycles, f"cycles rtl {got['cycles']} model {model.cycles}"
+    if cycles:      # the model's figure plus the cycles the stalls cost the core, if any
+        want = model.cycles + got["starved"] + got["stalls"]
+        assert got["cycles"] == want, (f"cycles rtl {got['cycles']}, model {model.cycles} + "
+                                       f"{got['starved']} starved + {got['stalls']} stalled = {want}")
     return n + len(model.path)

@@ -4,9 +4,10 @@ Shared by the planner regression (tb/harmonic/test_planner.py), the cocotb
 job sim/rtl/planner_job.py and, through :func:`run_planner_rtl`, the
 command line (``python -m sim harmonic --engine icarus|verilator``).
 
-* :class:`PlannerDriver`: pack / unpack commands and responses by the
-  planner's struct layouts, one command -> one response, map loading, a run
-  to the end, reading every node back.
+* :class:`PlannerDriver`: commands and responses on the planner's streams
+  (sim/rtl/stream.py, packed by the planner's struct layouts, with optional
+  random idle commands and response back-pressure), one command -> one
+  response, map loading, a run to the end, reading every node back.
 * :func:`planner_params`: the block / RAM parameters for a map.
 * :func:`run_planner_rtl`: a whole map through cocotb (a JSON job file read
   by sim/rtl/planner_job.py), returning the fields of
@@ -14,7 +15,6 @@ command line (``python -m sim harmonic --engine icarus|verilator``).
 """
 
 import json
-import os
 import tempfile
 from pathlib import Path
 
@@ -24,60 +24,49 @@ from navcores.hdl.harmonic.cluster import COLS, ROWS
 from navcores.hdl.harmonic.planner import Code, Op, command_layout, response_layout
 from navcores.models.harmonic import pad_to_blocks, reachable
 
+from .clock import PERIOD_NS
+from .stream import Streams, pauses
+
 __all__ = ["PlannerDriver", "planner_params", "run_planner_rtl", "Op", "Code"]
 
 POLL = 128          # cycles between STATUS polls while a run is on
 
 
-def _fields(layout):
-    return {name: (f.offset, f.width) for name, f in layout}
-
-
 class PlannerDriver:
-    def __init__(self, dut, n, m, blocks, p_max, exponents=False, e_max=255):
+    """The Planner's host streams under cocotb: one command, one response.
+
+    ``n``, ``m``, ``blocks``, ``p_max``, ``exponents``, ``e_max``: the
+    Planner's parameters (they fix the command and response layouts).
+    ``rng`` with ``idle`` / ``back_pressure``: the probability of an idle
+    cycle before each command and of ready low on the response stream each
+    cycle (:func:`.stream.pauses`); 0: commands at once, responses always
+    taken.  ``cmd`` / ``resp``: the :class:`.stream.StreamSource` /
+    :class:`.stream.StreamSink` (``beats``, ``idle``, ``stalls``).  The
+    clock must run before the first command (:func:`.clock.start`).
+    """
+
+    def __init__(self, dut, n, m, blocks, p_max, exponents=False, e_max=255, rng=None, idle=0.0,
+                 back_pressure=0.0):
         self.dut, self.n, self.m = dut, n, m
         self.BR, self.BC = blocks
         self.p_max = p_max
         self.exponents = bool(exponents)
-        self.cmd_f = _fields(command_layout(blocks, n, m, p_max))
-        self.resp_f = _fields(response_layout(p_max, exponents=True, e_max=e_max) if exponents
-                              else response_layout(p_max))
+        self.streams = Streams(dut)
+        self.cmd = self.streams.source("i_stream", command_layout(blocks, n, m, p_max), pause=pauses(rng, idle))
+        resp_layout = response_layout(p_max, exponents=True, e_max=e_max) if exponents else response_layout(p_max)
+        self.resp = self.streams.sink("o_stream", resp_layout, pause=pauses(rng, back_pressure))
         self.commands = 0
-        dut.i_stream__valid.value = 0
-        dut.o_stream__ready.value = 1
-
-    def pack(self, **fields):
-        word = 0
-        for name, value in fields.items():
-            off, width = self.cmd_f[name]
-            word |= (int(value) & ((1 << width) - 1)) << off
-        return word
-
-    def unpack(self, word):
-        out = {}
-        for name, (off, width) in self.resp_f.items():
-            v = (word >> off) & ((1 << width) - 1)
-            if name in ("g_row", "g_col") and v >> (width - 1):
-                v -= 1 << width
-            out[name] = v
-        out["code"] = Code(out["code"])
-        out["op"] = Op(out["op"])
-        return out
 
     async def command(self, op, **fields):
-        """Send one command (from a falling edge); return its response."""
-        from cocotb.triggers import FallingEdge
-        d = self.dut
-        d.i_stream__payload.value = self.pack(op=int(op.value), **fields)
-        d.i_stream__valid.value = 1
-        while not int(d.i_stream__ready.value):
-            await FallingEdge(d.clk)
-        await FallingEdge(d.clk)            # taken at the rising edge in between
-        d.i_stream__valid.value = 0
-        while not int(d.o_stream__valid.value):
-            await FallingEdge(d.clk)
-        resp = self.unpack(int(d.o_stream__payload.value))
-        await FallingEdge(d.clk)            # ready is held high: taken
+        """Send one command; return its response (a dict of the response
+        layout's fields, ``code`` and ``op`` as :class:`Code` / :class:`Op`).
+        ``op`` may be a raw integer (an op the planner does not know).
+        ``self.latency``: the response's latency, the cycles after the one
+        that took the command up to the one that raised the response's valid
+        (back-pressure on the response does not count)."""
+        self.cmd.put({"op": op, **fields})
+        resp = await self.resp.recv()
+        self.latency = self.resp.starts[-1] - self.cmd.beats[-1][0] - 1
         self.commands += 1
         assert resp["op"] == op, f"response to {op} says {resp['op']}"
         return resp
@@ -107,7 +96,8 @@ class PlannerDriver:
         return await self.command(Op.START, p1=p1, step=step, p_last=p_last, iters=iters)
 
     async def wait_idle(self, poll=POLL, limit=10**8, progress=None):
-        from cocotb.triggers import ClockCycles, FallingEdge
+        """STATUS every ``poll`` cycles until the run is over; its last response."""
+        from cocotb.triggers import FallingEdge, Timer
         waited = 0
         while True:
             st = await self.command(Op.STATUS)
@@ -115,7 +105,7 @@ class PlannerDriver:
                 return st
             if progress:
                 progress(st)
-            await ClockCycles(self.dut.clk, poll)
+            await Timer(poll * PERIOD_NS, unit="ns")    # one wake-up, not one per cycle
             await FallingEdge(self.dut.clk)
             waited += poll
             assert waited < limit, "the planner did not finish"
@@ -228,6 +218,3 @@ def exponent_params(params):
     """The emitted Planner's parameters with its block-exponent option on."""
     return {**params, "block_exponents": 1}
 
-
-def job_env():
-    return os.environ.get("PLANNER_JOB"), os.environ.get("PLANNER_RESULT")

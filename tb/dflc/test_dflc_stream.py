@@ -1,4 +1,4 @@
-"""DFLC stream top (hdl/dflc/top.py) against models.dflc, bit-exact, with cocotb-bus.
+"""DFLC stream top (hdl/dflc/top.py) against models.dflc, bit-exact, through sim/rtl/stream.py.
 
 Two builds per simulator: the test top ``dflc_multi_setregress``
 (tb/dflc/multi.py) holds one DflcStream per configuration, and the paper's
@@ -10,8 +10,10 @@ each cocotb test below runs on every instance of the build in turn:
   codes (fewer for the fixtures); all their combinations) through the stream
   at full rate, every output compared with ``Dflc.infer`` (y and zero flag).
 * ``random_stalls``: random samples with random idle cycles on the input and
-  random back-pressure on the output; a cocotb-bus Scoreboard checks that the
-  outputs are the model's, in order, none lost or duplicated.
+  random back-pressure on the output (seeded: SEED=); each output is checked
+  against the model's as it is taken, in order, none lost or duplicated, and
+  the run must have stalled both ways (idle input cycles the core was ready
+  for, output cycles with valid and not ready).
 * ``cycles``: at full throughput the input accepts exactly one sample every
   2^n cycles (1 in the parallel option), outputs come equally spaced, and
   the first output is ``stream_latency`` cycles after its input handshake.
@@ -40,11 +42,11 @@ import numpy as np
 import pytest
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, RisingEdge
-from cocotb_bus.scoreboard import Scoreboard
 
 from navcores.hdl.dflc.top import config_for, split_params, stream_latency
 from navcores.models.dflc import Dflc
-from navcores.sim.rtl.dflc_driver import PERIOD_NS, DflcDriver, DflcStallDriver, pack
+from navcores.sim.rtl.clock import PERIOD_NS
+from navcores.sim.rtl.dflc_driver import DflcDriver
 from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
 from tb.dflc.multi import SETS, DflcMulti
 
@@ -95,12 +97,9 @@ def start_clock(dut):
     cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
 
 
-async def new_driver(dut, key, config, **kw):
-    """The fast DflcDriver without kw, the cocotb-bus DflcStallDriver with."""
-    if kw:
-        drv = DflcStallDriver(dut, config, prefix=prefix(key), **kw)
-    else:
-        drv = DflcDriver(dut, config, prefix=prefix(key))
+async def new_driver(dut, key, config, **stalls):
+    """A DflcDriver on instance ``key``, reset; ``stalls``: rng, idle, back_pressure."""
+    drv = DflcDriver(dut, config, prefix=prefix(key), **stalls)
     await drv.reset()
     return drv
 
@@ -130,6 +129,7 @@ async def sweep(dut):
     for key, config, par, model in instances(dut):
         drv = await new_driver(dut, key, config)
         await _sweep(dut, drv, config, model)
+        drv.stop()
 
 
 async def _sweep(dut, drv, config, model):
@@ -160,7 +160,7 @@ async def random_stalls(dut):
         # output ready on average half as often as the core delivers: the
         # output FIFO fills and the input sees back-pressure
         ready_p = 0.5 / (1 if par["parallel"] else 1 << config.n)
-        drv = await new_driver(dut, key, config, rng=rng, idle=0.3, ready_p=ready_p)
+        drv = await new_driver(dut, key, config, rng=rng, idle=0.3, back_pressure=1 - ready_p)
         await _random_stalls(dut, drv, config, model, rng, ready_p)
         drv.stop()
         done.append(key)
@@ -176,28 +176,31 @@ async def _random_stalls(dut, drv, config, model, rng, ready_p):
                  [(1 << config.ip_sz) - 1] + [0] * (config.n - 1)]
     y, zero = model.infer(codes)
     expected = [(int(a), bool(b)) for a, b in zip(y, zero)]
-    sb = Scoreboard(dut)
-    compared = []
+    compared, errors = [], []
 
-    def check(tr):
-        got = drv.unpack(tr[1])
-        want = expected_q.pop(0)
-        assert got == want, f"output {len(compared)}: rtl {got}, model {want}"
+    def check(cycle, value):        # each output as it is taken (a scoreboard)
+        got, want = drv.result(value), expected_q.pop(0) if expected_q else None
+        if got != want:
+            errors.append(f"output {len(compared)} (cycle {cycle}): rtl {got}, model {want}")
         compared.append(got)
 
     expected_q = list(expected)
-    sb.add_interface(drv.out_mon, expected_q, compare_fn=check)
-    t0 = drv.cycles.now
+    drv.sink.callback = check
+    t0 = drv.streams.cycle
     out = await drv.run(codes.tolist(), timeout_cycles=n * 40 + 500)
-    spent = drv.cycles.now - t0
-    dut._log.info(f"random_stalls {config.name}: {n} samples in {spent} cycles")
+    spent = drv.streams.cycle - t0
+    src, snk = drv.source, drv.sink
+    dut._log.info(f"random_stalls {config.name}: {n} samples in {spent} cycles; input idle {src.idle} "
+                  f"and stalled {src.stalls} cycles, output stalled {snk.stalls} cycles")
+    assert not errors, errors[:3]
     assert spent > 0.7 * n / ready_p, "the output, not the input, must limit the rate"
     assert out == expected
     await ClockCycles(dut.clk, 40)
-    assert len(compared) == n and not expected_q and len(drv.outputs) == n, "lost or duplicated"
-    assert len(drv.in_mon._recvQ) == n
-    # (Scoreboard.result would end the cocotb test as passed: check by hand.)
-    assert sb.errors == 0 and not expected_q
+    assert len(compared) == n and not expected_q and len(snk.beats) == n, "lost or duplicated"
+    assert len(src.beats) == n
+    # it stalled every way: idle input cycles, input valid and not ready (the
+    # core held back by its output), output valid and not ready
+    assert src.idle > 0 and src.stalls > 0 and snk.stalls > 0, (src.idle, src.stalls, snk.stalls)
 
 
 @cocotb.test()
@@ -208,6 +211,7 @@ async def cycles(dut):
         rng = random.Random(seed() + 1)
         drv = await new_driver(dut, key, config)
         checked[key] = await _cycles(dut, drv, config, par, model, rng)
+        drv.stop()
     assert len(checked) == len(list(instances(dut)))
     if ONLY is None:    # the generics really spread the latency (multi.py's comments)
         assert checked == LATENCIES[TOP], checked
@@ -235,32 +239,31 @@ async def reset_mid_stream(dut):
     start_clock(dut)
     for key, config, par, model in instances(dut):
         rng = random.Random(seed() + 2)
-        drv = await new_driver(dut, key, config, rng=rng, ready_p=0.0)   # output stalled
+        drv = await new_driver(dut, key, config, rng=rng, back_pressure=1.0)   # output stalled
         await _reset_mid_stream(dut, drv, config, par, model, rng)
         drv.stop()
 
 
 async def _reset_mid_stream(dut, drv, config, par, model, rng):
     codes = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(30)]
-    for row in codes:
-        drv.source.append(pack(row, config.ip_sz))
+    drv.source.extend(codes)
     await ClockCycles(dut.clk, rng.randrange(20, 40))
-    assert len(drv.in_mon._recvQ) > 0, "some samples entered before the reset"
+    assert len(drv.source.beats) > 0 and drv.source.busy, "some samples entered before the reset, some not"
     await drv.reset()
-    drv.sink.set(1.0)
+    drv.sink.set_pause(None)
     # ready and empty: input ready at once, nothing comes out
     await RisingEdge(dut.clk)
-    assert int(getattr(dut, f"{drv.i_name}__ready").value) == 1
+    assert int(drv.source.ready.value) == 1
     for _ in range(3 * stream_latency(config, **par)):
         await RisingEdge(dut.clk)
-        assert int(getattr(dut, f"{drv.o_name}__valid").value) == 0, "output after reset without input"
-    assert drv.outputs == []
+        assert int(drv.sink.valid.value) == 0, "output after reset without input"
+    assert drv.sink.beats == []
     fresh = [[rng.randrange(1 << config.ip_sz) for _ in range(config.n)] for _ in range(12)]
     out = await drv.run(fresh)
     y, zero = model.infer(np.array(fresh))
     assert out == [(int(a), bool(b)) for a, b in zip(y, zero)]
     await ClockCycles(dut.clk, 2 * stream_latency(config, **par))
-    assert len(drv.outputs) == len(fresh), "nothing from before the reset may appear"
+    assert len(drv.sink.beats) == len(fresh), "nothing from before the reset may appear"
 
 
 @pytest.mark.parametrize("build", BUILDS)

@@ -1,4 +1,4 @@
-"""Test images for the EDT/BFS core (model tests and cocotb benches share them).
+"""Test images for the EDT/BFS core (the model tests and the cocotb tests share them).
 
 Every generator returns a bool array (True = obstacle) from a numpy Generator.
 """

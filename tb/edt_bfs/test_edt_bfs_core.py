@@ -1,16 +1,21 @@
 """The EDT/BFS core (hdl/edt_bfs/edt_bfs.py: controller, streams, array of cells) against the model.
 
 Every job's distances, vectors (NNT), cfr, visited flags, parents, path,
-iteration counts and cycle count (with an always-valid source and an
-always-ready sink) equal models.edt_bfs.plan_path bit for bit.  Cases:
+iteration counts and cycle count equal models.edt_bfs.plan_path bit for
+bit.  The cycle count is the model's (models.edt_bfs.job_cycles) when the
+sources are always valid and the result sink always ready; with random
+idle cycles on the command and image sources and random back-pressure on
+the results (sim/rtl/stream.py, seeded: SEED= replays) it is the model's
+plus exactly the cycles the core lost to them (load cycles with no column,
+result beats held back), and the stalled jobs must have had both.  Cases:
 random and structured images (rooms, corridors, isolated points) with one to
-three goals; no obstacles; a goal on an obstacle; an unreachable goal; the
-start equal to the goal; no path requested; a changed environment (a moved
-obstacle, loaded into the same array without reset); random stalls on the
-image source and back-pressure on the result stream; a reset in the middle
-of the EDT and of the read-out, after which the core is idle and the next
-job is exact; a start outside a 7x9 array (start_err).  Environment:
-EDT_SIZE (HxW), EDT_JOBS (random jobs).
+three goals, every other job stalled; no obstacles; a goal on an obstacle;
+an unreachable goal; the start equal to the goal; no path requested; a
+changed environment (a moved obstacle, loaded into the same array without
+reset, stalled); heavy stalls; a reset in the middle of a stalled load (the
+column being presented is dropped), of the EDT and of a stalled read-out,
+after which the core is idle and the next job is exact; a start outside a
+7x9 array (start_err).  Environment: EDT_SIZE (HxW), EDT_JOBS (random jobs).
 """
 
 import os
@@ -37,10 +42,27 @@ async def _setup(dut):
     return drv, np.random.default_rng(seed)
 
 
-async def _check(drv, img, goals, start, dfar, **kw):
+# stalls: probability of an idle cycle before a command or column, of ready low on the results
+IDLE, BACK_PRESSURE = 0.3, 0.5
+
+
+async def _check(drv, img, goals, start, dfar, stalled=None):
+    """One job against the model (values, path, iterations, cycles); with
+    ``stalled`` (a list) the job's lost cycles are appended to it."""
     model = plan_path(img, goals, start, dfar)
-    got = await drv.job(img, goals, start, dfar, **kw)
-    return compare(got, model, cycles="rng" not in kw), model
+    got = await drv.job(img, goals, start, dfar)
+    if stalled is not None:
+        stalled.append((got["starved"], got["stalls"]))
+    else:
+        assert got["starved"] == got["stalls"] == 0 and got["cycles"] == model.cycles
+    return compare(got, model), model
+
+
+def _stalled(stalled):
+    """The stalled jobs lost cycles both to the image source and to the result sink."""
+    starved, stalls = (sum(s[i] for s in stalled) for i in (0, 1))
+    assert starved > 0 and stalls > 0, stalled
+    return f"{len(stalled)} stalled jobs: {starved} load cycles without a column, {stalls} result stalls"
 
 
 @cocotb.test()
@@ -48,6 +70,7 @@ async def random_and_structured(dut):
     drv, rng = await _setup(dut)
     names = list(FAMILIES)
     compared = found = 0
+    stalled = []
     for n in range(JOBS):
         img = FAMILIES[names[n % len(names)]](rng, H, W)
         cells = free_cells(img, rng, 4)
@@ -56,11 +79,16 @@ async def random_and_structured(dut):
             cells = [(0, 0), (0, 0)]
         start, goals = cells[0], cells[1:1 + int(rng.integers(1, 4))]
         dfar = int(rng.integers(0, 3))
-        c, model = await _check(drv, img, goals, start, dfar)
+        if n % 2:                                   # every other job stalled
+            drv.set_stalls(rng, IDLE, BACK_PRESSURE)
+        c, model = await _check(drv, img, goals, start, dfar, stalled if n % 2 else None)
+        drv.set_stalls()
         compared += c
         found += model.path_found
     dut._log.info(f"{JOBS} jobs, {compared} values compared, {found} paths")
     assert compared >= JOBS * 7 * H * W and (found >= 1 or JOBS < 4)
+    if JOBS >= 2:
+        dut._log.info(_stalled(stalled))
 
 
 @cocotb.test()
@@ -103,30 +131,38 @@ async def edge_cases(dut):
 async def changed_environment(dut):
     """A moved obstacle loaded into the same array: nothing left over from the old image."""
     drv, rng = await _setup(dut)
+    drv.set_stalls(rng, IDLE, BACK_PRESSURE)
+    stalled = []
     h, w = H, W
     img = np.zeros((h, w), dtype=bool)
     img[2:4, 2:w - 2] = True
     goals, start = [(h - 1, w - 1)], (0, 0)
-    _, m1 = await _check(drv, img, goals, start, 1)
+    _, m1 = await _check(drv, img, goals, start, 1, stalled)
     moved = np.zeros_like(img)
     moved[h - 3:h - 1, 2:w - 2] = True
-    _, m2 = await _check(drv, moved, goals, start, 1)
+    _, m2 = await _check(drv, moved, goals, start, 1, stalled)
     assert not np.array_equal(m1.distance, m2.distance)
     # and back, plus a different goal set
-    _, m3 = await _check(drv, img, [(h - 1, 0)], (0, w - 1), 0)
+    _, m3 = await _check(drv, img, [(h - 1, 0)], (0, w - 1), 0, stalled)
+    dut._log.info(_stalled(stalled))
 
 
 @cocotb.test()
 async def back_pressure(dut):
-    """Random image stalls and result back-pressure: same results, more cycles."""
+    """Heavy random stalls (idle 0.4, ready 0.4): same results, the model's
+    cycles plus exactly the lost ones."""
     drv, rng = await _setup(dut)
+    drv.set_stalls(rng, 0.4, 0.6)
+    stalled = []
     for n in range(3):
         img = FAMILIES["random"](rng, H, W, 0.15)
         cells = free_cells(img, rng, 3)
         model = plan_path(img, cells[1:], cells[0], 0)
-        got = await drv.job(img, cells[1:], cells[0], 0, rng=rng, p_valid=0.6, p_ready=0.4)
-        compare(got, model, cycles=False)
-        assert got["cycles"] > model.cycles
+        got = await drv.job(img, cells[1:], cells[0], 0)
+        compare(got, model)                 # cycles: model + starved + stalls
+        assert got["cycles"] > model.cycles and got["stalls"] > 0
+        stalled.append((got["starved"], got["stalls"]))
+    dut._log.info(_stalled(stalled))
 
 
 async def _idle_after_reset(drv):
@@ -144,10 +180,18 @@ async def reset_mid_job(dut):
     img = FAMILIES["rooms"](rng, H, W)
     img[0, 0] = img[H - 1, W - 1] = False
     cells = [(0, 0), (H - 1, W - 1)]
-    # in the EDT (after the load), then in the middle of the read-out
-    for abort in (W + 3, W + 3 * W + H * W // 2):
+    # in the middle of a stalled load (a column is being presented or about
+    # to be: the reset drops it), in the EDT (after the load), then in the
+    # middle of a read-out with back-pressure
+    for abort, idle, back_pressure in ((W // 2, 0.5, 0), (W + 3, 0, 0), (W + 3 * W + H * W // 2, 0, 0.5)):
+        drv.set_stalls(rng, idle, back_pressure)
         assert await drv.job(img, cells[1:], cells[0], 0, abort_after=abort) is None
+        presented = drv.img.busy
         await _idle_after_reset(drv)
+        assert not drv.img.busy and drv.img.valid.value == 0, "the reset dropped what the source held"
+        if idle:
+            assert presented, "the load was still on at the reset"
+        drv.set_stalls()
         await _check(drv, img, cells[1:], cells[0], 0)
 
 

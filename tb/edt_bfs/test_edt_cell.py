@@ -1,6 +1,6 @@
 """One EdtCell (hdl/edt_bfs/cell.py) against models.edt_bfs.edt_step / bfs_step, every cycle.
 
-The bench drives random neighbour registers (done, δ, Δx, Δy, visited) and
+The test drives random neighbour registers (done, δ, Δx, Δy, visited) and
 a random mode each cycle: a load shift (the west neighbour's marks), an EDT
 iteration with a random k, the cfr step with a random d_far, a BFS step, or
 nothing.  Neighbour values are drawn so that candidates stay within the
@@ -17,7 +17,7 @@ from cocotb.triggers import ReadOnly, RisingEdge, Timer
 
 from navcores.hdl.edt_bfs.cell import cell_widths, result_layout, state_layout
 from navcores.models.edt_bfs import OFFSETS, bfs_step, edt_step
-from navcores.sim.rtl.edt_bfs_driver import pack, unpack
+from navcores.sim.rtl.stream import pack, unpack
 from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
 
 H = W = 16

@@ -1,4 +1,4 @@
-"""Small synthetic maps shared by the harmonic host-side tests and benches.
+"""Small synthetic maps shared by the harmonic host-side tests and benchmarks.
 
 Each returns a bool grid, True = obstacle, and the goal cells.
 """

@@ -2,8 +2,6 @@
 
 import numpy as np
 
-from navcores.models.harmonic import reachable
-
 
 def corridor(rows, cols):
     """A serpentine corridor of width 1: walls every other row, open at
@@ -48,7 +46,3 @@ MAPS = {
     "spiral": lambda rows, cols, seed: spiral(rows, cols),
     "random": lambda rows, cols, seed: random_map(rows, cols, seed),
 }
-
-
-def reachable_cells(ob, goals):
-    return reachable(ob, goals) & ~ob

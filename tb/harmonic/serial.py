@@ -1,4 +1,4 @@
-"""Testbench pieces shared by the harmonic tests: the RAM addresses of the
+"""Test helpers shared by the harmonic tests: the RAM addresses of the
 Counters (models.harmonic.counters), emulated serial words (a border node's
 or a neighbour's storage, one bit per RAM address) and cycle steps.  The
 clock and reset: navcores.sim.rtl.clock.start."""

@@ -41,9 +41,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from dirichlet import dirichlet
 from harmonic_small_maps import corridor, spiral
 from navcores.models.harmonic import neighbours, one, plan, relax, step
 from navcores.models.maps import load_map
@@ -76,34 +76,9 @@ MAPS = {
 SCHEDULES = [((3, 6), 1, (8, 16, 24, 32)), ((4, 4), 3, (16, 32)), ((5, 7), 6, (12, 20, 32))]
 
 
-def _free_index(const):
-    index = -np.ones(const.shape, dtype=int)
-    free = np.argwhere(~const)
-    index[tuple(free.T)] = np.arange(len(free))
-    return free, index
-
-
-def dirichlet(goal, const):
-    """x* and (I - H)^-1 1 on the free nodes (scipy, float64)."""
-    rows, cols = const.shape
-    free, index = _free_index(const)
-    a = sp.lil_matrix((len(free), len(free)))
-    b = np.zeros(len(free))
-    for k, (r, c) in enumerate(free):
-        a[k, k] = 1.0
-        for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
-            if 0 <= rr < rows and 0 <= cc < cols:
-                if const[rr, cc]:
-                    b[k] += 0.25 * goal[rr, cc]
-                else:
-                    a[k, index[rr, cc]] = -0.25
-    a = a.tocsc()
-    return free, a, spla.spsolve(a, b), spla.spsolve(a, np.ones(len(free)))
-
-
 def _check_bound(h, const, goal, p, slack=1e-12):
     """Returns (max gap / bound, count); raises AssertionError with details."""
-    free, a, exact, resolvent = dirichlet(goal.astype(float), const)
+    free, a, exact, resolvent = dirichlet(goal, const)
     x = np.array([int(h[r, c]) / one(p) for r, c in free])
     gap = exact - x
     bound = 0.75 * 2.0 ** -p * resolvent
@@ -164,7 +139,7 @@ def test_padding_changes_nothing():
 
 @pytest.mark.parametrize("block,iters", [((3, 6), 2), ((4, 4), 1), ((5, 7), 4)])
 def test_plan_explore_defaults_are_plan(block, iters):
-    """plan_explore (the benches' schedule variants) with its defaults is
+    """plan_explore (the benchmarks' schedule variants) with its defaults is
     plan() counter for counter; every order, with and without skipping still
     blocks, ends in the same fixed point (part 2 above)."""
     from navcores.models.harmonic import plan_explore

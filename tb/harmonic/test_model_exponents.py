@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from dirichlet import dirichlet
 from harmonic_small_maps import corridor, spiral
 from planner_maps import random_map
 from navcores.models.harmonic import (
@@ -141,7 +142,7 @@ def test_termination_invariant(case):
             assert E[b] == 0
         val = _scaled(mant, E, p, n, m, F)
         if prev is not None:
-            pev, pp, pE, pval = prev
+            _, pp, pE, pval = prev
             if event == "raise":
                 coarsened += int((E < pE).sum())
             assert (val >= pval).all(), f"a value fell at {event}"
@@ -152,7 +153,7 @@ def test_termination_invariant(case):
                 levels_seen += 1
             compared += val.size
         prev = (event, p, E, val)
-    assert compared > 0 and trace[-1][0] == "check"
+    assert compared > 0 and levels_seen > 0 and trace[-1][0] == "check"     # across a precision rise too
     # the run ended at a fixed point of the update with conversions
     bad, checked = _fixed_point_violations(res, res.p)
     assert bad == 0 and checked > 0
@@ -166,26 +167,12 @@ def test_termination_invariant(case):
 
 def test_below_dirichlet_solution():
     """Sub-solution: every exact value is at most the exact harmonic solution."""
-    from scipy.sparse import lil_matrix
-    from scipy.sparse.linalg import spsolve
-
     for seed in (4, 5):
         ob, goals = _random_map(12, 18, seed)
         res = plan(ob, goals, block=(3, 6), iters=3, schedule=(8, 16, 24), block_exponents=True)
-        const = res.const
-        free = np.argwhere(~const)
-        index = {tuple(rc): i for i, rc in enumerate(free)}
-        A = lil_matrix((len(free), len(free)))
-        rhs = np.zeros(len(free))
-        for i, (r, c) in enumerate(free):
-            A[i, i] = 1.0
-            for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
-                if 0 <= rr < ob.shape[0] and 0 <= cc < ob.shape[1]:
-                    if (rr, cc) in index:
-                        A[i, index[(rr, cc)]] = -0.25
-                    elif (rr, cc) in goals:
-                        rhs[i] += 0.25
-        x = spsolve(A.tocsr(), rhs)
+        goal = np.zeros(ob.shape, dtype=bool)
+        goal[tuple(np.array(goals).T)] = True
+        free, _, x, _ = dirichlet(goal, res.const)
         unit = 1 << res.frac_bits
         got = np.array([int(res.h[r, c]) / unit for r, c in free])
         assert (got <= x * (1 + 1e-9) + 1e-300).all()

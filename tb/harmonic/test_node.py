@@ -1,6 +1,6 @@
 """Node module against models.harmonic, bit-exact, every iteration.
 
-The bench plays the node's surroundings as a cluster would: the node's own
+The test plays the node's surroundings as a cluster would: the node's own
 word and its four neighbours' words are stored one bit per address and read
 through the Counters' address sequences with one cycle of RAM latency; the
 node's ``w`` output is written back into its own word at ``cntW``, so an error

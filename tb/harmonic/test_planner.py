@@ -1,4 +1,3 @@
-# amaranth: UnusedElaboratable=no
 """The whole harmonic Planner RTL against models.harmonic.plan, bit-exact.
 
 One build per parameter set (B = BR x BC blocks of n x m nodes); the cocotb
@@ -8,9 +7,11 @@ tests drive only the host streams (sim/rtl/planner_driver.py):
   STATUS to the end, READ every node: every stored value and constant flag
   equals the model's, and so do the final precision, converged, sweeps,
   block iterations, check iterations and the cycle count.  Then DIRECTION
-  at corners, edges, block corners and random cells equals
-  models.harmonic.decision (outside the map reads 0: the border nodes at the
-  map's edge).
+  at every node of the map's edges, at the nodes next to block seams, at
+  up to 24 nodes with ties among the Decision's terms and at random cells
+  equals models.harmonic.decision (outside the map reads 0: the border
+  nodes at the map's edge), and its response latency equals
+  hdl.harmonic.planner.direction_latency(p, neighbours in the map).
 * planner_dynamic: an obstacle added during a run (taken at the end of the
   pass the model's event names; the SET response's counters prove which),
   then an obstacle added after convergence (SET while idle, START): values,
@@ -19,6 +20,12 @@ tests drive only the host streams (sim/rtl/planner_driver.py):
   START with no goal, bad precisions, zero iterations, unknown ops, LOAD /
   READ / DIRECTION / START during a run: each gets its error code, and the
   run that follows still equals the model bit for bit (nothing corrupted).
+
+Every test drives the host streams with random idle cycles before each
+command and random back-pressure on the responses (seeded: SEED= replays),
+and asserts that both happened.  The run's cycles are the planner's own
+(the STATUS cycles field), so the stalls must not change them: they still
+equal the model's.
 """
 
 import json
@@ -29,11 +36,14 @@ import cocotb
 import numpy as np
 import pytest
 
+from navcores.hdl.harmonic.planner import direction_latency
+from navcores.hdl.params import unelaborated
 from navcores.models.harmonic import decision, plan
 from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.planner_driver import Code, Op, PlannerDriver, arithmetic
 from navcores.sim.rtl.planner_job import run_map
 from navcores.sim.rtl.runner import SIMULATORS, run
+from tb.harmonic.harmonic_fields import tie_kinds
 from tb.harmonic.planner_maps import MAPS, random_map
 
 SETS = {
@@ -51,9 +61,20 @@ PARAMS = json.loads(os.environ.get("PLANNER_PARAMS", json.dumps(SETS["b3x6"])))
 SET_NAME = os.environ.get("PLANNER_SET", "b3x6")
 
 
+# stalls on the host streams: idle cycles before a command, ready low on the responses
+IDLE, BACK_PRESSURE = 0.3, 0.5
+
+
 def _driver(dut):
     P = PARAMS
-    return PlannerDriver(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"])
+    return PlannerDriver(dut, P["n"], P["m"], (P["br"], P["bc"]), P["p_max"],
+                         rng=random.Random(cocotb.RANDOM_SEED), idle=IDLE, back_pressure=BACK_PRESSURE)
+
+
+def _stalled(drv):
+    """The commands waited idle cycles and the responses met back-pressure."""
+    assert drv.cmd.idle > 0 and drv.resp.stalls > 0, (drv.cmd.idle, drv.resp.stalls)
+    return f"{drv.commands} commands, {drv.cmd.idle} idle cycles, {drv.resp.stalls} response stalls"
 
 
 def _shape():
@@ -92,6 +113,8 @@ async def planner_maps(dut):
     rng = random.Random(cocotb.RANDOM_SEED)
     rows, cols = _shape()
     compared = 0
+    seen = dict.fromkeys(("edge", "seam", "row_tie", "col_tie", "both_ties", "triangle_0", "triangle_1",
+                          "triangle_2", "triangle_3"), 0)
     for name, sched, iters in RUNS[SET_NAME]:
         ob, goals = MAPS[name](rows, cols, cocotb.RANDOM_SEED % 1000)
         res, h = await _run(drv, ob, goals, sched, iters)
@@ -99,21 +122,53 @@ async def planner_maps(dut):
         dut._log.info(f"{name} {rows}x{cols}, {sched}, I={iters}: p={res.p} converged={res.converged} "
                       f"sweeps={res.sweeps} block_iterations={res.block_iterations} "
                       f"cycles={res.cycles}: all {h.size} nodes equal")
-        # Decision at the map's corners and edges (the border reads 0 there),
-        # at block corners (neighbours in other blocks) and at random cells.
-        n, m = PARAMS["n"], PARAMS["m"]
-        cells = {(0, 0), (0, cols - 1), (rows - 1, 0), (rows - 1, cols - 1), (0, cols // 2),
-                 (rows // 2, 0), (n - 1, m - 1), (n, m), (n - 1, m), (n, m - 1)}
-        cells |= {(rng.randrange(rows), rng.randrange(cols)) for _ in range(6)}
-        for r, c in sorted(cells):
-            b, x, y = drv.locate(r, c)
-            resp = await drv.command(Op.DIRECTION, block=b, row=x, col=y)
-            t, (gr, gc) = decision(res.padded_h, r, c)
-            assert resp["code"] == Code.OK
-            got = (resp["triangle"], resp["g_row"], resp["g_col"], resp["value"])
-            assert got == (t, gr, gc, res.padded_h[r, c]), f"{name} ({r}, {c}): RTL {got} model {(t, gr, gc)}"
-            compared += 1
+        compared += await _directions(drv, res, name, rng, seen)
+    dut._log.info(f"DIRECTION: {seen}")
+    assert all(seen.values()), f"not exercised: {[k for k, v in seen.items() if not v]}"
     assert compared > 3 * rows * cols
+    dut._log.info(_stalled(drv))
+
+
+async def _directions(drv, res, name, rng, seen):
+    """DIRECTION at the map's edges (the border reads 0 there), next to the
+    block seams (neighbours in other blocks), at up to 24 nodes with a tie
+    among the Decision's terms and at random cells, against
+    models.harmonic.decision, each with its response latency."""
+    h, p = res.padded_h, res.p
+    rows, cols = h.shape
+    n, m = PARAMS["n"], PARAMS["m"]
+    cells = {(r, c) for r, c in np.ndindex(rows, cols) if r in (0, rows - 1) or c in (0, cols - 1)}
+    cells |= {(r, c) for r, c in np.ndindex(rows, cols) if r % n in (0, n - 1) and c % m in (0, m - 1)}
+    ties = [(r, c) for r, c in np.ndindex(rows, cols) if any(tie_kinds(_around(h, r, c)).values())]
+    cells |= set(rng.sample(ties, min(len(ties), 24)))
+    cells |= {(rng.randrange(rows), rng.randrange(cols)) for _ in range(6)}
+    for r, c in sorted(cells):
+        b, x, y = drv.locate(r, c)
+        resp = await drv.command(Op.DIRECTION, block=b, row=x, col=y)
+        t, (gr, gc) = decision(h, r, c)
+        assert resp["code"] == Code.OK
+        got = (resp["triangle"], resp["g_row"], resp["g_col"], resp["value"])
+        assert got == (t, gr, gc, h[r, c]), f"{name} ({r}, {c}): RTL {got} model {(t, gr, gc)}"
+        inside = (r > 0) + (r < rows - 1) + (c > 0) + (c < cols - 1)
+        assert drv.latency == direction_latency(p, inside), (
+            f"{name} ({r}, {c}): DIRECTION took {drv.latency} cycles, expected {direction_latency(p, inside)}")
+        seen["edge"] += inside < 4
+        seen["seam"] += r % n in (0, n - 1) and c % m in (0, m - 1) and inside == 4
+        for k, hit in tie_kinds(_around(h, r, c)).items():
+            if k in seen:
+                seen[k] += hit
+        seen[f"triangle_{t}"] += 1
+    return len(cells)
+
+
+def _around(h, r, c):
+    """{"c", "N", "E", "S", "W": value} at (r, c), 0 outside the map."""
+    rows, cols = h.shape
+    v = {"c": int(h[r, c])}
+    for d, (dr, dc) in (("N", (-1, 0)), ("E", (0, 1)), ("S", (1, 0)), ("W", (0, -1))):
+        rr, cc = r + dr, c + dc
+        v[d] = int(h[rr, cc]) if 0 <= rr < rows and 0 <= cc < cols else 0
+    return v
 
 
 @cocotb.test()
@@ -148,6 +203,7 @@ async def planner_dynamic(dut):
     res2, _ = await _run(drv, ob2, goals, (4, 8), iters, events=[(0, cell2, "obstacle")])
     assert res2.events_applied == 1
     dut._log.info(f"obstacle at {cell2} after the run: equal, {res2.cycles} cycles")
+    dut._log.info(_stalled(drv))
 
 
 @cocotb.test()
@@ -169,23 +225,8 @@ async def planner_bad_commands(dut):
     for op in (Op.LOAD, Op.SET, Op.READ, Op.DIRECTION):
         for where in ({"block": B}, {"row": n}, {"col": m}):
             await expect(Code.BAD_NODE, op, **{"block": 0, "row": 0, "col": 0, **where})
-    dut.i_stream__valid.value = 0
     for raw in (6, 7):      # ops the layout can carry but the planner does not know
-        d = drv.dut
-        word = drv.pack(block=0) | raw
-        d.i_stream__payload.value = word
-        d.i_stream__valid.value = 1
-        from cocotb.triggers import FallingEdge
-        while not int(d.i_stream__ready.value):
-            await FallingEdge(d.clk)
-        await FallingEdge(d.clk)
-        d.i_stream__valid.value = 0
-        while not int(d.o_stream__valid.value):
-            await FallingEdge(d.clk)
-        word = int(d.o_stream__payload.value)
-        await FallingEdge(d.clk)
-        assert word & 7 == Code.BAD_OP.value and (word >> 3) & 7 == raw
-        checked += 1
+        await expect(Code.BAD_OP, raw, block=0)
     rows, cols = _shape()
     ob, goals = random_map(rows, cols, 3)
     sched, iters = (4, 8), 2
@@ -206,6 +247,7 @@ async def planner_bad_commands(dut):
     assert (h == res.padded_h).all() and (const == res.padded_const).all(), "a refused command changed the map"
     assert (st["cycles"], st["sweeps"], st["p"]) == (res.cycles, res.sweeps, res.p)
     dut._log.info(f"{checked} refused commands, each with its code; the run after them is exact")
+    dut._log.info(_stalled(drv))
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)
@@ -236,9 +278,7 @@ def test_block_elaborates_paper_sizes():
         names = list(mod._named_submodules)
         assert sum(str(k).startswith("cluster_") for k in names) == (n // 3) * (m // 6)
         Fragment.get(mod._named_submodules["cluster_0_0"][0], None)
-        for sub, _ in mod._named_submodules.values():
-            sub._MustUse__silence = True        # elaborated at the block level only
-        mod._MustUse__silence = True
+        unelaborated([blk, mod])    # elaborated by hand, at the block level only (and one cluster)
 
 
 @pytest.mark.parametrize("kwargs,message", [
@@ -256,4 +296,4 @@ def test_block_refuses(kwargs, message):
 
 def test_block_fits_exactly():
     from navcores.hdl.harmonic.block import Block
-    assert Block(6, 12, (4, 4), p_max=62, depth=1024).stride == 64      # 16 * 64 = 1024
+    assert unelaborated(Block(6, 12, (4, 4), p_max=62, depth=1024)).stride == 64      # 16 * 64 = 1024

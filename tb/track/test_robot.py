@@ -89,7 +89,7 @@ def test_slip_drift():
     clean, _ = _drift(0.0, 1)
     assert clean < quant
     d1, end1 = _drift(0.02, 1)
-    d1b, end1b = _drift(0.02, 1)
+    _, end1b = _drift(0.02, 1)
     d2, end2 = _drift(0.02, 2)
     assert d1 > 2 * quant and d2 > 2 * quant       # slip makes them drift apart
     assert end1 == end1b and end1 != end2          # seeded

@@ -72,7 +72,7 @@ def test_round_trip():
         strips_seen |= sum(1 << int(k) for k in set(m.strip_of_x(x)) if k in (0, m.n))
         # heading too
         tc = rng.uniform(-math.pi, math.pi, 50)
-        x2, y2, tc2, _ = m.psi_inv(m.psi((x, y, tc)))
+        _, _, tc2, _ = m.psi_inv(m.psi((x, y, tc)))
         assert np.abs(np.angle(np.exp(1j * (tc2 - tc)))).max() < 1e-9
         checked += 150
     assert checked == 200 * 150
