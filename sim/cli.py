@@ -232,8 +232,8 @@ def engine_type(serial):
 
 def add_engine(parser, what, serial=False):
     """``--engine``; ``serial``: a board over its serial port is offered too."""
-    board = (f"; serial:PORT[@BAUD]: the core on a board (make bitstream) over its USB serial port, "
-             f"checked against the model") if serial else ""
+    board = ("; serial:PORT[@BAUD]: the core on a board (make bitstream) over its USB serial port, "
+             "checked against the model") if serial else ""
     parser.add_argument("--engine", type=engine_type(serial), default="model",
                         metavar="model|icarus|verilator" + ("|serial:PORT[@BAUD]" if serial else ""),
                         help=f"model (default): the golden model; icarus / verilator: {what}{board}")

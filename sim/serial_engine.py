@@ -160,7 +160,7 @@ def run_dflc(engine, fll_path, config, parallel, codes):
         _needs(info, "this run", divider=config.div_type, par=int(bool(parallel)), ip_sz=config.ip_sz,
                op_sz=config.op_sz)
 
-    out = session(engine, "dflc", lambda link, info: dflc(link, codes.tolist(), config.ip_sz, config.op_sz), fits)
+    out = session(engine, "dflc", lambda link, info: dflc(link, codes.tolist(), config), fits)
     return [y for y, _ in out], [z for _, z in out]
 
 

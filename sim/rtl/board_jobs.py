@@ -12,23 +12,25 @@ Each job is a coroutine awaiting only the protocol's I/O operations:
 * :func:`dflc`: samples through the DFLC, up to the bridge's window in
   flight: [(y, zero)].
 * :func:`edt`: one EDT/BFS job: the decoded results of
-  :class:`.edt_bfs_driver.EdtBfsDriver`, with the iterations and the job's
+  :func:`.edt_bfs_driver.decode`, with the iterations and the job's
   cycles from the status word.
 
 A core's own error (the planner's ``code``, the EDT/BFS ``start_err``) is a
 :class:`CoreError`; the bridge's refusals are ``protocol.BridgeError``.
 """
 
-import types
-
 import numpy as np
 
 from navcores.hdl.board.cores import edt_status_layout
 from navcores.hdl.board.protocol import WRITE, BridgeError, Cmd, Error, ProtocolError
+from navcores.hdl.dflc.core import sample_layout
+from navcores.hdl.edt_bfs.cell import cell_widths
 from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
+from navcores.hdl.harmonic import planner
 
-from .edt_bfs_driver import EdtBfsDriver, pack, unpack
+from .edt_bfs_driver import decode
 from .planner_driver import Code, Op, PlannerDriver
+from .stream import pack, unpack
 
 __all__ = ["CoreError", "open_core", "bridge_checks", "RemotePlanner", "harmonic", "harmonic_differences", "dflc",
            "edt"]
@@ -85,27 +87,25 @@ def _first_difference(a, b):
 
 # --- harmonic planner ------------------------------------------------------------------
 
-class _NoPins:
-    """PlannerDriver's constructor idles the streams' pins: here the bridge holds them."""
-
-    def __getattr__(self, name):
-        return types.SimpleNamespace(value=0)
-
-
 class RemotePlanner(PlannerDriver):
-    """:class:`.planner_driver.PlannerDriver` over the link: the same command
-    packing, map loading and read-back; each command is a WRITE of sink 0
-    and its response the next DATA beat of source 0.  ``check``: a response
-    whose code is not OK raises :class:`CoreError`."""
+    """:class:`.planner_driver.PlannerDriver` over the link: its map loading
+    (``load_map``, ``locate``) on the same command and response layouts;
+    each command is a WRITE of sink 0 and its response the next DATA beat of
+    source 0.  No simulator streams: ``PlannerDriver.__init__`` (which
+    opens them on a DUT) is not called.  ``check``: a response whose code
+    is not OK raises :class:`CoreError`."""
 
-    def __init__(self, link, check=True):
+    def __init__(self, link, check=True):       # not super().__init__: it would open streams on a DUT
         i = link.info
-        super().__init__(_NoPins(), i["n"], i["m"], (i["br"], i["bc"]), i["p_max"])
+        self.n, self.m, self.BR, self.BC, self.p_max = i["n"], i["m"], i["br"], i["bc"], i["p_max"]
+        self.exponents, self.commands = False, 0
+        self.cmd_layout = planner.command_layout((self.BR, self.BC), self.n, self.m, self.p_max)
+        self.resp_layout = planner.response_layout(self.p_max)
         self.link, self.check = link, check
 
     async def command(self, op, **fields):
-        await self.link.write(0, self.pack(op=int(op.value), **fields))
-        resp = self.unpack(await self.link.read(0))
+        await self.link.write(0, pack(self.cmd_layout, {"op": op, **fields}))
+        resp = unpack(self.resp_layout, await self.link.read(0))
         self.commands += 1
         if resp["op"] != op:
             raise ProtocolError(f"the planner answered {resp['op'].name} to {op.name}")
@@ -121,13 +121,14 @@ class RemotePlanner(PlannerDriver):
         seqs = []
         for r, c in cells:
             b, x, y = self.locate(r, c)
-            seqs.append(await self.link.write(0, self.pack(op=Op.READ.value, block=b, row=x, col=y), wait=False))
+            seqs.append(await self.link.write(0, pack(self.cmd_layout, {"op": Op.READ, "block": b, "row": x,
+                                                                         "col": y}), wait=False))
         for s in seqs:
             await self.link.reply(s)
         h = np.zeros(shape, dtype=object)
         const = np.zeros(shape, dtype=bool)
         for r, c in cells:
-            resp = self.unpack(await self.link.read(0))
+            resp = unpack(self.resp_layout, await self.link.read(0))
             if (resp["op"], resp["code"]) != (Op.READ, Code.OK):
                 raise CoreError(f"READ ({r}, {c}): the planner answered {resp['op'].name} {resp['code'].name}")
             h[r, c], const[r, c] = resp["value"], bool(resp["const"])
@@ -175,12 +176,13 @@ def harmonic_differences(status, h, const, model):
 
 # --- DFLC ----------------------------------------------------------------------------
 
-async def dflc(link, rows, ip_sz, op_sz):
-    """``rows`` of input codes through the DFLC; [(y, zero)] in order.  The
-    samples go out as fast as the bridge's window allows; their ACKs and the
-    results are collected as they come."""
-    from .dflc_driver import pack as pack_codes
-    seqs = [await link.write(0, pack_codes(r, ip_sz), wait=False) for r in rows]
+async def dflc(link, rows, config):
+    """``rows`` of input codes through the DFLC (``config``: its
+    models.dflc.DflcConfig); [(y, zero)] in order.  The samples go out as
+    fast as the bridge's window allows; their ACKs and the results are
+    collected as they come."""
+    layout, op_sz = sample_layout(config), config.op_sz
+    seqs = [await link.write(0, pack(layout, [int(c) for c in r]), wait=False) for r in rows]
     for s in seqs:
         await link.reply(s)
     out = []
@@ -194,17 +196,17 @@ async def dflc(link, rows, ip_sz, op_sz):
 
 async def edt(link, img, goals, start, dfar):
     """One EDT/BFS job on the board's array (the image its size): the
-    decoded results (:meth:`EdtBfsDriver.job`'s dict), ``cycles`` from the
+    decoded results (:func:`.edt_bfs_driver.decode`), ``cycles`` from the
     status word.  ``start`` None: no path."""
     h, w = link.info["height"], link.info["width"]
     img = np.asarray(img, dtype=bool)
     if img.shape != (h, w):
         raise ValueError(f"the board's array is {h}x{w}; the image is {img.shape[0]}x{img.shape[1]}")
-    drv = EdtBfsDriver(None, h, w)          # its layouts and its decoder (no pins)
-    dfar = min(int(dfar), (1 << drv.widths["di"]) - 1)
+    widths = cell_widths(h, w)
+    dfar = min(int(dfar), (1 << widths["di"]) - 1)
     sr, sc = start if start is not None else (0, 0)
-    await link.write(0, pack(command_layout(drv.widths), {"dfar": dfar, "start_row": sr, "start_col": sc,
-                                                          "path": int(start is not None)}))
+    await link.write(0, pack(command_layout(widths), {"dfar": dfar, "start_row": sr, "start_col": sc,
+                                                      "path": int(start is not None)}))
     goal = np.zeros((h, w), dtype=bool)
     for r, c in goals:
         goal[r, c] = True
@@ -213,16 +215,20 @@ async def edt(link, img, goals, start, dfar):
                              wait=False) for c in reversed(range(w))]
     for s in seqs:
         await link.reply(s)
-    layout = result_layout(drv.widths)
+    layout = result_layout(widths)
     beats = []
     while not beats or not beats[-1]["last"]:
         beats.append(unpack(layout, await link.read(0)))
-    out = drv._decode(beats)
+    try:
+        out = decode(beats, h, w)
+    except AssertionError as e:         # the board's beats break the core's read-out order
+        raise ProtocolError(f"the EDT/BFS results: {e}") from None
     st = unpack(edt_status_layout(h, w), await link.status())
     if st["start_err"]:
         raise CoreError(f"start {start} is outside the board's {h}x{w} array")
-    out.update(cycles=st["cycles"], iterations_edt=st["iterations_edt"], iterations_bfs=st["iterations_bfs"],
-               path_found_flag=st["path_found"], start_err=st["start_err"])
+    # the status word's cycles leave out the clocks the UART stalled the core: none to add
+    out.update(cycles=st["cycles"], starved=0, stalls=0, iterations_edt=st["iterations_edt"],
+               iterations_bfs=st["iterations_bfs"], path_found_flag=st["path_found"], start_err=st["start_err"])
     return out
 
 

@@ -219,10 +219,12 @@ async def host_command(dut, line, argv, timeout_s=300, option="--engine"):
     return proc.returncode, out, err
 
 
-async def host_matches_model(dut, line, argv, work):
+async def host_matches_model(dut, line, argv, work, unrecorded=()):
     """``python -m sim ARGV`` on the board (``host_command``) and on the model:
-    the same JSON but for ``engine``, ``rtl_matches_model`` (true) and
-    ``model_differences`` (empty); returns the board's JSON."""
+    the same JSON but for ``engine``, ``rtl_matches_model`` (true),
+    ``model_differences`` (empty) and the ``unrecorded`` keys (what the
+    hardware does not record, empty on the board as on the simulator
+    engines); returns the board's JSON."""
     import json
     import os
     import subprocess
@@ -237,6 +239,8 @@ async def host_matches_model(dut, line, argv, work):
     model = json.loads((work / "model.json").read_text())
     assert board.pop("rtl_matches_model") is True and not board.pop("model_differences", [])
     assert board.pop("engine").startswith("serial:") and model.pop("engine") == "model"
+    for k in unrecorded:
+        assert not board.pop(k) and model.pop(k), k
     assert board == model, [k for k in model if board.get(k) != model[k]]
     return board
 

@@ -71,7 +71,7 @@ async def samples(dut):
     rng = np.random.default_rng(rng_from_env().randrange(1 << 30))
     for batch in range(2):
         rows = _codes(config, rng, 12)
-        got = await perform(dflc(link, rows, config.ip_sz, config.op_sz), line)
+        got = await perform(dflc(link, rows, config), line)
         y, zero = model.infer(np.array(rows))
         want = [(int(a), bool(b)) for a, b in zip(y, zero)]
         assert got == want, [(i, g, w) for i, (g, w) in enumerate(zip(got, want)) if g != w][:5]

@@ -100,10 +100,11 @@ async def host_engine(dut):
     await start(dut)
     line = UartLine(dut, PARAMS["divisor"], timeout_bits=20_000)
     work = Path(os.environ["HOST_WORK"])
-    (work / "map.txt").write_text("......#.....\n..##..#..#..\n.........#..\n")
-    args = ["harmonic", str(work / "map.txt"), "--goal", "2,11", "--start", "0,0", "--block", "3x6",
+    # p_max 16 converges when no cell is far from the goal: the goal in the middle
+    (work / "map.txt").write_text(".....#......\n..#..#..#...\n........#...\n")
+    args = ["harmonic", str(work / "map.txt"), "--goal", "1,6", "--start", "0,0", "--block", "3x6",
             "--schedule", "8:8:16", "--iters", "2"]
-    data = await host_matches_model(dut, line, args, work)
+    data = await host_matches_model(dut, line, args, work, unrecorded=("levels",))  # no per-level record
     assert data["converged"] and data["trajectories"][0]["reached_goal"]
     rc, out, err = await host_command(dut, line, [*args[:-6], "--block", "6x12"])
     assert rc == 2 and err.count("\n") == 1 and "the board's planner has 3x6 blocks" in err, (rc, err)
