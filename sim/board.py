@@ -32,8 +32,9 @@ def run(args):
     if not serial_engine.is_serial(args.engine):
         raise CliError(f"{args.engine!r}: give the board's port as serial:PORT[@BAUD]")
     info, checks = serial_engine.loopback(args.engine)
-    print(f"{args.engine}: {info['core']} board, " + " ".join(f"{k}={v}" for k, v in info.items()
-                                                            if k not in ("core", "version")))
+    words = (f"{k}={','.join(map(str, v)) if isinstance(v, tuple) else v}" for k, v in info.items()
+             if k not in ("core", "version"))
+    print(f"{args.engine}: {info['core']} board, " + " ".join(words))
     for what, ok, came in checks[1:]:
         print(f"  {'ok  ' if ok else 'FAIL'} {what}: {came}")
     passed = all(ok for _, ok, _ in checks)
