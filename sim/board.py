@@ -18,6 +18,8 @@ cannot be opened, no answer, not a navcores bridge).
 
 import json
 
+from navcores.hdl.board.protocol import format_info
+
 from . import serial_engine
 from .cli import CliError, add_outputs, write_text
 
@@ -32,9 +34,7 @@ def run(args):
     if not serial_engine.is_serial(args.engine):
         raise CliError(f"{args.engine!r}: give the board's port as serial:PORT[@BAUD]")
     info, checks = serial_engine.loopback(args.engine)
-    words = (f"{k}={','.join(map(str, v)) if isinstance(v, tuple) else v}" for k, v in info.items()
-             if k not in ("core", "version"))
-    print(f"{args.engine}: {info['core']} board, " + " ".join(words))
+    print(f"{args.engine}: {info['core']} board, {format_info(info, skip=('version', 'core'))}")
     for what, ok, came in checks[1:]:
         print(f"  {'ok  ' if ok else 'FAIL'} {what}: {came}")
     passed = all(ok for _, ok, _ in checks)

@@ -55,16 +55,19 @@ BOARDS = {
 }
 
 # The configuration of each core on each board (hdl.emit's parameters).
-# ULX3S-85F: the planner at 6x12 blocks (4 clusters) over 11x6 blocks (a
-# 66x72 map: the bundled 64x64 maps fit; room-64-64-8 converges at p =
-# 160), precisions up to p = 254 (the bit-serial Decision has no
-# multipliers: ~2,000 LUT4 at 254), cluster RAMs of 32,768 words (66 blocks
-# x 256 words; 32 of the 208 EBRs each); the EDT/BFS array at 8x8, a stated
-# smaller size (every cell is 270 to 440 LUT4: 12x12 might fit the 83,640,
-# 16x16, about 118,000, does not; each size is a build of an hour here).
-# The iCEBreaker's UP5K (5,280 logic cells) holds the DFLC only.
+# ULX3S-85F: the planner at 6x12 blocks (4 clusters) over 6x3 blocks (a
+# 36x36 map: the bundled 32x32 maps fit), precisions up to p = 254 (the
+# bit-serial Decision has no multipliers: ~2,000 LUT4 at 254), cluster RAMs
+# of 8,192 words (18 blocks x 256).  A stated smaller size: the 85F's 208
+# EBRs are what limits it, and 11x6 blocks (the 64x64 maps, which need p =
+# 160) at p_max 254 took 353 (the four border stores of 16,896 words, each
+# RAM doubled for its third port, and 32,768-word cluster RAMs).  The
+# EDT/BFS array at 8x8, also a stated smaller size (a cell is 270 to 440
+# LUT4: 12x12 might fit the 83,640, 16x16, about 118,000, does not; a size
+# is an hour's build on this machine).  The iCEBreaker's UP5K (5,280 logic
+# cells) holds the DFLC only.
 CONFIGS = {
-    ("ulx3s-85f", "harmonic"): {"n": 6, "m": 12, "br": 11, "bc": 6, "p_max": 254, "depth": 32768},
+    ("ulx3s-85f", "harmonic"): {"n": 6, "m": 12, "br": 6, "bc": 3, "p_max": 254, "depth": 8192},
     ("ulx3s-85f", "dflc"): {"fll": "table1"},
     ("ulx3s-85f", "edt_bfs"): {"height": 8, "width": 8},
     ("icebreaker", "dflc"): {"fll": "table1"},

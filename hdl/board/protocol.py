@@ -61,6 +61,7 @@ from collections import deque
 
 __all__ = ["END", "ESC", "ESC_END", "ESC_ESC", "Cmd", "ACK", "NAK", "DATA", "WRITE", "Error", "MIN_BODY",
            "crc16", "crc16_update", "crc16_shift8", "frame", "request", "Decoder", "Frame", "info_text", "parse_info",
+           "format_info",
            "BridgeError", "LinkTimeout", "ProtocolError", "Send", "Receive", "Link", "run_blocking",
            "beat_bytes", "PROTOCOL_VERSION"]
 
@@ -235,6 +236,12 @@ def parse_info(payload):
             except ValueError:
                 out[key] = value
     return out
+
+
+def format_info(info, skip=("version",)):
+    """A parsed INFO dict as ``key=value`` words again (stream widths comma-separated)."""
+    return " ".join(f"{k}={','.join(map(str, v)) if isinstance(v, tuple) else v}" for k, v in info.items()
+                    if k not in skip)
 
 
 # --- the client ----------------------------------------------------------------------

@@ -22,7 +22,7 @@ A core's own error (the planner's ``code``, the EDT/BFS ``start_err``) is a
 import numpy as np
 
 from navcores.hdl.board.cores import edt_status_layout
-from navcores.hdl.board.protocol import WRITE, BridgeError, Cmd, Error, ProtocolError
+from navcores.hdl.board.protocol import WRITE, BridgeError, Cmd, Error, ProtocolError, format_info
 from navcores.hdl.dflc.core import sample_layout
 from navcores.hdl.edt_bfs.cell import cell_widths
 from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_layout
@@ -57,7 +57,7 @@ async def bridge_checks(link):
     damaged frame, an unknown command, a missing sink and a wrong length.
     Returns (info, [(check, passed, what came)]); the core is left reset."""
     info = await link.read_info()
-    checks = [("INFO", True, " ".join(f"{k}={v}" for k, v in info.items()))]
+    checks = [("INFO", True, format_info(info))]
     values, echo = bytes(range(256)), info["echo"]
     got = b"".join([await link.echo(values[i:i + echo]) for i in range(0, 256, echo)])
     checks.append((f"ECHO of the 256 byte values in {-(-256 // echo)} frames", got == values,

@@ -27,13 +27,12 @@ import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, host_command, host_env, host_matches_model, protocol_suite, rng_from_env
-from navcores.hdl.board.serial_top import SerialTop
+from board_checks import connect, host_command, host_matches_model, protocol_suite, rng_from_env, run_board
 from navcores.hdl.dflc.top import config_for
 from navcores.models.dflc import Dflc
 from navcores.sim.rtl.board_driver import UartLine, perform, start
 from navcores.sim.rtl.board_jobs import dflc
-from navcores.sim.rtl.runner import SIMULATORS, run
+from navcores.sim.rtl.runner import SIMULATORS
 
 # A simulation-friendly line: 4 clocks a bit, short timeouts, a small FIFO.
 PARAMS = {"core": "dflc", "fll": "table1", "divisor": 4, "fifo": 32, "gap_bits": 40, "accept_bits": 400}
@@ -103,4 +102,4 @@ async def host_engine(dut):
 
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_board_dflc(sim, tmp_path):
-    assert run("board_dflc", PARAMS, sim, "test_board_dflc", factory=SerialTop, env=host_env(tmp_path)) == 3
+    run_board("dflc", PARAMS, sim, tmp_path, ('protocol', 'samples', 'host_engine'))

@@ -28,15 +28,14 @@ import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, host_command, host_env, host_matches_model, protocol_suite, rng_from_env
+from board_checks import connect, host_command, host_matches_model, protocol_suite, rng_from_env, run_board
 from images import FAMILIES, free_cells
 from navcores.hdl.board import protocol as P
-from navcores.hdl.board.serial_top import SerialTop
 from navcores.models.edt_bfs import plan_path
 from navcores.sim.rtl.board_driver import UartLine, perform, start
 from navcores.sim.rtl.board_jobs import CoreError, edt
 from navcores.sim.rtl.edt_bfs_driver import compare
-from navcores.sim.rtl.runner import SIMULATORS, run
+from navcores.sim.rtl.runner import SIMULATORS
 
 PARAMS = {"core": "edt_bfs", "height": 5, "width": 5, "divisor": 4, "fifo": 32, "gap_bits": 40,
           "accept_bits": 300}
@@ -123,4 +122,4 @@ async def host_engine(dut):
 
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_board_edt(sim, tmp_path):
-    assert run("board_edt", PARAMS, sim, "test_board_edt", factory=SerialTop, env=host_env(tmp_path)) == 4
+    run_board("edt", PARAMS, sim, tmp_path, ('protocol', 'jobs', 'core_errors', 'host_engine'))

@@ -24,13 +24,12 @@ import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, host_command, host_env, host_matches_model, protocol_suite, rng_from_env
-from navcores.hdl.board.serial_top import SerialTop
+from board_checks import connect, host_command, host_matches_model, protocol_suite, rng_from_env, run_board
 from navcores.models.harmonic import plan
 from navcores.sim.rtl.board_driver import UartLine, perform, start
 from navcores.sim.rtl.board_jobs import CoreError, RemotePlanner, harmonic, harmonic_differences
 from navcores.sim.rtl.planner_driver import Code, Op
-from navcores.sim.rtl.runner import SIMULATORS, run
+from navcores.sim.rtl.runner import SIMULATORS
 from tb.harmonic.planner_maps import MAPS
 
 PARAMS = {"core": "harmonic", "n": 3, "m": 6, "br": 1, "bc": 2, "p_max": 16, "depth": 64,
@@ -112,4 +111,4 @@ async def host_engine(dut):
 
 @pytest.mark.parametrize("sim", SIMULATORS)
 def test_board_harmonic(sim, tmp_path):
-    assert run("board_harmonic", PARAMS, sim, "test_board_harmonic", factory=SerialTop, env=host_env(tmp_path)) == 4
+    run_board("harmonic", PARAMS, sim, tmp_path, ('protocol', 'plan_matches_model', 'core_error', 'host_engine'))

@@ -102,9 +102,9 @@ def harmonic():
     c = CONFIGS["ulx3s-85f", "harmonic"]
     cmd = planner.command_layout((c["br"], c["bc"]), c["n"], c["m"], c["p_max"])
     resp = planner.response_layout(c["p_max"])
-    # a STATUS response after a run of room-64-64-8.map (models.harmonic.plan; docs/protocol.md)
-    status = {"code": planner.Code.OK, "op": planner.Op.STATUS, "converged": 1, "p": 160, "sweeps": 303,
-              "block_iterations": 91863, "check_iterations": 660, "clear_passes": 0, "cycles": 11488436}
+    # a STATUS response after a run of room-32-32-4.map (models.harmonic.plan; docs/protocol.md)
+    status = {"code": planner.Code.OK, "op": planner.Op.STATUS, "converged": 1, "p": 96, "sweeps": 67,
+              "block_iterations": 4475, "check_iterations": 108, "clear_passes": 0, "cycles": 356440}
 
     def write(seq, fields):
         return P.request(P.WRITE, seq, pack(cmd, fields).to_bytes(P.beat_bytes(cmd.size), "little"))
