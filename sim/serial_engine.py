@@ -77,15 +77,21 @@ class SerialTransport:
             self.port.reset_input_buffer()
         except (serial.SerialException, OSError, ValueError) as e:
             raise CliError(f"serial port {port}: cannot open it ({e})") from None
-        self.name, self.baud = port, baud
+        self.name, self.baud, self.faults = port, baud, (serial.SerialException, OSError)
 
     def write(self, data):
-        self.port.write(data)
+        try:
+            self.port.write(data)
+        except self.faults as e:         # unplugged in the middle of a job, a write that never drains
+            raise CliError(f"serial port {self.name}: {e}") from None
 
     def read(self):
-        self.port.timeout = self.timeout
-        first = self.port.read(1)
-        return first + self.port.read(self.port.in_waiting) if first else b""
+        try:
+            self.port.timeout = self.timeout
+            first = self.port.read(1)
+            return first + self.port.read(self.port.in_waiting) if first else b""
+        except self.faults as e:
+            raise CliError(f"serial port {self.name}: {e}") from None
 
     def close(self):
         self.port.close()
