@@ -8,8 +8,8 @@ LFE5U-85F (its header, the preamble, the part's IDCODE), the clock reached
 against the board's 25 MHz, the resources within the part, the INFO text
 the bitstream answers with (the one the host reads).  This pair is the
 cheapest to build from nothing: 98 s of tool time on this two-core machine
-(yosys 28 s, nextpnr 70 s), where the iCEBreaker's DFLC, its multipliers
-in logic, took 160 s.  The other pairs take minutes each: ``make
+(yosys 28 s, nextpnr 70 s; 376 s with a dozen other jobs on the cores),
+where the iCEBreaker's DFLC, its multipliers in logic, took 160 s.  The other pairs take minutes each: ``make
 bitstreams`` and ``make bench``.
 
 In the tools' pytest-xdist group (tb/fpga/test_fit.py says why).
@@ -43,7 +43,8 @@ def test_ulx3s_dflc(tmp_path):
     lines = r.stdout.splitlines()
     assert len(lines) == 1 and lines[0].startswith("ulx3s-85f dflc on LFE5U-85F, 115200 Bd (divisor 217)"), r.stdout
     image = (tmp_path / "ulx3s-85f-dflc.bit").read_bytes()
-    assert image.startswith(HEADER) and image.find(PREAMBLE) == len(HEADER)
+    start = image.find(PREAMBLE)        # after the header and ecppack's padding (0xFF)
+    assert image.startswith(HEADER) and set(image[len(HEADER):start]) <= {0xFF} and start - len(HEADER) <= 4
     assert VERIFY_ID in image[:64] and len(image) > 50_000
     d = json.loads((tmp_path / "ulx3s-85f-dflc.json").read_text())
     assert (d["board"], d["core"], d["part"], d["clock_mhz"], d["divisor"]) == ("ulx3s-85f", "dflc", "LFE5U-85F", 25,
@@ -56,7 +57,7 @@ def test_ulx3s_dflc(tmp_path):
     info = P.parse_info(d["info"].encode())
     assert (info["core"], info["fll"], info["divider"], info["div"], info["baud"], info["clk"]) == \
         ("dflc", "table1", "lut", 217, 115207, 25_000_000)
-    assert d["tools"]["packer"].startswith("ecppack") and d["bitstream"].endswith("ulx3s-85f-dflc.bit")
+    assert "ecppack" in d["tools"]["packer"] and d["bitstream"].endswith("ulx3s-85f-dflc.bit")
 
 
 @pytest.mark.parametrize("args,says", [
