@@ -61,10 +61,10 @@ BOARDS = {
 # of 8,192 words (18 blocks x 256).  A stated smaller size: the 85F's 208
 # EBRs are what limits it, and 11x6 blocks (the 64x64 maps, which need p =
 # 160) at p_max 254 took 353 (the four border stores of 16,896 words, each
-# RAM doubled for its third port, and 32,768-word cluster RAMs).  The
-# EDT/BFS array at 8x8, also a stated smaller size (a cell is 270 to 440
-# LUT4: 12x12 might fit the 83,640, 16x16, about 118,000, does not; a size
-# is an hour's build on this machine).  The iCEBreaker's UP5K (5,280 logic
+# RAM doubled for its third port, and 32,768-word cluster RAMs); 6x3
+# takes 97.  The EDT/BFS array at 8x8, also a stated smaller size (33,509
+# LUT4 with the bridge, 40 % of the 85F: 12x12 would be about 90 %, 16x16
+# does not fit; a size is an hour's build on this machine).  The iCEBreaker's UP5K (5,280 logic
 # cells) holds the DFLC only.
 CONFIGS = {
     ("ulx3s-85f", "harmonic"): {"n": 6, "m": 12, "br": 6, "bc": 3, "p_max": 254, "depth": 8192},
