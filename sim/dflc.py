@@ -1,6 +1,6 @@
 """DFLC fuzzy controller (paper 003): evaluate a .fll controller on a CSV of inputs.
 
-    python -m sim dflc [--fll FILE] --input IN.csv [--engine model|icarus|verilator]
+    python -m sim dflc [--fll FILE] --input IN.csv [--engine model|icarus|verilator|serial:PORT[@BAUD]]
                        [--parallel] [--div lut|array] [--json OUT] [--plot OUT.png]
 
 IN.csv has a header naming the .fll's input variables (any order) and one
@@ -13,16 +13,22 @@ models/dflc.py (bit-exact with the RTL); the icarus / verilator engines emit
 the stream top for the .fll (``dflc_stream_<stem>_<hash>``;
 ``dflc_stream_table1``, the module ``make verilog`` emits, for the shipped
 default) and run the samples through it in cocotb
-(build/sim/<engine>/<module>/, reused while the .fll is unchanged).
+(build/sim/<engine>/<module>/, reused while the .fll is unchanged); the
+serial:PORT[@BAUD] engine runs them on a board with the DFLC bitstream
+(make bitstream CORE=dflc, built for the same .fll; docs/boards.md) and
+compares every output with the model.
 
 Output: without --json the samples and outputs as CSV on stdout; --json
 writes outputs (floats, output units), codes (output codes), zero_strength
 (booleans: no rule fired, the output is the .fll's default),
-cycles_per_sample, latency (clock cycles; the RTL engines report what they
-measured, the model engine the design's figures).  --plot plots the control
-surface of a 2-input controller (model).
+cycles_per_sample, latency (clock cycles; the simulator engines report what
+they measured, the model and serial engines the design's figures),
+rtl_matches_model (serial engine).  --plot plots the control surface of a
+2-input controller (model).
 
-Exit status: 0 done; 2 bad input (one line on stderr).
+Exit status: 0 done; 1 the board's outputs differ from the model's; 2 bad
+input (one line on stderr; for the serial engine also a port or a board
+that does not answer or runs another controller).
 """
 
 import csv
@@ -38,6 +44,7 @@ import numpy as np
 
 from navcores.models.tracker import wrap_degrees
 
+from . import serial_engine
 from .cli import CliError, add_engine, add_outputs, read_lines, save_figure, write_text
 from .progress import Ticker
 
@@ -50,7 +57,7 @@ def add_arguments(p):
     p.add_argument("--fll", default=str(ROOT / "models" / "dflc_table1.fll"),
                    help="controller in fuzzylite's FLL (default: models/dflc_table1.fll, paper Table 1)")
     p.add_argument("--input", required=True, metavar="IN.csv", help="samples: header = input variable names")
-    add_engine(p, "the DFLC stream top's RTL in that simulator")
+    add_engine(p, "the DFLC stream top's RTL in that simulator", serial=True)
     p.add_argument("--parallel", action="store_true", help="RTL: the parallel option (one sample per clock)")
     p.add_argument("--div", choices=("lut", "array"), default="lut", help="divider (Table 2 div_type)")
     add_outputs(p, plot_help="plot the control surface (2-input controllers)")
@@ -181,6 +188,9 @@ def plot_surface(model, out):
 def run(args):
     from navcores.hdl.dflc.top import stream_latency
     from navcores.models.dflc import Dflc
+    serial = serial_engine.is_serial(args.engine)
+    if serial:
+        serial_engine.check(args.engine)        # the port exists, before any work
     if not Path(args.fll).is_file():
         raise CliError(f"{args.fll}: no such .fll file" if not Path(args.fll).exists() else f"{args.fll}: not a file")
     config = load_config(args.fll, args.div)
@@ -189,12 +199,17 @@ def run(args):
         raise CliError(f"--plot needs a 2-input controller (a control surface); {config.name} has {config.n}")
     values = wrap_angles(read_csv(args.input, model.input_names), config.inputs)
     codes = model.encode(values)
-    if args.engine == "model":
+    if args.engine == "model" or serial:
         y, zero = model.infer(codes)
         y, zero = [int(v) for v in y], [bool(v) for v in zero]
         cps = 1 if args.parallel else 1 << config.n
         lat = stream_latency(config, args.parallel)
-    else:
+    if serial:
+        with Ticker(f"DFLC on the board ({args.engine})"):
+            board_y, board_zero = serial_engine.run_dflc(args.engine, args.fll, config, args.parallel, codes)
+        matches = (board_y, board_zero) == (y, zero)
+        y, zero = board_y, board_zero
+    elif args.engine != "model":
         if shutil.which("iverilog") is None and args.engine == "icarus":
             raise CliError("iverilog not found (Debian: apt-get install iverilog)")
         params = rtl_params(args.fll, config, args.div, args.parallel)
@@ -209,13 +224,16 @@ def run(args):
     result = {"fll": str(args.fll), "engine": args.engine, "inputs": list(model.input_names),
               "output": model.output_name, "outputs": outputs, "codes": y, "zero_strength": zero,
               "cycles_per_sample": cps, "latency": lat}
+    if serial:
+        result["rtl_matches_model"] = matches
     if args.json:
         write_text(args.json, json.dumps(result, indent=1))
     else:
-        print(f"{config.name} ({args.engine}): {len(y)} samples, {cps} cycles/sample, latency {lat}")
+        check = f", {'bit-exact against' if matches else 'DIFFERENT from'} the model" if serial else ""
+        print(f"{config.name} ({args.engine}): {len(y)} samples, {cps} cycles/sample, latency {lat}{check}")
         print(",".join(model.input_names) + f",{model.output_name},code,zero")
         for row, v, code, z in zip(values, outputs, y, zero):
             print(",".join(f"{x:g}" for x in row) + f",{v:.6g},{code},{int(z)}")
     if args.plot:
         plot_surface(model, args.plot)
-    return 0
+    return 0 if not serial or matches else 1

@@ -1,7 +1,7 @@
 """EDT/NNT + BFS path planning on a map (paper 004): distance map, cfr, path.
 
     python -m sim edt MAP --dfar D (--goal R,C | --goal-xy X,Y) [...] [--start R,C | --start-xy X,Y]
-        [--array RxC] [--engine model|icarus|verilator] [--cell METRES] [--unknown obstacle|free]
+        [--array RxC] [--engine model|icarus|verilator|serial:PORT[@BAUD]] [--cell METRES] [--unknown obstacle|free]
         [--json OUT] [--csv OUT] [--plot OUT.png]
 
 Runs Parallel_Path_Plan on MAP (.map, .txt, .pgm/.png or a ROS map's .yaml,
@@ -19,7 +19,9 @@ grows with the cell count).  A smaller array is the tile engine (issue
 18): models/edt_bfs_tiled.py, and on icarus / verilator the tile engine's
 RTL (hdl/edt_bfs/tile_engine.py, 2..32 cells a side, at most 256; its RAM
 holds any map up to 2^20 pixels; one build per array and RAM size, the
-RAM's sides powers of two from 64).  Results are the same either way (the
+RAM's sides powers of two from 64).  serial:PORT[@BAUD] runs the job on a
+board with the EDT/BFS bitstream (make bitstream CORE=edt_bfs; the untiled
+array, so the map must be the size of its array: 8x8 on the ULX3S-85F).  Results are the same either way (the
 tiled engine's invariant); cycles and tile visits are the engine's.  The
 RTL engines are checked against the model of the same array.  The
 untiled model's work grows with the cells times the iterations (about the
@@ -33,13 +35,15 @@ whole job: load, EDT, goals, BFS, path, map read-out), distance (d_i; 0 on
 obstacles, -1 where never reached, i.e. a map without obstacles), nearest
 ([r, c] of the nearest obstacle, null where none), cfr (0/1), path ([r, c]
 from start to goal), path_xy (the path in metres in the map frame),
-path_found, frame, rtl_matches_model (RTL engines); --csv: the path as rows
+path_found, frame, rtl_matches_model (RTL and serial engines); --csv: the path as rows
 row,col,x,y; --plot: the distance map (obstacles and unreached cells in
 their own colours) and the cfr with the path.
 
 Exit status: 0 done (a path found, or no start given); 1 ran, but no path
 from the start (no path in the cfr, or start or goal on an obstacle or
-outside the cfr), or an RTL engine differs from the model; 2 bad input.
+outside the cfr), or an RTL engine or the board differs from the model; 2
+bad input (for the serial engine also a port or a board that does not
+answer, runs another core or an array of another size).
 """
 
 import argparse
@@ -53,6 +57,7 @@ import numpy as np
 from navcores.models.edt_bfs import plan_path, widths
 from navcores.models.edt_bfs_tiled import plan_path_tiled
 
+from . import serial_engine
 from .cli import (CliError, add_engine, add_map, add_outputs, add_place, integer, load_map_arg, path_csv,
                   path_xy, places, save_figure, write_text)
 from .progress import Progress, Ticker, announce
@@ -106,11 +111,13 @@ def add_arguments(p):
                    help="the physical array of cells (default: the whole map up to 256 cells, else 8x8); "
                         "smaller than the map: the tile engine")
     add_engine(p, "the RTL in that simulator: the untiled core (maps up to 1024 / 256 cells) or, with an "
-                  "array smaller than the map, the tile engine (maps up to 2^20 pixels)")
+                  "array smaller than the map, the tile engine (maps up to 2^20 pixels)", serial=True)
     add_outputs(p, csv=True, plot_help="plot distance map, cfr and path")
 
 
 def _check_args(args):
+    if serial_engine.is_serial(args.engine):
+        serial_engine.check(args.engine)        # the port exists, before any work
     gm, frame = load_map_arg(args)
     grid = gm.obstacle
     h, w = grid.shape
@@ -125,12 +132,15 @@ def _check_args(args):
     array = args.array or ((h, w) if h * w <= WHOLE_MAP_CELLS else DEFAULT_ARRAY)
     tiled = array[0] < h or array[1] < w          # else the whole map is the array: the untiled design
     array = array if tiled else (h, w)
-    if args.engine != "model" and not tiled:
+    if serial_engine.is_serial(args.engine) and tiled:
+        raise CliError(f"--engine {args.engine}: the board runs the untiled array, which takes a map of "
+                       f"its own size; the map is {h}x{w}, the array {array[0]}x{array[1]}")
+    if args.engine in RTL_LIMIT and not tiled:
         if h * w > RTL_LIMIT[args.engine] or min(h, w) < MIN_SIDE:
             raise CliError(f"the map is {h}x{w}: --engine {args.engine} with the whole map as the array supports "
                            f"maps of {MIN_SIDE}x{MIN_SIDE} up to {RTL_LIMIT[args.engine]} cells; "
                            f"use a smaller --array (the tile engine), --engine model or a smaller map")
-    if args.engine != "model" and tiled:
+    if args.engine in RTL_LIMIT and tiled:
         from navcores.hdl.edt_bfs.tile_engine import TileEngine
         from navcores.hdl.params import check
         try:
@@ -275,7 +285,11 @@ def run(args):
             model = plan_path(grid, goals, start, args.dfar,
                               progress=lambda stage, k: bar.update(k, f"{stage}"))
     data = to_json(model, "model", h, w, array)
-    if args.engine != "model":
+    if serial_engine.is_serial(args.engine):
+        with Ticker(f"EDT/BFS on the board ({args.engine})"):
+            rtl = serial_engine.run_edt(args.engine, grid, goals, start, args.dfar)
+        data = to_json(rtl, args.engine, h, w, array)
+    elif args.engine != "model":
         what = f"the {array[0]}x{array[1]} tile engine" if tiled else "the EDT/BFS core"
         if tiled:
             rate = CYCLES_PER_SECOND[args.engine] * 64 / (array[0] * array[1])
@@ -289,6 +303,7 @@ def run(args):
             else:
                 rtl = run_rtl(grid, goals, start, args.dfar, args.engine, Path(tmp))
         data = to_json(rtl, args.engine, h, w, array)
+    if args.engine != "model":
         data["rtl_matches_model"] = bool(_matches(rtl, model))
     data["path_xy"] = path_xy(frame, data["path"])
     data["frame"] = frame.as_dict()

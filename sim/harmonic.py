@@ -2,7 +2,7 @@
 
     python -m sim harmonic MAP (--goal R,C | --goal-xy X,Y) [...] [--start R,C | --start-xy X,Y ...]
         [--block NxM] [--iters I] [--schedule P1,P2,... | P1:STEP:PMAX]
-        [--engine model|icarus|verilator] [--block-exponents [--e-max N|map]]
+        [--engine model|icarus|verilator|serial:PORT[@BAUD]] [--block-exponents [--e-max N|map]]
         [--cell METRES] [--unknown obstacle|free] [--json OUT] [--csv OUT] [--plot OUT.png]
 
 MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free),
@@ -33,6 +33,14 @@ criterion.  The work grows with the free cells times the square of the
 longest distance to a goal: a run estimated at more than 10 minutes says so
 before it starts, and on a terminal a progress line shows the precision and
 the sweeps.
+
+--engine serial:PORT[@BAUD] plans on a board with the planner bitstream
+(make bitstream CORE=harmonic; docs/boards.md): --block must be the board
+planner's (6x12 on the ULX3S-85F), the map at most its grid of blocks (it
+is padded with obstacles to that grid, so the counters and cycles are the
+whole grid's), the schedule arithmetic up to its p_max; the model plans
+the same padded grid and every node, counter and cycle count is compared
+(rtl_matches_model; a difference exits 1).
 
 --block-exponents (beyond the paper, issue 10; every engine): every block
 keeps an exponent e_b, a mantissa v of block b stands for v / 2**(p+e_b), so
@@ -73,7 +81,9 @@ value, potential 0, in their own colour) and the trajectories.
 
 Exit status: 0 planned, converged, every start reached a goal; 1 planned but
 not converged or a start did not reach a goal (e.g. no goal can reach it);
-2 bad input (one line on stderr).
+the board's plan differs from the model's; 2 bad input (one line on
+stderr; for the serial engine also a port or a board that does not answer
+or whose planner cannot take the map).
 """
 
 import json
@@ -82,6 +92,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import serial_engine
 from .cli import (CliError, add_block, add_engine, add_map, add_outputs, add_place, add_schedule, integer,
                   load_map_arg, parse_block, parse_schedule, path_csv, path_xy, places, save_figure,
                   write_text)
@@ -113,7 +124,8 @@ def add_arguments(parser):
                         default=DEFAULT_ITERS, metavar="I",
                         help="iterations per block visit at most (default %(default)s)")
     add_schedule(parser, DEFAULT_SCHEDULE)
-    add_engine(parser, "the planner RTL in that simulator (arithmetic schedules, blocks of whole 3x6 clusters)")
+    add_engine(parser, "the planner RTL in that simulator (arithmetic schedules, blocks of whole 3x6 clusters)",
+               serial=True)
     parser.add_argument("--block-exponents", action="store_true",
                         help="one exponent per block (issue 10, beyond the paper; every engine): "
                              "the word length follows the block, not the map")
@@ -140,6 +152,8 @@ def estimate(grid, goals, engine):
         r, c = rows[k:k + (1 << 20), None], cols[k:k + (1 << 20), None]
         far = max(far, int((np.abs(r - g[None, :, 0]) + np.abs(c - g[None, :, 1])).min(axis=1).max()))
     updates = WORK_K * len(rows) * float(far) ** 2
+    if serial_engine.is_serial(engine):        # the board's clock runs it; its line reads it back
+        return 0.0, "on a board"
     if engine == "model":
         return updates / MODEL_RATE, (f"about {updates:.2g} node updates: {len(rows)} free cells, "
                                       f"{far} cells to the farthest, at {MODEL_RATE:.0f} a second")
@@ -188,6 +202,11 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
             # exact local maxima of the final field (the RTL engines count the same)
             out["maxima"] = _maxima(obstacle, goals, block, r.padded_h)
         return out
+    if serial_engine.is_serial(engine):
+        with Ticker(f"planner on the board ({engine})"):
+            res = serial_engine.run_harmonic(engine, obstacle, goals, block, iters, schedule, block_exponents)
+        res["maxima"] = _maxima(res["grid"], goals, block, res["padded_h"])
+        return res
     from .rtl.planner_driver import run_planner_rtl
     with Ticker(f"planner RTL on {engine}") as ticker:
         try:
@@ -279,6 +298,8 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
     }
     if frame is not None:
         out["frame"] = frame.as_dict()
+    if "rtl_matches_model" in res:           # the serial engine: the board against the model
+        out["rtl_matches_model"], out["model_differences"] = res["rtl_matches_model"], res["differences"]
     if block_exponents:
         out["exponents"] = [[int(e) for e in row] for row in res["exponents"]]
         out["frac_bits"] = scale
@@ -335,6 +356,8 @@ def plot(path, grid, result, title):
 
 
 def run(args):
+    if serial_engine.is_serial(args.engine):
+        serial_engine.check(args.engine)        # the port exists, before any work
     gm, frame = load_map_arg(args)
     grid = gm.obstacle
     goals = places(args, "goal", grid, frame)
@@ -348,7 +371,7 @@ def run(args):
     if bexp and e_max == "map":
         from navcores.models.harmonic import e_max_for
         e_max = e_max_for(grid, goals)
-    if args.engine != "model":
+    if args.engine != "model" and not serial_engine.is_serial(args.engine):
         check_rtl(args.engine, grid.shape, block, schedule, bexp, e_max)
 
     seconds, basis = estimate(grid, goals, args.engine)
@@ -382,6 +405,9 @@ def run(args):
                      f"(fraction bits {result['precision']}..{result['frac_bits']}); e_max {result['e_max']} "
                      f"({int(result['e_max']).bit_length()}-bit exponent registers)"
                      + (f", {at} block(s) at e_max: a larger --e-max may converge" if at else ""))
+    if "rtl_matches_model" in result:
+        lines.append("board bit-exact against the model: " + ("yes" if result["rtl_matches_model"] else
+                                                               "NO (" + "; ".join(result["model_differences"]) + ")"))
     if result["unreachable"]:
         lines.append(f"{len(result['unreachable'])} free cell(s) no goal can reach (no gradient there)")
     for tr in result["trajectories"]:
@@ -413,4 +439,4 @@ def run(args):
         lines.append(f"wrote {args.plot}")
     print("\n".join(lines))
     ok = result["converged"] and all(tr["reached_goal"] for tr in result["trajectories"])
-    return 0 if ok else 1
+    return 0 if ok and result.get("rtl_matches_model", True) else 1

@@ -23,7 +23,7 @@ from navcores.hdl.edt_bfs.edt_bfs import command_layout, image_layout, result_la
 from .clock import PERIOD_NS
 from .stream import Streams, pauses
 
-__all__ = ["EdtBfsDriver", "compare", "compare_fields"]
+__all__ = ["EdtBfsDriver", "decode", "compare", "compare_fields"]
 
 
 class EdtBfsDriver:
@@ -91,7 +91,7 @@ class EdtBfsDriver:
         beats = []
         while not beats or not beats[-1]["last"]:
             beats.append(await self.res.recv(max(1, deadline - self.streams.cycle)))
-        out = self._decode(beats)
+        out = decode(beats, h, w)
         out["cycles"] = self.res.beats[-1][0] - self.cmd.beats[-1][0]
         out["starved"] = self.img.starved - starved
         out["stalls"] = self.res.stalls - stalls
@@ -101,33 +101,36 @@ class EdtBfsDriver:
         out["start_err"] = int(d.start_err.value)
         return out
 
-    def _decode(self, beats):
-        h, w = self.h, self.w
-        path = [(b["row"], b["col"]) for b in beats if not b["cell"]]
-        cells = [b for b in beats if b["cell"]]
-        assert all(not b["cell"] for b in beats[:len(path)]), "path beats come first"
-        assert len(cells) == h * w, f"{len(cells)} cell beats, expected {h * w}"
-        assert sum(b["last"] for b in beats) == 1 and beats[-1]["last"]
-        dist = np.full((h, w), -1, dtype=np.int64)
-        vec = np.zeros((h, w, 2), dtype=np.int64)
-        nearest = np.full((h, w, 2), -1, dtype=np.int64)
-        done = np.zeros((h, w), dtype=bool)
-        cfr = np.zeros((h, w), dtype=bool)
-        visited = np.zeros((h, w), dtype=bool)
-        parent = np.zeros((h, w), dtype=np.int64)
-        for n, b in enumerate(cells):
-            r, c = b["row"], b["col"]
-            assert (r, c) == divmod(n, w), f"beat {n} is cell {(r, c)}: not row-major"
-            done[r, c] = b["done"]
-            if b["done"]:
-                dist[r, c] = b["di"]
-                vec[r, c] = (b["dx"], b["dy"])
-                nearest[r, c] = (r - b["dx"], c - b["dy"])
-            else:
-                assert (b["di"], b["dx"], b["dy"]) == (0, 0, 0)
-            cfr[r, c], visited[r, c], parent[r, c] = b["cfr"], b["visited"], b["parent"]
-        return {"path": path, "path_found": bool(path), "distance": dist, "vector": vec,
-                "nearest": nearest, "done": done, "cfr": cfr, "visited": visited, "parent": parent}
+
+def decode(beats, h, w):
+    """The result beats of one job (unpacked ``result_layout`` dicts, the
+    path's first, then every cell row by row) as the model's arrays; shared
+    with the board's job (sim/rtl/board_jobs.py)."""
+    path = [(b["row"], b["col"]) for b in beats if not b["cell"]]
+    cells = [b for b in beats if b["cell"]]
+    assert all(not b["cell"] for b in beats[:len(path)]), "path beats come first"
+    assert len(cells) == h * w, f"{len(cells)} cell beats, expected {h * w}"
+    assert sum(b["last"] for b in beats) == 1 and beats[-1]["last"]
+    dist = np.full((h, w), -1, dtype=np.int64)
+    vec = np.zeros((h, w, 2), dtype=np.int64)
+    nearest = np.full((h, w, 2), -1, dtype=np.int64)
+    done = np.zeros((h, w), dtype=bool)
+    cfr = np.zeros((h, w), dtype=bool)
+    visited = np.zeros((h, w), dtype=bool)
+    parent = np.zeros((h, w), dtype=np.int64)
+    for n, b in enumerate(cells):
+        r, c = b["row"], b["col"]
+        assert (r, c) == divmod(n, w), f"beat {n} is cell {(r, c)}: not row-major"
+        done[r, c] = b["done"]
+        if b["done"]:
+            dist[r, c] = b["di"]
+            vec[r, c] = (b["dx"], b["dy"])
+            nearest[r, c] = (r - b["dx"], c - b["dy"])
+        else:
+            assert (b["di"], b["dx"], b["dy"]) == (0, 0, 0)
+        cfr[r, c], visited[r, c], parent[r, c] = b["cfr"], b["visited"], b["parent"]
+    return {"path": path, "path_found": bool(path), "distance": dist, "vector": vec,
+            "nearest": nearest, "done": done, "cfr": cfr, "visited": visited, "parent": parent}
 
 
 def compare_fields(got, model, names):

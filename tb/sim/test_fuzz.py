@@ -234,20 +234,23 @@ def _vocabulary(d):
     xys = ["0.05,0.15", "-0.25,-0.15", "0.2,0.1", "1e300,0", "nan,1", "inf,inf", "x,y", "-1,-1"]
     numbers = ["0", "1", "0.1", "0.2", "-1", "1e9", "nan", "inf", "-inf", "abc", "", "2", "255", "256",
                "99999999999999999999"]
+    # no board here: a missing port, a bad spec, and a file that is no serial port
+    serial = ["serial:/dev/nonexistent", "serial:", "serial:/dev/null", "serial:/dev/null@12", "serial:x@"]
     outs = [str(d / "out" / "r.json"), str(d / "out" / "r.png"), str(d / "out" / "r.csv"), str(d / "out" / "p.xyz"),
             "/proc/x/y.json", str(d), str(d / "out" / "deep" / "x.json")]
     return {
         "harmonic": ([maps], {"--goal": cells, "--goal-xy": xys, "--start": cells, "--start-xy": xys,
                               "--block": ["3x6", "6x12", "0x1", "100000x6", "3,6", "x"],
                               "--iters": numbers, "--schedule": ["16:16:64", "8,16", "16,8", "2:1:99999", "x", "8:8"],
-                              "--engine": ["model", "fpga"], "--cell": numbers, "--unknown": ["free", "obstacle", "x"],
+                              "--engine": ["model", "fpga"] + serial, "--cell": numbers,
+                              "--unknown": ["free", "obstacle", "x"],
                               "--json": outs, "--plot": outs, "--csv": outs, "--block-exponents": None}),
         "edt": ([maps], {"--dfar": numbers + ["3"], "--goal": cells, "--goal-xy": xys, "--start": cells,
-                         "--start-xy": xys, "--engine": ["model", "fpga"], "--cell": numbers,
+                         "--start-xy": xys, "--engine": ["model", "fpga"] + serial, "--cell": numbers,
                          "--json": outs, "--plot": outs, "--csv": outs}),
         "dflc": ([], {"--fll": [str(ROOT / "models" / "dflc_table1.fll"), str(d / "bad.fll"), "none.fll", str(d)],
                       "--input": [str(d / "in.csv"), str(d / "bad.csv"), "none.csv", str(d / "p.csv")],
-                      "--engine": ["model", "x"], "--div": ["lut", "array", "x"], "--parallel": None,
+                      "--engine": ["model", "x"] + serial, "--div": ["lut", "array", "x"], "--parallel": None,
                       "--json": outs, "--plot": outs}),
         # (in.csv as a path is a valid 238 m chain: minutes of driving, not the fuzzer's business)
         "track": ([[str(d / "p.csv"), str(d / "bad.csv"), "none.csv", str(d / "bad.fll"), str(ROOT / "paths" / "line.csv")]],
@@ -262,6 +265,7 @@ def _vocabulary(d):
                               "--seed": ["0", "-5"], "--dfar": ["0", "1", "-1"], "--block": ["3x6", "6,12", "x"],
                               "--schedule": ["16:16:64", "x"], "--iters": ["6", "0", "300"],
                               "--engine": ["model", "fpga"], "--json": outs, "--plot": outs, "--csv": outs}),
+        "board": ([serial + ["x", str(d)]], {"--json": outs}),
     }
 
 
