@@ -70,12 +70,14 @@ def test_long_runs_say_so_first(tmp_path, capsys, monkeypatch):
                     r"\(about [\d.e+]+ node updates: \d+ free cells, \d+ cells to the farthest", note), note
     assert "stopped by the test" in err
     Image.fromarray(np.full((4000, 4000), 255, dtype=np.uint8)).save(tmp_path / "big.png")
-    assert main(["edt", str(tmp_path / "big.png"), "--dfar", "0", "--goal", "1,1"]) == 2
+    # the untiled array (the paper's, one cell a pixel) as large as the map
+    assert main(["edt", str(tmp_path / "big.png"), "--dfar", "0", "--goal", "1,1", "--array", "4000x4000"]) == 2
     note = capsys.readouterr().err.splitlines()[0]
     assert re.match(r"sim edt: note: the model on 4000x4000 will take about [\d.]+ h \(at least 8000 iterations",
                     note), note
     # a small run says nothing
-    assert main(["edt", str(ROOT / "maps" / "room-32-32-4.map"), "--dfar", "0", "--goal", "30,30"]) == 2
+    assert main(["edt", str(ROOT / "maps" / "room-32-32-4.map"), "--dfar", "0", "--goal", "30,30",
+                 "--array", "32x32"]) == 2
     assert capsys.readouterr().err.splitlines()[0].endswith("stopped by the test")
 
 
