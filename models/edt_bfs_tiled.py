@@ -406,14 +406,19 @@ class _Fifo:
         return t
 
 
+PROGRESS_VISITS = 1024      # tile visits between two progress calls
+
+
 class TileEngine:
     """One tiled job: the map's state (padded arrays standing for the RAM), the schedule, the counts.
 
     ``obstacle``: bool H x W; ``array``: (T_r, T_c); ``word_pixels``,
-    ``banks``: the RAM layout (:class:`Geometry`); ``timing``: :class:`Timing`.
+    ``banks``: the RAM layout (:class:`Geometry`); ``timing``: :class:`Timing`;
+    ``progress``: called as ``progress(phase, visits)`` every
+    :data:`PROGRESS_VISITS` tile visits (a command's progress line).
     """
 
-    def __init__(self, obstacle, array, word_pixels=None, banks=3, timing=None):
+    def __init__(self, obstacle, array, word_pixels=None, banks=3, timing=None, progress=None):
         obstacle = np.asarray(obstacle, dtype=bool)
         if obstacle.ndim != 2 or obstacle.size == 0:
             raise ValueError(f"obstacle must be a non-empty 2-D array, got shape {obstacle.shape}")
@@ -433,11 +438,14 @@ class TileEngine:
         self.cycles = {"load": g.h * -(-g.w // g.p), "scan": g.tiles, "edt": 0, "goals": 0,
                        "bfs": 0, "path": 0, "readout": 0}
         self.trace = []          # every visit in order: (phase, level (0 in the BFS), tile, iterations, marks)
+        self.progress = progress
 
     def _account(self, phase, k, t, iterations, marks):
         """One visit of tile t: trace, counts and cycles (module docstring, cycle model)."""
         g, tm = self.g, self.timing
         self.trace.append((phase, k, t, iterations, marks))
+        if self.progress is not None and len(self.trace) % PROGRESS_VISITS == 0:
+            self.progress(phase, len(self.trace))
         self.visits[t] += 1
         self.counts[f"visits_{phase}"] += 1
         self.counts[f"array_iterations_{phase}"] += iterations
@@ -597,13 +605,14 @@ class TileEngine:
 
 
 def plan_path_tiled(obstacle, goals, start, dfar, array=(8, 8), word_pixels=None, banks=3,
-                    timing=None, readout=False):
+                    timing=None, readout=False, progress=None):
     """Parallel_Path_Plan on a ``T_r x T_c`` tile array over the map (module docstring).
 
     Arguments as :func:`models.edt_bfs.plan_path`, plus ``array`` (T_r, T_c),
     ``word_pixels`` (pixels per RAM word, a divisor of T_c; default T_c),
     ``banks`` (RAM banks read in one beat), ``timing`` (:class:`Timing`) and
-    ``readout`` (count the map read-out's cycles).  Returns an
+    ``readout`` (count the map read-out's cycles) and ``progress``
+    (:class:`TileEngine`'s).  Returns an
     :class:`EdtBfsTiledResult`: its result fields equal ``plan_path``'s, its
     ``cycles`` are the tile engine's.
     """
@@ -615,7 +624,7 @@ def plan_path_tiled(obstacle, goals, start, dfar, array=(8, 8), word_pixels=None
         start = _check_cell(obstacle.shape, start, "start")
     if dfar < 0:
         raise ValueError(f"dfar {dfar} must be >= 0")
-    eng = TileEngine(obstacle, array, word_pixels, banks, timing)
+    eng = TileEngine(obstacle, array, word_pixels, banks, timing, progress)
     eng.edt()
     eng.bfs(goals, int(dfar))
     h, w = obstacle.shape

@@ -275,8 +275,10 @@ def run(args):
     grid, frame, goals, start, array, tiled = _check_args(args)
     h, w = grid.shape
     if tiled:
-        # the tiled model: a few seconds even on 512x512 (scripts/bench_edt_tiled.py)
-        model = plan_path_tiled(grid, goals, start, args.dfar, array=array, readout=True)
+        # the tiled model: seconds on 512x512 (scripts/bench_edt_tiled.py); its cost follows the wave
+        with Progress("edt tiled model", total=None, unit="tile visits") as bar:
+            model = plan_path_tiled(grid, goals, start, args.dfar, array=array, readout=True,
+                                    progress=lambda phase, visits: bar.update(visits, phase))
     else:
         seconds = (h + w) * h * w * NS_PER_CELL_ITERATION * 1e-9
         announce("sim edt", seconds, f"the model on {h}x{w}",
