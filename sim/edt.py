@@ -129,12 +129,14 @@ def _check_args(args):
     if not goals:
         raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
     starts = places(args, "start", grid, frame, free=False)
-    array = args.array or ((h, w) if h * w <= WHOLE_MAP_CELLS else DEFAULT_ARRAY)
+    serial = serial_engine.is_serial(args.engine)
+    if serial and args.array and tuple(args.array) != (h, w):
+        raise CliError(f"--array {args.array[0]}x{args.array[1]}: --engine {args.engine} runs the board's "
+                       f"untiled array, as large as the map")
+    # the board's array is untiled: it takes a map of its own size (it says so when asked)
+    array = args.array or ((h, w) if h * w <= WHOLE_MAP_CELLS or serial else DEFAULT_ARRAY)
     tiled = array[0] < h or array[1] < w          # else the whole map is the array: the untiled design
     array = array if tiled else (h, w)
-    if serial_engine.is_serial(args.engine) and tiled:
-        raise CliError(f"--engine {args.engine}: the board runs the untiled array, which takes a map of "
-                       f"its own size; the map is {h}x{w}, the array {array[0]}x{array[1]}")
     if args.engine in RTL_LIMIT and not tiled:
         if h * w > RTL_LIMIT[args.engine] or min(h, w) < MIN_SIDE:
             raise CliError(f"the map is {h}x{w}: --engine {args.engine} with the whole map as the array supports "

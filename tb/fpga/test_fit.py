@@ -74,17 +74,18 @@ def test_node_fits(tmp_path, given, part, speed, nextpnr, ff_resource):
 
 @TOOLS
 def test_too_large_does_not_fit(tmp_path):
-    """The DFLC's parallel option needs more multipliers than the UP5K's 8
-    DSPs: fits false, the overflowing resource named, no clock, exit 0."""
+    """A cluster whose node RAM (8192 words x 18 bits: 36 blocks of 4 Kbit)
+    overflows the UP5K's 30 RAM blocks: fits false, the overflowing resource
+    named, no clock, exit 0."""
     out = tmp_path / "big.json"
-    r = fit("dflc_core", "fll=table1", "par=1", "--part", "iCE40-UP5K", out=out)
+    r = fit("harmonic_cluster", "depth=8192", "--part", "iCE40-UP5K", out=out)
     assert r.returncode == 0, r.stderr
-    assert "does not fit (ICESTORM_DSP" in r.stdout and len(r.stdout.splitlines()) == 1, r.stdout
+    assert "does not fit (ICESTORM_RAM 36/30)" in r.stdout and len(r.stdout.splitlines()) == 1, r.stdout
     d = json.loads(out.read_text())
     assert (d["fits"], d["fmax_mhz"], d["seeds"], d["critical_path"]) == (False, None, [], None)
     assert d["overflow"] and all(o["used"] > o["available"] for o in d["overflow"])
-    dsp = next(o for o in d["overflow"] if o["resource"] == "ICESTORM_DSP")
-    assert dsp["available"] == 8 and d["dsp"] == dsp["used"]      # the harness has no DSP
+    ram = next(o for o in d["overflow"] if o["resource"] == "ICESTORM_RAM")
+    assert ram["available"] == 30 and d["bram"] == ram["used"] == 36     # the harness has no RAM
 
 
 @pytest.mark.parametrize("args,says", [

@@ -1,5 +1,6 @@
 """Map and scenario loading: the bundled maps parse, bad files name their line."""
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +21,7 @@ def test_bundled_maps_parse(name):
 
 @pytest.mark.parametrize("name", sorted(p.name for p in MAPS.glob("*.scen")))
 def test_bundled_scenarios_parse(name):
-    grid = load_map(MAPS / (name.split("-even")[0] + ".map"))
+    grid = load_map(MAPS / (re.sub(r"(-even-\d+|-longest)?\.scen$", "", name) + ".map"))   # the map it belongs to
     scen = load_scenarios(MAPS / name, grid)
     assert scen and all(not grid[s.start] and not grid[s.goal] for s in scen)
 
