@@ -49,19 +49,11 @@ SYNTH = {("icebreaker", "dflc"): "synth_ice40 -device u"}
 
 
 def _fail(msg, code=2):
-    print(f"{PROG}: error: {msg}", file=sys.stderr)
-    sys.exit(code)
+    toolchain.fail(PROG, msg, code)
 
 
 def _progress():
-    if not sys.stderr.isatty():
-        return None
-    t0 = time.monotonic()
-
-    def show(msg):
-        sys.stderr.write(f"[bitstream {time.monotonic() - t0:5.0f} s] {msg}\n")
-        sys.stderr.flush()
-    return show
+    return toolchain.progress_printer("bitstream")
 
 
 def parse_args(argv):

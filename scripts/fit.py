@@ -39,20 +39,11 @@ PROG = "make fit"
 
 
 def _fail(msg, code=2):
-    print(f"{PROG}: error: {msg}", file=sys.stderr)
-    sys.exit(code)
+    toolchain.fail(PROG, msg, code)
 
 
 def _progress():
-    """A progress printer for a terminal (None otherwise: logs stay quiet)."""
-    if not sys.stderr.isatty():
-        return None
-    t0 = time.monotonic()
-
-    def show(msg):      # one write per line: seeds run in threads
-        sys.stderr.write(f"[fit {time.monotonic() - t0:5.0f} s] {msg}\n")
-        sys.stderr.flush()
-    return show
+    return toolchain.progress_printer("fit")
 
 
 def parse_args(argv):

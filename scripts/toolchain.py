@@ -237,3 +237,24 @@ def main():
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def fail(prog, msg, code=2):
+    """The flow commands' refusal (scripts/fit.py, bitstream.py): one line on
+    stderr, exit ``code`` (2 bad input, 1 ran without a result)."""
+    print(f"{prog}: error: {msg}", file=sys.stderr)
+    sys.exit(code)
+
+
+def progress_printer(label):
+    """A progress printer for a terminal, ``[label  12 s] msg`` (None when
+    stderr is not one: logs stay quiet).  One write per line: place-and-route
+    seeds report from threads."""
+    if not sys.stderr.isatty():
+        return None
+    t0 = time.monotonic()
+
+    def show(msg):
+        sys.stderr.write(f"[{label} {time.monotonic() - t0:5.0f} s] {msg}\n")
+        sys.stderr.flush()
+    return show
