@@ -146,12 +146,17 @@ async def protocol_suite(line, info, rng, full=True):
     return w.checked
 
 
-async def connect(line, core):
-    """A Link on the line, INFO read and the core reset (board_jobs.open_core)."""
+async def open_board(dut, params, timeout_bits):
+    """Start the board top, put a UART line on it at ``params["divisor"]``
+    clocks a bit, open a Link, read INFO and reset the core
+    (board_jobs.open_core): (line, link, info)."""
+    from navcores.sim.rtl.board_driver import UartLine, start
     from navcores.sim.rtl.board_jobs import open_core
+    await start(dut)
+    line = UartLine(dut, params["divisor"], timeout_bits=timeout_bits)
     link = P.Link()
-    info = await perform(open_core(link, core), line)
-    return link, info
+    info = await perform(open_core(link, params["core"]), line)
+    return line, link, info
 
 
 def rng_from_env():

@@ -27,7 +27,7 @@ import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, host_command, host_matches_model, protocol_suite, rng_from_env, run_board
+from board_checks import host_command, host_matches_model, open_board, protocol_suite, rng_from_env, run_board
 from navcores.hdl.dflc.top import config_for
 from navcores.models.dflc import Dflc
 from navcores.sim.rtl.board_driver import UartLine, perform, start
@@ -38,16 +38,10 @@ from navcores.sim.rtl.runner import SIMULATORS
 PARAMS = {"core": "dflc", "fll": "table1", "divisor": 4, "fifo": 32, "gap_bits": 40, "accept_bits": 400}
 
 
-async def _open(dut):
-    await start(dut)
-    line = UartLine(dut, PARAMS["divisor"], timeout_bits=4000)
-    link, info = await connect(line, "dflc")
-    return line, link, info
-
 
 @cocotb.test()
 async def protocol(dut):
-    line, link, info = await _open(dut)
+    line, link, info = await open_board(dut, PARAMS, timeout_bits=4_000)
     assert (info["core"], info["fll"], info["fifo"], info["div"]) == ("dflc", "table1", 32, 4), info
     n = await protocol_suite(line, info, rng_from_env())
     dut._log.info(f"{n} frames checked")
@@ -64,7 +58,7 @@ def _codes(config, rng, n):
 
 @cocotb.test()
 async def samples(dut):
-    line, link, info = await _open(dut)
+    line, link, info = await open_board(dut, PARAMS, timeout_bits=4_000)
     config = config_for(fll="table1")
     model = Dflc(config)
     rng = np.random.default_rng(rng_from_env().randrange(1 << 30))

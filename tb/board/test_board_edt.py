@@ -28,7 +28,7 @@ import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, host_command, host_matches_model, protocol_suite, rng_from_env, run_board
+from board_checks import host_command, host_matches_model, open_board, protocol_suite, rng_from_env, run_board
 from images import FAMILIES, free_cells
 from navcores.hdl.board import protocol as P
 from navcores.models.edt_bfs import plan_path
@@ -42,12 +42,6 @@ PARAMS = {"core": "edt_bfs", "height": 5, "width": 5, "divisor": 4, "fifo": 32, 
 H, W = PARAMS["height"], PARAMS["width"]
 
 
-async def _open(dut):
-    await start(dut)
-    line = UartLine(dut, PARAMS["divisor"], timeout_bits=20_000)
-    link, info = await connect(line, "edt_bfs")
-    return line, link, info
-
 
 async def _job(line, link, img, goals, start_, dfar):
     model = plan_path(img, goals, start_, dfar)
@@ -57,7 +51,7 @@ async def _job(line, link, img, goals, start_, dfar):
 
 @cocotb.test()
 async def protocol(dut):
-    line, link, info = await _open(dut)
+    line, link, info = await open_board(dut, PARAMS, timeout_bits=20_000)
     assert (info["height"], info["width"], info["sinks"], len(info["sources"])) == (H, W, info["sinks"], 1)
     assert len(info["sinks"]) == 2 and info["status"] > 32, info
     n = await protocol_suite(line, info, rng_from_env(), full=False)
@@ -66,7 +60,7 @@ async def protocol(dut):
 
 @cocotb.test()
 async def jobs(dut):
-    line, link, info = await _open(dut)
+    line, link, info = await open_board(dut, PARAMS, timeout_bits=20_000)
     rng = np.random.default_rng(rng_from_env().randrange(1 << 30))
     compared = found = 0
     for name in ("random", "rooms", "sparse"):
@@ -84,7 +78,7 @@ async def jobs(dut):
 
 @cocotb.test()
 async def core_errors(dut):
-    line, link, info = await _open(dut)
+    line, link, info = await open_board(dut, PARAMS, timeout_bits=20_000)
     img = np.zeros((H, W), dtype=bool)
     img[2, 1:4] = True
     # an image column before any command: the core never takes it

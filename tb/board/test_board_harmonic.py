@@ -24,7 +24,7 @@ import cocotb
 import numpy as np
 import pytest
 
-from board_checks import connect, host_command, host_matches_model, protocol_suite, rng_from_env, run_board
+from board_checks import host_command, host_matches_model, open_board, protocol_suite, rng_from_env, run_board
 from navcores.models.harmonic import plan
 from navcores.sim.rtl.board_driver import UartLine, perform, start
 from navcores.sim.rtl.board_jobs import CoreError, RemotePlanner, harmonic, harmonic_differences
@@ -37,16 +37,10 @@ PARAMS = {"core": "harmonic", "n": 3, "m": 6, "br": 1, "bc": 2, "p_max": 16, "de
 SHAPE = (PARAMS["br"] * PARAMS["n"], PARAMS["bc"] * PARAMS["m"])
 
 
-async def _open(dut):
-    await start(dut)
-    line = UartLine(dut, PARAMS["divisor"], timeout_bits=20_000)
-    link, info = await connect(line, "harmonic")
-    return line, link, info
-
 
 @cocotb.test()
 async def protocol(dut):
-    line, link, info = await _open(dut)
+    line, link, info = await open_board(dut, PARAMS, timeout_bits=20_000)
     assert {k: info[k] for k in ("n", "m", "br", "bc", "p_max", "depth")} == \
         {k: PARAMS[k] for k in ("n", "m", "br", "bc", "p_max", "depth")}, info
     n = await protocol_suite(line, info, rng_from_env(), full=False)
@@ -55,7 +49,7 @@ async def protocol(dut):
 
 @cocotb.test()
 async def plan_matches_model(dut):
-    line, link, info = await _open(dut)
+    line, link, info = await open_board(dut, PARAMS, timeout_bits=20_000)
     rng = rng_from_env()
     for name, sched, iters in (("random", (8, 16), 2),):
         ob, goals = MAPS[name](*SHAPE, rng.randrange(1000))
@@ -76,7 +70,7 @@ async def plan_matches_model(dut):
 
 @cocotb.test()
 async def core_error(dut):
-    line, link, info = await _open(dut)
+    line, link, info = await open_board(dut, PARAMS, timeout_bits=20_000)
     drv = RemotePlanner(link)
     try:
         await perform(drv.command(Op.READ, block=0, row=PARAMS["n"], col=0), line)
