@@ -102,8 +102,9 @@ class Decision(wiring.Component):
         w = self.p_max + 1
         i = Signal(range(w + 1))            # the bit of the pass: 0 .. p+1
         nxt = Signal(range(w + 1))          # the bit of the next cycle: i + 1, 0 after p+1
+        top = Signal(range(w + 1))          # p+1, registered at start (p holds until done)
         last = Signal()
-        m.d.comb += last.eq(i == self.p + 1)
+        m.d.comb += last.eq(i == top)
         pass1, pass2 = Signal(), Signal()
 
         # Bit i of every value (0 above bit p_max: i reaches p_max + 1),
@@ -187,9 +188,9 @@ class Decision(wiring.Component):
 
         m.d.sync += self.done.eq(0)
         with m.If(self.start):
-            m.d.sync += [pass1.eq(1), pass2.eq(0), i.eq(0), nxt.eq(1)]
+            m.d.sync += [pass1.eq(1), pass2.eq(0), i.eq(0), nxt.eq(1), top.eq(self.p + 1)]
         with m.Elif(pass1 | pass2):
-            m.d.sync += [i.eq(i + 1), nxt.eq(Mux(nxt == self.p + 1, 0, nxt + 1))]
+            m.d.sync += [i.eq(i + 1), nxt.eq(Mux(nxt == top, 0, nxt + 1))]
             with m.If(last):
                 m.d.sync += i.eq(0)
                 with m.If(pass1):

@@ -259,6 +259,7 @@ class Planner(wiring.Component):
 
         in_map = (cmd.block < B) & (cmd.row < n) & (cmd.col < mm)
         c_br, c_bc, c_ci, c_bit = locate(c.block, c.row, c.col, "c")
+        _, _, cmd_ci, _ = locate(cmd.block, cmd.row, cmd.col, "cmd")
 
         # Status fields ride on every response.
         def respond(code, op):
@@ -280,6 +281,12 @@ class Planner(wiring.Component):
         rd_j = Signal(range(S + 2))
         rd_val, rd_const = Signal(p_max + 1), Signal()
         rd_busy = Signal()
+        # p+1 and the read's last count, registered: ctl.p holds while idle
+        # (the only time READ / DIRECTION read), so the adders leave the
+        # read's path (issue 17).
+        p_top = Signal(range(p_max + 2))
+        rd_end = Signal(range(S + 2))
+        m.d.sync += [p_top.eq(ctl.p + 1), rd_end.eq(ctl.p + 1 + READ_LATENCY)]
         with m.If(rd_go):
             m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0)]
         with m.Elif(rd_busy):
@@ -290,7 +297,7 @@ class Planner(wiring.Component):
                 m.d.sync += rd_const.eq(got)
             with m.Elif(rd_j > READ_LATENCY):
                 m.d.sync += rd_val.eq(Cat(got, rd_val[:-1]))
-            with m.If(rd_j == ctl.p + 1 + READ_LATENCY):
+            with m.If(rd_j == rd_end):
                 m.d.sync += rd_busy.eq(0)
                 m.d.comb += rd_done.eq(1)
 
@@ -354,7 +361,6 @@ class Planner(wiring.Component):
             m.d.comb += [s_sh.eq(dir_e - ctl.e_rd), s_abs.eq(Mux(s_sh < 0, -s_sh, s_sh))]
 
         accept = Signal()
-        start_ok = Signal()
         with m.FSM() as fsm:
             with m.State("IDLE"):
                 with m.If(accept):
@@ -366,7 +372,11 @@ class Planner(wiring.Component):
                             with m.Elif(ctl.busy):
                                 respond(Code.BUSY, cmd.op)
                             with m.Else():
-                                m.d.sync += load_a.eq(0)
+                                # LOAD's RAM base and cluster registered now (as
+                                # LOCATE does for a read): the host port's cluster
+                                # select is then a flip-flop in every state.
+                                m.d.sync += [load_a.eq(0), rd_base.eq(times(cmd.block, S) if B > 1 else 0),
+                                             rd_ci.eq(cmd_ci)]
                                 with m.If(cmd.flag):
                                     m.d.sync += has_goal.eq(cmd.goals != 0)
                                 with m.Else():
@@ -387,7 +397,7 @@ class Planner(wiring.Component):
                             with m.Elif(~has_goal):
                                 respond(Code.NO_GOAL, cmd.op)
                             with m.Else():
-                                m.next = "STARTED"
+                                m.next = "START_GO"
                         with m.Case(Op.STATUS):
                             respond(Code.OK, cmd.op)
                         with m.Case(Op.READ, Op.DIRECTION):
@@ -400,15 +410,13 @@ class Planner(wiring.Component):
                                 m.next = "FETCH"
                         with m.Default():
                             respond(Code.BAD_OP, cmd.op)
+            with m.State("START_GO"):       # the Controller starts from the registered command
+                m.next = "STARTED"
             with m.State("STARTED"):        # the response shows the run begun
                 respond(Code.OK, Op.START)
                 m.next = "IDLE"
             with m.State("LOAD"):
-                base = Signal(range(self.depth))
-                m.d.comb += [
-                    base.eq((c_br * BC + c_bc) * S),
-                    host.addr.eq(base + load_a), host.cluster.eq(c_ci),
-                ]
+                m.d.comb += [host.addr.eq(rd_base + load_a), host.cluster.eq(rd_ci)]
                 with m.If(load_a == 0):
                     m.d.comb += host.wdata.eq(c.flags | c.goals)
                 with m.Elif(load_a == 1):
@@ -444,7 +452,7 @@ class Planner(wiring.Component):
                         m.d.sync += [dir_e.eq(ctl.e_rd), cv_n.eq(0)]
                     with m.Else():
                         m.d.sync += [cv_left.eq(s_sh > 0),
-                                     cv_n.eq(Mux(s_abs > ctl.p + 1, ctl.p + 1, s_abs))]
+                                     cv_n.eq(Mux(s_abs > p_top, p_top, s_abs))]
                 m.next = "FETCH_WAIT"
             with m.State("FETCH_WAIT"):
                 with m.If(rd_done):
@@ -505,9 +513,11 @@ class Planner(wiring.Component):
         m.d.comb += [
             self.i_stream.ready.eq(fsm.ongoing("IDLE") & ~self.o_stream.valid),
             accept.eq(fsm.ongoing("IDLE") & self.i_stream.valid & ~self.o_stream.valid),
-            start_ok.eq(accept & (cmd.op == Op.START) & ~ctl.busy & ~p_bad & (cmd.iters != 0) & has_goal),
-            ctl.start.eq(start_ok), ctl.p1.eq(cmd.p1), ctl.step.eq(cmd.step),
-            ctl.p_last.eq(cmd.p_last), ctl.iters.eq(cmd.iters),
+            # START is checked when taken and run from the registered command a
+            # cycle later (START_GO): the stream's payload -> the checks -> the
+            # Controller's 48-bit counters was one path (issue 17)
+            ctl.start.eq(fsm.ongoing("START_GO")), ctl.p1.eq(c.p1), ctl.step.eq(c.step),
+            ctl.p_last.eq(c.p_last), ctl.iters.eq(c.iters),
             ctl.order.valid.eq(fsm.ongoing("SET")), ctl.order.payload.br.eq(c_br),
             ctl.order.payload.bc.eq(c_bc), ctl.order.payload.row.eq(c.row),
             ctl.order.payload.col.eq(c.col), ctl.order.payload.sat.eq(c.flag),
