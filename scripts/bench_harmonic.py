@@ -232,7 +232,7 @@ def cycles_section(name):
         "Where the work goes: speed-up = padding x visit costs x iterations / baseline costs.  *Padding*: "
         "map nodes over the nodes of the B blocks (the blocked array also updates the padding to whole "
         "blocks); *visit costs*: iteration cycles (counted iterations x (p+2)) over all cycles (confirmation "
-        "iterations, the 6-cycle visit overhead, check passes); *iterations*: the baseline's iteration "
+        f"iterations, the {VISIT_CYCLES}-cycle visit overhead, check passes); *iterations*: the baseline's iteration "
         "cycles over the blocked run's per block (its iteration cycles / B), i.e. what block-synchronous "
         "updates and increasing precision save in iterations; *baseline costs*: the same visit costs of the "
         "baseline (one visit).",
