@@ -31,7 +31,8 @@ by this run on this machine; only the papers' column is copied.
    results of the runs above (sim_time / wall time of the test, build
    excluded), and an idle-clock probe (sim/rtl/simspeed.py) for tops without a job.
 5. The regression's wall time (build/regression.json, written by make test).
-6. The harmonic schedule study (scripts/bench_harmonic.py), when present,
+6. The harmonic schedule study (scripts/bench_harmonic.py: the schedules,
+   where their cycles go and why not 2x, the bits needed), when present,
    the block-exponent comparison (scripts/bench_exponents.py), and the EDT/BFS
    tile engine's jobs (scripts/bench_edt_tiled.py).
 7. The board bitstreams (scripts/bitstream.py, ``make bitstreams``): every
@@ -45,6 +46,7 @@ the options (a re-run only redoes what changed).
     python scripts/bench.py [--md BENCHMARKS.md] [--json build/bench/results.json]
                             [--skip study,simspeed,...]
     python scripts/bench.py --only study    # redo the study sections of BENCHMARKS.md in place
+    python scripts/bench.py --only why      # ... or some of them (schedule,why,bits,exponents,edt_tiled,float)
 
 A run that skips some parts (``--skip``) rewrites the report with the parts
 it ran; the job rows of the cores it skipped and the hardware table, when
@@ -610,46 +612,93 @@ def markdown(data, hw, extra):
     return "\n".join(lines) + "\n"
 
 
-def study_sections():
-    """The harmonic schedule study, the block-exponent comparison and the tile engine's jobs, as markdown."""
+def _schedule_study():
     import bench_harmonic
-    out = []
-    lines, _ = bench_harmonic.study_lines()
-    bits, _ = bench_harmonic.bits_section()
-    out.append(("Harmonic planner: block-synchronous schedule against one block (paper 4.5.2)", "\n".join(lines)))
-    out.append(("Harmonic planner: bits of precision against the longest distance (paper 3.2.2)", "\n".join(bits)))
+    return "\n".join(bench_harmonic.study_lines()[0])
+
+
+def _why():
+    import bench_harmonic
+    return "\n".join(bench_harmonic.why_lines())
+
+
+def _bits():
+    import bench_harmonic
+    return "\n".join(bench_harmonic.bits_section()[0])
+
+
+def _exponents():
     import bench_exponents
-    text, _ = bench_exponents.comparison()
-    out.append(("Harmonic planner: fixed point against block exponents", text))
+    return bench_exponents.comparison()[0]
+
+
+def _edt_tiled():
     import bench_edt_tiled
-    out.append((bench_edt_tiled.SECTION, bench_edt_tiled.section(arrays=bench_edt_tiled.BENCH_ARRAYS)))
+    return bench_edt_tiled.section(arrays=bench_edt_tiled.BENCH_ARRAYS)
+
+
+def _float():
     import bench_float
-    text, _ = bench_float.section()
-    out.append((bench_float.TITLE, text))
-    return out
+    return bench_float.section()[0]
 
 
-def update_study(md):
-    """``--only study``: the study sections of ``md`` replaced by a new run
-    (a section missing from ``md`` is appended before the run time line)."""
+def _titles():
+    import bench_edt_tiled
+    import bench_float
+    import bench_harmonic
+    return {"schedule": "Harmonic planner: block-synchronous schedule against one block (paper 4.5.2)",
+            "why": bench_harmonic.WHY_TITLE,
+            "bits": "Harmonic planner: bits of precision against the longest distance (paper 3.2.2)",
+            "exponents": "Harmonic planner: fixed point against block exponents",
+            "edt_tiled": bench_edt_tiled.SECTION, "float": bench_float.TITLE}
+
+
+# The study sections, in the report's order: key -> the function that writes its body.
+STUDIES = {"schedule": _schedule_study, "why": _why, "bits": _bits, "exponents": _exponents,
+           "edt_tiled": _edt_tiled, "float": _float}
+
+
+def study_sections(keys=None):
+    """The harmonic schedule study (and where its cycles go), the bits study, the
+    block-exponent comparison, the tile engine's jobs and the float study, as
+    (title, markdown); ``keys``: only those (:data:`STUDIES`)."""
+    titles = _titles()
+    return [(titles[k], fn()) for k, fn in STUDIES.items() if keys is None or k in keys]
+
+
+def update_study(md, keys=None):
+    """``--only study`` (or ``--only why`` ...): those study sections of ``md``
+    replaced by a new run (a section missing from ``md`` is inserted after the
+    study section before it, else before the run time line)."""
     if not md.exists():
         log(f"{md} does not exist: run the whole bench first")
         return 2
     t0 = time.time()
     text = md.read_text()
-    for title, body in study_sections():
-        stamp = f"(This section: `scripts/bench.py --only study`, {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.)"
+    order = list(_titles().values())
+    for title, body in study_sections(keys):
+        stamp = (f"(This section: `scripts/bench.py --only {','.join(keys) if keys else 'study'}`, "
+                 f"{time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}.)")
         section = f"## {title}\n\n{body.rstrip()}\n\n{stamp}\n"
-        match = re.search(rf"^## {re.escape(title)}\n.*?(?=^## |^Bench run time|\Z)", text, flags=re.M | re.S)
+        match = _section(text, title)
         if match:
             text = text[:match.start()] + section + "\n" + text[match.end():]
+            continue
+        before = [_section(text, t) for t in order[:order.index(title)]]
+        before = [b for b in before if b]
+        if before:
+            at = before[-1].end()
         else:
             at = text.rfind("\nBench run time")
             at = len(text) if at < 0 else at + 1
-            text = text[:at] + section + "\n" + text[at:]
+        text = text[:at] + section + "\n" + text[at:]
     md.write_text(text)
     log(f"replaced the study sections of {md} in {time.time() - t0:.0f} s")
     return 0
+
+
+def _section(text, title):
+    return re.search(rf"^## {re.escape(title)}\n.*?(?=^## |^Bench run time|\Z)", text, flags=re.M | re.S)
 
 
 def board_section(problems):
@@ -693,12 +742,17 @@ def main(argv=None):
     ap.add_argument("--md", default=str(ROOT / "BENCHMARKS.md"))
     ap.add_argument("--json", default=str(OUT / "results.json"))
     ap.add_argument("--skip", default="", help=f"comma-separated parts to leave out: {','.join(PARTS)}")
-    ap.add_argument("--only", choices=("study",),
-                    help="study: rerun only the harmonic study sections (6 above) and replace them in --md, "
-                         "each with this run's time; the other sections stay as their run wrote them")
+    ap.add_argument("--only", metavar="study|" + "|".join(STUDIES),
+                    help="study: rerun only the study sections (6 above) and replace them in --md, each with "
+                         "this run's time; or a comma-separated list of them (why: where the harmonic "
+                         "planner's cycles go); the other sections stay as their run wrote them")
     args = ap.parse_args(argv)
     if args.only:
-        return update_study(Path(args.md))
+        keys = None if args.only == "study" else set(args.only.split(","))
+        if keys and keys - set(STUDIES):
+            ap.error(f"--only: unknown section(s) {sorted(keys - set(STUDIES))}; "
+                     f"study or {','.join(STUDIES)}")
+        return update_study(Path(args.md), keys)
     skip = {s for s in args.skip.split(",") if s}
     if skip - set(PARTS):
         ap.error(f"--skip: unknown part(s) {sorted(skip - set(PARTS))}; parts: {','.join(PARTS)}")

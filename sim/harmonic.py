@@ -1,7 +1,7 @@
 """Plan on a map with the harmonic planner (model or RTL) and follow the gradient.
 
     python -m sim harmonic MAP (--goal R,C | --goal-xy X,Y) [...] [--start R,C | --start-xy X,Y ...]
-        [--block NxM] [--iters I] [--schedule P1,P2,... | P1:STEP:PMAX]
+        [--block NxM] [--iters I] [--schedule P1,P2,... | P1:STEP:PMAX] [--paper-schedule]
         [--engine model|icarus|verilator|serial:PORT[@BAUD]] [--block-exponents [--e-max N|map]]
         [--cell METRES] [--unknown obstacle|free] [--json OUT] [--csv OUT] [--plot OUT.png]
 
@@ -24,7 +24,14 @@ I iterations per block while the block changes, sweeps over the blocks that
 may still change (their own nodes or a facing border changed since their
 last stable visit) until none is left, then the next precision of the
 schedule while local maxima remain.  The field is the paper's schedule's
-bit for bit; only the cycles are fewer.  Schedule default 16:16:256 (p = 16, 32, ... 256);
+bit for bit; only the cycles are fewer.  --paper-schedule runs the paper's
+schedule instead (model: plan(..., paper_schedule=True); RTL engines:
+Planner(paper_schedule=True)): every block in every sweep, a confirmation
+iteration after the first stable one, a check pass (one iteration per block)
+before each precision rise; the same field, more cycles (the JSON's
+"block_schedule" says which ran: "still blocks" or "paper"; the check
+iterations are 0 with still blocks).  The board (--engine serial:...) runs
+the default schedule only.  Schedule default 16:16:256 (p = 16, 32, ... 256);
 the RTL engines run arithmetic schedules only (P1:STEP:PMAX), build one
 design per map size and p_max, and simulate slowly (thousands of cycles per
 second): use them on small maps.  Free cells no goal can reach cannot get a
@@ -124,6 +131,9 @@ def add_arguments(parser):
                         default=DEFAULT_ITERS, metavar="I",
                         help="iterations per block visit at most (default %(default)s)")
     add_schedule(parser, DEFAULT_SCHEDULE)
+    parser.add_argument("--paper-schedule", action="store_true",
+                        help="the paper's block schedule (every block every sweep, a confirmation iteration, "
+                             "check passes) instead of the default still blocks: the same field, more cycles")
     add_engine(parser, "the planner RTL in that simulator (arithmetic schedules, blocks of whole 3x6 clusters)",
                serial=True)
     parser.add_argument("--block-exponents", action="store_true",
@@ -162,7 +172,7 @@ def estimate(grid, goals, engine):
                                        f"simulated a second on {engine}")
 
 
-def check_rtl(engine, shape, block, schedule, block_exponents, e_max=None):
+def check_rtl(engine, shape, block, schedule, block_exponents, e_max=None, paper_schedule=False):
     """Refuse, before anything runs, what the planner RTL cannot run: a
     schedule that is not arithmetic, blocks that are not whole clusters, a
     map larger than a Planner's declared bounds (hdl/harmonic/planner.py)."""
@@ -173,16 +183,20 @@ def check_rtl(engine, shape, block, schedule, block_exponents, e_max=None):
         params = planner_params(shape, block, p_max=arithmetic(schedule)[2])
         if block_exponents:
             params = exponent_params(params, e_max)
+        if paper_schedule:
+            params["paper_schedule"] = True
         check(Planner.PARAMS, Planner.CONSTRAINTS, **{**{p.name: p.default for p in Planner.PARAMS}, **params})
     except ValueError as e:
         raise CliError(f"--engine {engine}: {e}") from None
 
 
-def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=False, progress=None, e_max=None):
+def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=False, progress=None, e_max=None,
+               paper_schedule=False):
     """Plan with the model or the RTL; returns a dict with the PlanResult
     fields (h and unreachable on the unpadded map).  With block exponents
     also ``exponents`` (BR x BC) and ``frac_bits`` (h is then on
-    the common scale 2**-frac_bits)."""
+    the common scale 2**-frac_bits).  ``paper_schedule``: the paper's block
+    schedule (model and RTL engines; the board runs the default only)."""
     keys = ("h", "p", "converged", "maxima", "unreachable", "sweeps", "block_iterations",
             "check_iterations", "node_updates", "cycles", "levels")
     if engine == "model":
@@ -193,7 +207,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
             # the model and the RTL engines give the same JSON.
             opts = {"block_exponents": True, "rtl": True, "fast": True, "e_max": e_max} if block_exponents else {}
             r = plan(obstacle, goals, block=block, iters=iters, schedule=tuple(schedule), progress=progress,
-                     **opts)
+                     paper_schedule=paper_schedule, **opts)
         except ValueError as e:
             raise CliError(str(e)) from None
         out = {k: getattr(r, k) for k in keys}
@@ -211,6 +225,7 @@ def run_engine(engine, obstacle, goals, block, iters, schedule, block_exponents=
     with Ticker(f"planner RTL on {engine}") as ticker:
         try:
             out = run_planner_rtl(obstacle, goals, block, iters, tuple(schedule), engine, block_exponents=block_exponents,
+                                  paper_schedule=paper_schedule,
                                   **({"e_max": e_max} if block_exponents else {}),
                                   progress=lambda st: ticker.status(f"p = {st.get('p')}, {st.get('sweeps')} sweeps, "
                                                                     f"{st.get('cycles')} cycles"))
@@ -248,7 +263,7 @@ def _maxima(obstacle, goals, block, padded_h):
 
 
 def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_exponents=False, frame=None,
-             progress=None, e_max="map"):
+             progress=None, e_max="map", paper_schedule=False):
     """The whole command without I/O: returns the JSON-ready dict and the
     field (h at precision p, unpadded map; with block exponents h is on the
     common scale 2**-frac_bits and p is that scale)."""
@@ -259,7 +274,7 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
     reach = reachable(grid, goals)
     if block_exponents and e_max == "map":
         e_max = e_max_for(grid, goals)
-    res = run_engine(engine, grid, goals, block, iters, schedule, block_exponents, progress, e_max)
+    res = run_engine(engine, grid, goals, block, iters, schedule, block_exponents, progress, e_max, paper_schedule)
     h, p = np.asarray(res["h"], dtype=object)[:height, :width], int(res["p"])
     scale = int(res["frac_bits"]) if block_exponents else p
     goal_mask = np.zeros(grid.shape, dtype=bool)
@@ -293,6 +308,7 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
         "cycles": int(res["cycles"]), "maxima": int(res["maxima"]),
         "check_iterations": int(res["check_iterations"]),
         "block": list(block), "iters": iters, "schedule": list(schedule),
+        "block_schedule": "paper" if paper_schedule else "still blocks",
         "padded": list(padded.shape), "levels": _levels_json(res.get("levels") or []),
         "potential": potential, "unreachable": unreachable, "trajectories": trajectories,
     }
@@ -356,6 +372,10 @@ def plot(path, grid, result, title):
 
 
 def run(args):
+    paper = bool(args.paper_schedule)
+    if paper and serial_engine.is_serial(args.engine):
+        raise CliError(f"--paper-schedule: the board's planner (--engine {args.engine}) runs the default "
+                       "schedule (still blocks) only")
     if serial_engine.is_serial(args.engine):
         serial_engine.check(args.engine)        # the port exists, before any work
     gm, frame = load_map_arg(args)
@@ -372,7 +392,7 @@ def run(args):
         from navcores.models.harmonic import e_max_for
         e_max = e_max_for(grid, goals)
     if args.engine != "model" and not serial_engine.is_serial(args.engine):
-        check_rtl(args.engine, grid.shape, block, schedule, bexp, e_max)
+        check_rtl(args.engine, grid.shape, block, schedule, bexp, e_max, paper)
 
     seconds, basis = estimate(grid, goals, args.engine)
     announce("sim harmonic", seconds, f"planning {grid.shape[0]}x{grid.shape[1]} on the {args.engine}", basis)
@@ -381,21 +401,23 @@ def run(args):
         result, _ = plan_map(grid, goals, starts, block, args.iters, schedule, args.engine, bexp, frame,
                              progress=lambda res, p, cycles: bar.update(
                                  note=f"p = {p}, {res.sweeps} sweeps, {res.block_iterations} block iterations"),
-                             e_max=e_max)
+                             e_max=e_max, paper_schedule=paper)
     seconds = time.time() - t0
 
     name = Path(args.map).name
     lines = [
         f"{name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), block "
         f"{block[0]}x{block[1]} (padded to {result['padded'][0]}x{result['padded'][1]}), I = {args.iters}, "
-        f"engine {args.engine}" + (", block exponents" if bexp else ""),
+        f"engine {args.engine}" + (", block exponents" if bexp else "")
+        + (", the paper's schedule" if paper else ", still blocks"),
         f"precision {result['precision']} ("
         + ("converged: no local maximum" if result["converged"]
            else f"NOT converged: {result['maxima']} local maxima left at the schedule's end")
         + (f"; levels p = {','.join(str(lv['p']) for lv in result['levels'])}" if result["levels"] else "")
         + f"); {result['sweeps']} sweeps, "
         f"{result['block_iterations']} block iterations, {result['node_updates']} node updates, "
-        f"{result['cycles']} cycles ({seconds:.1f} s)",
+        f"{result['cycles']} cycles"
+        + (f", {result['check_iterations']} check iterations" if paper else "") + f" ({seconds:.1f} s)",
     ]
     if bexp:
         ex = result["exponents"]

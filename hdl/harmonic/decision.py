@@ -101,15 +101,22 @@ class Decision(wiring.Component):
         m = Module()
         w = self.p_max + 1
         i = Signal(range(w + 1))            # the bit of the pass: 0 .. p+1
+        nxt = Signal(range(w + 1))          # the bit of the next cycle: i + 1, 0 after p+1
+        top = Signal(range(w + 1))          # p+1, registered at start (p holds until done)
         last = Signal()
-        m.d.comb += last.eq(i == self.p + 1)
+        m.d.comb += last.eq(i == top)
         pass1, pass2 = Signal(), Signal()
 
-        # Bit i of every value (0 above bit p_max: i reaches p_max + 1).
+        # Bit i of every value (0 above bit p_max: i reaches p_max + 1),
+        # selected a cycle ahead (by nxt) into a flip-flop: the (p_max+2)-to-1
+        # selection and the serial arithmetic after it are two paths, not one
+        # (issue 17: i -> selection -> borrows -> g_col was the planner's
+        # critical path on the ECP5).
         bit = {}
         for k in ("c", "N", "E", "S", "W"):
             bit[k] = Signal(name=f"bit_{k}")
-            m.d.comb += bit[k].eq(Cat(self.h[k], 0).bit_select(i, 1))
+            at = Mux(self.start, 0, nxt)
+            m.d.sync += bit[k].eq(Cat(self.h[k], 0).bit_select(at, 1))
         c_prev = Signal()                   # bit i-1 of h: bit i of 2h
         m.d.sync += c_prev.eq(Mux(pass1 & ~last, bit["c"], 0))
 
@@ -181,9 +188,9 @@ class Decision(wiring.Component):
 
         m.d.sync += self.done.eq(0)
         with m.If(self.start):
-            m.d.sync += [pass1.eq(1), pass2.eq(0), i.eq(0)]
+            m.d.sync += [pass1.eq(1), pass2.eq(0), i.eq(0), nxt.eq(1), top.eq(self.p + 1)]
         with m.Elif(pass1 | pass2):
-            m.d.sync += i.eq(i + 1)
+            m.d.sync += [i.eq(i + 1), nxt.eq(Mux(nxt == top, 0, nxt + 1))]
             with m.If(last):
                 m.d.sync += i.eq(0)
                 with m.If(pass1):

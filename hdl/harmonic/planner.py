@@ -3,7 +3,7 @@ behind one host interface of valid/ready streams (paper 000, section 5)."""
 
 from dataclasses import replace
 
-from amaranth.hdl import Cat, Module, Mux, Signal, signed
+from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -37,17 +37,36 @@ class Code(enum.Enum, shape=3):
     BAD_ITERS = 6       # START with iters = 0
 
 
+# Cycles of one value read besides its p+2 addresses and the RAM's
+# READ_LATENCY: FETCH (the node or neighbour selected and registered) and
+# LOCATE (its cluster, bit and RAM base registered: the table look-ups are
+# kept out of FETCH's path, issue 17).
+READ_SETUP = 2
+
+
 def direction_latency(p, inside=4):
     """DIRECTION's response latency at precision ``p`` (fixed point), in
     cycles from the clock edge that takes the command to the one that
     raises ``o_stream.valid``: the node and its ``inside`` neighbours in the
-    map are read serially (p+3+READ_LATENCY = p+5 cycles each: the flag and
-    p+1 value bits through the host port, whose data come READ_LATENCY
-    cycles after the address, one cycle to start the read), a neighbour
-    outside the map costs 1 cycle, then 1 cycle starts the Decision, whose
-    2p+5 cycles (two serial passes) end with the response.  With block
-    exponents each value read adds its conversion: 1 + the shift cycles."""
-    return (1 + inside) * (p + 3 + READ_LATENCY) + (4 - inside) + 1 + (2 * p + 5)
+    map are read serially (p+2+READ_SETUP+READ_LATENCY = p+6 cycles each:
+    FETCH registers the node, LOCATE its cluster, bit and RAM base, then the
+    flag and p+1 value bits through the host port, whose data come
+    READ_LATENCY cycles after the address), a neighbour outside the map
+    costs 1 cycle, then 1 cycle starts the Decision, whose 2p+5 cycles (two
+    serial passes) end with the response: 7p+36 inside the map, 6p+31 on an
+    edge, 5p+26 in a corner.  With block exponents each value read adds its
+    conversion: 1 + the shift cycles."""
+    return (1 + inside) * (p + 2 + READ_SETUP + READ_LATENCY) + (4 - inside) + 1 + (2 * p + 5)
+
+
+def times(x, k):
+    """``x * k`` for a constant ``k`` >= 0 as shifts and adds (no $mul cell for
+    yosys to map to a multiplier block)."""
+    terms = [x << i for i in range(k.bit_length()) if k >> i & 1]
+    out = terms[0] if terms else Const(0, 1)
+    for t in terms[1:]:
+        out = out + t
+    return out
 
 
 def _pw(p_max):
@@ -113,7 +132,7 @@ class Planner(wiring.Component):
                gradient (g_row, g_col) of :func:`models.harmonic.decision`
                (block exponents: of :func:`models.harmonic.decision_exponents`,
                in the centre's units; ``exponent`` = its e_b).  Response
-               after :func:`direction_latency` cycles (7p+31 inside the map).
+               after :func:`direction_latency` cycles (7p+36 inside the map).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
@@ -200,8 +219,8 @@ class Planner(wiring.Component):
                 "block_visit_cycles": "K*L+7 for K iterations",
                 "schedule": "paper's" if self.paper else "still blocks",
                 "response": "one o_stream beat per i_stream command, in order",
-                "direction_latency": "7p+31 cycles (a node with 4 neighbours in the map; "
-                                     "p+4 fewer per neighbour outside it: direction_latency())",
+                "direction_latency": "7p+36 cycles (a node with 4 neighbours in the map; "
+                                     "p+5 fewer per neighbour outside it: direction_latency())",
                 "run_cycles": "reported by STATUS (cycles field)"}
 
     def elaborate(self, platform):
@@ -222,21 +241,25 @@ class Planner(wiring.Component):
         c = Signal(self.cmd_layout)             # the command being executed
         has_goal = Signal()
 
-        # (block, row, col) -> block row/column, cluster, bit: constant tables.
+        # (block, row, col) -> block row/column, cluster, bit.  Arithmetic by
+        # constants as continuous assignments (defined from time 0); the
+        # products as shifts and adds (times): yosys mapped a constant
+        # product here to a MULT18X18D on the ECP5, on the planner's
+        # critical path (issue 17).
         def locate(block, row, col, prefix):
-            # Arithmetic by constants: continuous assignments, defined from time 0.
             tbr, tbc = Signal(range(max(BR, 2)), name=f"{prefix}_br"), Signal(range(max(BC, 2)), name=f"{prefix}_bc")
             ci = Signal(range(max(CC * (n // ROWS), 2)), name=f"{prefix}_ci")
             bit = Signal(range(18), name=f"{prefix}_bit")
             m.d.comb += [
                 tbr.eq(block // BC), tbc.eq(block % BC),
-                ci.eq((row // ROWS) * CC + col // COLS),
-                bit.eq((row % ROWS) * COLS + col % COLS),
+                ci.eq(times(row // ROWS, CC) + col // COLS),
+                bit.eq(times(row % ROWS, COLS) + col % COLS),
             ]
             return tbr, tbc, ci, bit
 
         in_map = (cmd.block < B) & (cmd.row < n) & (cmd.col < mm)
         c_br, c_bc, c_ci, c_bit = locate(c.block, c.row, c.col, "c")
+        _, _, cmd_ci, _ = locate(cmd.block, cmd.row, cmd.col, "cmd")
 
         # Status fields ride on every response.
         def respond(code, op):
@@ -258,6 +281,12 @@ class Planner(wiring.Component):
         rd_j = Signal(range(S + 2))
         rd_val, rd_const = Signal(p_max + 1), Signal()
         rd_busy = Signal()
+        # p+1 and the read's last count, registered: ctl.p holds while idle
+        # (the only time READ / DIRECTION read), so the adders leave the
+        # read's path (issue 17).
+        p_top = Signal(range(p_max + 2))
+        rd_end = Signal(range(S + 2))
+        m.d.sync += [p_top.eq(ctl.p + 1), rd_end.eq(ctl.p + 1 + READ_LATENCY)]
         with m.If(rd_go):
             m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0)]
         with m.Elif(rd_busy):
@@ -268,7 +297,7 @@ class Planner(wiring.Component):
                 m.d.sync += rd_const.eq(got)
             with m.Elif(rd_j > READ_LATENCY):
                 m.d.sync += rd_val.eq(Cat(got, rd_val[:-1]))
-            with m.If(rd_j == ctl.p + 1 + READ_LATENCY):
+            with m.If(rd_j == rd_end):
                 m.d.sync += rd_busy.eq(0)
                 m.d.comb += rd_done.eq(1)
 
@@ -299,7 +328,9 @@ class Planner(wiring.Component):
                         m.d.comb += jump
                     with m.Else():
                         m.d.comb += t_in.eq(0)
-        _, _, t_ci, t_bit = locate(t_blk, t_row, t_col, "t")
+        # FETCH registers the selected node (f_*), LOCATE its address.
+        f_blk, f_row, f_col = Signal.like(c.block), Signal.like(c.row), Signal.like(c.col)
+        _, _, f_ci, f_bit = locate(f_blk, f_row, f_col, "f")
         m.d.comb += [dec.h.eq(vals), dec.p.eq(ctl.p)]
 
         load_a = Signal(range(S + 1))
@@ -324,13 +355,12 @@ class Planner(wiring.Component):
             cv_left = Signal()
             cap = Signal(p_max + 1)             # 2**(p+1) - 1: the word's top
             m.d.comb += [cap.eq(Cat(1, *[ctl.p >= i for i in range(1, p_max + 1)])),
-                         ctl.e_rd_block.eq(t_blk)]
+                         ctl.e_rd_block.eq(f_blk)]
             s_sh = Signal(signed(E_W + 1))
             s_abs = Signal(E_W)
             m.d.comb += [s_sh.eq(dir_e - ctl.e_rd), s_abs.eq(Mux(s_sh < 0, -s_sh, s_sh))]
 
         accept = Signal()
-        start_ok = Signal()
         with m.FSM() as fsm:
             with m.State("IDLE"):
                 with m.If(accept):
@@ -342,7 +372,11 @@ class Planner(wiring.Component):
                             with m.Elif(ctl.busy):
                                 respond(Code.BUSY, cmd.op)
                             with m.Else():
-                                m.d.sync += load_a.eq(0)
+                                # LOAD's RAM base and cluster registered now (as
+                                # LOCATE does for a read): the host port's cluster
+                                # select is then a flip-flop in every state.
+                                m.d.sync += [load_a.eq(0), rd_base.eq(times(cmd.block, S) if B > 1 else 0),
+                                             rd_ci.eq(cmd_ci)]
                                 with m.If(cmd.flag):
                                     m.d.sync += has_goal.eq(cmd.goals != 0)
                                 with m.Else():
@@ -363,7 +397,7 @@ class Planner(wiring.Component):
                             with m.Elif(~has_goal):
                                 respond(Code.NO_GOAL, cmd.op)
                             with m.Else():
-                                m.next = "STARTED"
+                                m.next = "START_GO"
                         with m.Case(Op.STATUS):
                             respond(Code.OK, cmd.op)
                         with m.Case(Op.READ, Op.DIRECTION):
@@ -376,15 +410,13 @@ class Planner(wiring.Component):
                                 m.next = "FETCH"
                         with m.Default():
                             respond(Code.BAD_OP, cmd.op)
+            with m.State("START_GO"):       # the Controller starts from the registered command
+                m.next = "STARTED"
             with m.State("STARTED"):        # the response shows the run begun
                 respond(Code.OK, Op.START)
                 m.next = "IDLE"
             with m.State("LOAD"):
-                base = Signal(range(self.depth))
-                m.d.comb += [
-                    base.eq((c_br * BC + c_bc) * S),
-                    host.addr.eq(base + load_a), host.cluster.eq(c_ci),
-                ]
+                m.d.comb += [host.addr.eq(rd_base + load_a), host.cluster.eq(rd_ci)]
                 with m.If(load_a == 0):
                     m.d.comb += host.wdata.eq(c.flags | c.goals)
                 with m.Elif(load_a == 1):
@@ -403,14 +435,8 @@ class Planner(wiring.Component):
                 m.next = "IDLE"
             with m.State("FETCH"):          # READ: q = 0 only; DIRECTION: q = 0 .. 4
                 with m.If(t_in):
-                    m.d.sync += [rd_base.eq(t_blk * S if B > 1 else 0), rd_ci.eq(t_ci), rd_bit.eq(t_bit)]
-                    if X:
-                        with m.If(q == 0):
-                            m.d.sync += [dir_e.eq(ctl.e_rd), cv_n.eq(0)]
-                        with m.Else():
-                            m.d.sync += [cv_left.eq(s_sh > 0),
-                                         cv_n.eq(Mux(s_abs > ctl.p + 1, ctl.p + 1, s_abs))]
-                    m.next = "FETCH_WAIT"
+                    m.d.sync += [f_blk.eq(t_blk), f_row.eq(t_row), f_col.eq(t_col)]
+                    m.next = "LOCATE"
                 with m.Else():
                     with m.Switch(q):
                         for i in range(1, 5):
@@ -419,6 +445,15 @@ class Planner(wiring.Component):
                     m.d.sync += q.eq(q + 1)
                     with m.If(q == 4):
                         m.next = "DECIDE_GO"
+            with m.State("LOCATE"):         # the read starts (rd_go)
+                m.d.sync += [rd_base.eq(times(f_blk, S) if B > 1 else 0), rd_ci.eq(f_ci), rd_bit.eq(f_bit)]
+                if X:
+                    with m.If(q == 0):
+                        m.d.sync += [dir_e.eq(ctl.e_rd), cv_n.eq(0)]
+                    with m.Else():
+                        m.d.sync += [cv_left.eq(s_sh > 0),
+                                     cv_n.eq(Mux(s_abs > p_top, p_top, s_abs))]
+                m.next = "FETCH_WAIT"
             with m.State("FETCH_WAIT"):
                 with m.If(rd_done):
                     word = Cat(host.rdata.bit_select(rd_bit, 1), rd_val[:-1])
@@ -478,15 +513,17 @@ class Planner(wiring.Component):
         m.d.comb += [
             self.i_stream.ready.eq(fsm.ongoing("IDLE") & ~self.o_stream.valid),
             accept.eq(fsm.ongoing("IDLE") & self.i_stream.valid & ~self.o_stream.valid),
-            start_ok.eq(accept & (cmd.op == Op.START) & ~ctl.busy & ~p_bad & (cmd.iters != 0) & has_goal),
-            ctl.start.eq(start_ok), ctl.p1.eq(cmd.p1), ctl.step.eq(cmd.step),
-            ctl.p_last.eq(cmd.p_last), ctl.iters.eq(cmd.iters),
+            # START is checked when taken and run from the registered command a
+            # cycle later (START_GO): the stream's payload -> the checks -> the
+            # Controller's 48-bit counters was one path (issue 17)
+            ctl.start.eq(fsm.ongoing("START_GO")), ctl.p1.eq(c.p1), ctl.step.eq(c.step),
+            ctl.p_last.eq(c.p_last), ctl.iters.eq(c.iters),
             ctl.order.valid.eq(fsm.ongoing("SET")), ctl.order.payload.br.eq(c_br),
             ctl.order.payload.bc.eq(c_bc), ctl.order.payload.row.eq(c.row),
             ctl.order.payload.col.eq(c.col), ctl.order.payload.sat.eq(c.flag),
             host.we.eq(fsm.ongoing("LOAD")),
             dec.start.eq(fsm.ongoing("DECIDE_GO")),
-            rd_go.eq(fsm.ongoing("FETCH") & t_in),
+            rd_go.eq(fsm.ongoing("LOCATE")),
         ]
         # Responses without a value: clear the data fields.
         with m.If(self.i_stream.valid & self.i_stream.ready):

@@ -158,7 +158,8 @@ def planner_params(shape, block=(6, 12), p_max=30, depth=None):
 
 
 def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), sim="verilator",
-                    progress=None, work=None, events=(), block_exponents=False, e_max=E_MAX):
+                    progress=None, work=None, events=(), block_exponents=False, e_max=E_MAX,
+                    paper_schedule=False):
     """Run the Planner RTL on a whole map through cocotb; return a dict with
     the fields of :class:`models.harmonic.PlanResult` (h, const, p,
     converged, sweeps, block_iterations, check_iterations, clear_passes,
@@ -179,12 +180,16 @@ def run_planner_rtl(obstacle, goals, block=(3, 6), iters=6, schedule=(16, 32), s
     its largest exponent ``e_max``);
     ``h``/``padded_h`` are then the mantissas and ``exponents``
     (BR x BC) the block exponents (models.harmonic.plan(..., rtl=True)).
+    ``paper_schedule``: build ``Planner(paper_schedule=True)``, the paper's
+    block schedule (``plan(..., paper_schedule=True)``); default still blocks.
     """
     from .runner import run
     obstacle = np.asarray(obstacle, dtype=bool)
     H, W = obstacle.shape
     p1, step, p_last = arithmetic(schedule)
     params = planner_params(obstacle.shape, block, p_max=p_last)
+    if paper_schedule:
+        params["paper_schedule"] = 1        # the regression's b3x6_paper build (tb/harmonic/test_planner.py)
     padded = pad_to_blocks(obstacle, block)
     goal = np.zeros(padded.shape, dtype=bool)
     for r, c in goals:

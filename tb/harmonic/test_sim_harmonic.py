@@ -208,6 +208,46 @@ def test_subprocess_ok_and_errors(tmp_path):
     assert bad.stderr.strip().splitlines() == [bad.stderr.strip()] and "invalid choice: 'fpga'" in bad.stderr
 
 
+# --- --paper-schedule (issue 19) -----------------------------------------------
+
+@pytest.mark.parametrize("exponents", [False, True], ids=["fixed", "exponents"])
+def test_paper_schedule(ascii_map, tmp_path, capsys, exponents):
+    """--paper-schedule runs plan(..., paper_schedule=True): the same field,
+    the paper's cycles and check iterations (the default: still blocks, no
+    check pass, fewer cycles); the JSON and the summary say which ran."""
+    from navcores.models.harmonic import plan
+    grid = np.array([[ch == "#" for ch in row] for row in ASCII.splitlines()])
+    extra = ["--block-exponents", "--e-max", "255"] if exponents else []
+    opts = {"block_exponents": True, "rtl": True, "e_max": 255} if exponents else {}
+    args = [str(ascii_map), "--goal", "0,0", "--start", "6,8", "--block", "3x6", "--iters", "3",
+            "--schedule", "8:8:32", *extra]
+    runs = {}
+    for paper in (False, True):
+        out = tmp_path / f"{paper}.json"
+        rc, text, _ = _run([*args, *(["--paper-schedule"] if paper else []), "--json", str(out)], capsys)
+        assert rc == 0, text
+        r = runs[paper] = json.loads(out.read_text())
+        want = plan(grid, [(0, 0)], block=(3, 6), iters=3, schedule=(8, 16, 24, 32), paper_schedule=paper, **opts)
+        got = {k: r[k] for k in ("cycles", "check_iterations", "block_iterations", "sweeps", "precision")}
+        assert got == {"cycles": want.cycles, "check_iterations": want.check_iterations,
+                       "block_iterations": want.block_iterations, "sweeps": want.sweeps,
+                       "precision": want.p}, (paper, got)
+        assert r["block_schedule"] == ("paper" if paper else "still blocks")
+        assert ("the paper's schedule" if paper else "still blocks") in text.splitlines()[0]
+    still, paper = runs[False], runs[True]
+    assert paper["potential"] == still["potential"] and paper["precision"] == still["precision"]
+    # the paper's check passes and confirmation iterations cost cycles the default saves
+    assert paper["check_iterations"] > 0 == still["check_iterations"]
+    assert paper["cycles"] > still["cycles"] and paper["block_iterations"] > still["block_iterations"]
+
+
+def test_paper_schedule_refused_on_the_board(capsys):
+    rc, text, err = _run([ROOM, "--goal", "3,3", "--engine", "serial:/dev/nonexistent", "--paper-schedule"],
+                         capsys)
+    assert rc == 2 and text == "" and len(err.strip().splitlines()) == 1, err
+    assert "--paper-schedule: the board's planner" in err
+
+
 # --- --block-exponents (issue 10) ----------------------------------------------
 
 RANDOM = str(ROOT / "maps" / "random-32-32-10.map")

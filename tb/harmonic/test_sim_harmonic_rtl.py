@@ -63,6 +63,29 @@ def test_rtl_engine_matches_model(sim, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)
+def test_rtl_engine_paper_schedule_matches_model(sim, tmp_path, capsys):
+    """``--paper-schedule`` on the RTL engines builds Planner(paper_schedule=True)
+    (the regression's ``b3x6_paper`` build) and gives the model engine's JSON
+    with the paper's schedule: more cycles than the default, check passes."""
+    grid = _map((8, 17), seed=7)
+    path = tmp_path / "m.txt"
+    path.write_text("\n".join("".join("#" if x else "." for x in row) for row in grid) + "\n")
+    args = [str(path), "--goal", "0,0", "--start", "7,16", "--block", "3x6", "--schedule", "8:8:16",
+            "--iters", "3"]
+    model, rtl = _model_and_rtl([*args, "--paper-schedule"], sim, tmp_path, capsys)
+    assert rtl["engine"] == sim and rtl["block_schedule"] == model["block_schedule"] == "paper"
+    compared = 0
+    for key in ("rc", "precision", "converged", "maxima", "sweeps", "block_iterations", "check_iterations",
+                "cycles", "potential", "trajectories"):
+        assert rtl[key] == model[key], key
+        compared += 1
+    still = main(["harmonic", *args, "--json", str(tmp_path / "still.json")])
+    still = json.loads((tmp_path / "still.json").read_text())
+    assert compared == 10 and model["check_iterations"] > 0 and model["cycles"] > still["cycles"]
+    assert model["potential"] == still["potential"]
+
+
+@pytest.mark.parametrize("sim", SIMULATORS)
 def test_rtl_engine_block_exponents_matches_model(sim, tmp_path, capsys):
     """``--block-exponents`` on the RTL engines: the Planner's exponent option
     (the build of tb/harmonic/test_planner_exponents.py: 3x3 blocks of 3x6,
