@@ -308,7 +308,7 @@ def test_undefined_memory_has_no_initial_block():
     its init; a marked memory with a non-zero init is refused, never dropped."""
     from amaranth.hdl import Module, Signal
     from amaranth.lib.memory import Memory
-    from navcores.hdl.ram_init import strip_undefined_init, undefined_memory
+    from navcores.hdl.ram_init import UNDEFINED_INIT, strip_undefined_init, undefined_memory
 
     def verilog(mem_kind):
         m = Module()
@@ -326,6 +326,6 @@ def test_undefined_memory_has_no_initial_block():
     assert re.search(r"reg \[7:0\] plain \[3:0\];\n\s*initial begin", text)
     assert "undef[0] =" not in text and "undef[0] =" in raw
     assert "always @(posedge clk)" in text.split("reg [7:0] undef [3:0];")[1]   # the rest stays
-    bad = verilog(lambda: Memory(shape=8, depth=4, init=[0, 5], attrs={"navcores.undefined_init": 1}))
+    bad = verilog(lambda: Memory(shape=8, depth=4, init=[0, 5], attrs={UNDEFINED_INIT: 1}))
     with pytest.raises(ValueError, match="initial value"):
         strip_undefined_init(bad)
