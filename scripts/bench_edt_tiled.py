@@ -68,7 +68,7 @@ from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 MAPS = ("maze512-1-0", "den312d", "room-64-64-8", "random-64-64-10", "room-64-64-8x4")
 ARRAYS = ((8, 8), (16, 16))
 # make bench: also the smallest array and the largest that may fit the LFE5U-85F (hdl/edt_bfs/README.md)
-BENCH_ARRAYS = ((2, 2), (6, 6), (8, 8), (16, 16))
+BENCH_ARRAYS = ((4, 4), (6, 6), (8, 8), (16, 16))
 DFAR = 0
 PART = "LFE5U-85F"
 RAM = (224, 224)            # the fitted tops' RAM (module docstring: 256x256 overflows the part's EBRs)
@@ -152,7 +152,7 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
     for r in rows:
         held = _held(r)
         c = r["cycles_split"]
-        clock = f"{r['mhz']:.1f} MHz" if r["mhz"] else _no_clock(r["fit"])
+        clock = f"{r['mhz']:.1f} MHz" if r["mhz"] else _no_clock(r["fit"], r["array"])
         speedup = (f"{r['sw_seconds'] / r['hw_seconds']:.1f}x" + ("" if r["in_ram"] else " (ext.)")
                    if r["hw_seconds"] else "-")
         when = (f"{r['hw_seconds'] * 1e3:.3f} ms" if r["hw_seconds"] and r["in_ram"] else
@@ -184,7 +184,7 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
                          f"tile visits at {r['cycles_per_visit']:.1f} cycles each, {r['words_moved']:,} RAM words "
                          f"moved against a floor of {r['words_floor']:,} ({r['words_moved'] / r['words_floor']:.2f}x).")
         else:
-            lines.append(f"* maze512-1-0 at {a}: {_no_clock(r['fit'])}; no time.")
+            lines.append(f"* maze512-1-0 at {a}: {_no_clock(r['fit'], r['array'])}; no time.")
     lines.append("")
     fits = {tuple(r["array"]): r["fit"] for r in rows}
     cell = cell_bound(arrays)
@@ -196,15 +196,9 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
                      f"| {cell['resources']['ff']} | 0 | 0 | {cell['fmax_mhz']:.1f} MHz (a bound on the engine's) "
                      f"| {cp['from']['cell']} -> {cp['to']['cell']} ({cp['to']['port']}), {cp['delay_ns']} ns, "
                      f"{cp['logic_levels']} levels |")
-    luts = cell["utilisation"]["TRELLIS_COMB"][1] if cell else None
     for array, fit in fits.items():
         if fit is None:
-            need = array[0] * array[1] * cell["resources"]["lut4"] if cell else None
-            verdict = ("" if need is None else "no" if need > luts else "likely" if need <= 0.8 * luts
-                       else "borderline")
-            est = (f"no fit result; estimate: {array[0] * array[1]} cells x {cell['resources']['lut4']:,} = "
-                   f"{need:,} LUT4 of {luts:,}: {verdict}" if cell else "no fit result")
-            lines.append(f"| {array[0]}x{array[1]} | {est} | | | | | | |")
+            lines.append(f"| {array[0]}x{array[1]} | {_no_clock(None, array)} | | | | | | |")
             continue
         cp = fit.get("critical_path") or {}
         path = (f"{cp['from']['cell']} -> {cp['to']['cell']}, {cp.get('delay_ns', '?')} ns, "
@@ -241,9 +235,27 @@ def _held(r):
             f"part with this store (the model's count for this map: {r['ebr']} EBR of {LFE5U_85F_EBR})")
 
 
-def _no_clock(fit):
-    """Why an array has no clock of its own: it does not fit (what overflowed), or it was not placed."""
+def estimate(array):
+    """(LUT4, available) of an engine not placed: the cell alone's LUT4 times the cells plus the rest
+    (lanes, controller, worklist) as measured in the smallest placed engine, or None without both.
+    The rest grows a little with T_c (T_c + 2 lanes): an estimate, said so where it is shown."""
+    cell = cell_bound([array])
+    placed = next((f for f in (fit_result(a) for a in BENCH_ARRAYS) if f), None)
+    if not cell or not placed:
+        return None
+    t_r, t_c = placed["params"]["t_r"], placed["params"]["t_c"]
+    rest = placed["lut4"] - t_r * t_c * cell["resources"]["lut4"]
+    return rest + array[0] * array[1] * cell["resources"]["lut4"], placed["utilisation"]["TRELLIS_COMB"][1]
+
+
+def _no_clock(fit, array=None):
+    """Why an array has no clock of its own: it does not fit (what overflowed), or it was not placed
+    (with the estimate of its size when there is one)."""
     if fit is None:
+        est = estimate(array) if array else None
+        if est:
+            verdict = "does not fit" if est[0] > est[1] else "may fit"
+            return f"not placed; estimate {est[0]:,} LUT4 of {est[1]:,}: {verdict}"
         return "not placed"
     over = ", ".join(f"{o['resource']} {o['used']:,}/{o['available']:,}" for o in fit.get("overflow", []))
     return f"does not fit ({over})" if over else "does not fit"
