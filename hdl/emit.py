@@ -58,6 +58,7 @@ from .harmonic.decision import Decision  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
 from .harmonic.planner import Planner  # noqa: E402
 from .harmonic.block import Block  # noqa: E402
+from .ram_init import strip_undefined_init  # noqa: E402
 from .params import REQUIRED, Param, check, parse, unelaborated  # noqa: E402
 
 __all__ = ["TOPS", "DEFAULT_SETS", "SPECS", "top_name", "emit", "manifest", "params_of", "main"]
@@ -189,14 +190,15 @@ def _signature_ports(component):
 
 def _convert(component, module):
     """The component's Verilog: ``verilog.convert`` with the ports it would
-    take from the signature itself, minus the constant members."""
+    take from the signature itself, minus the constant members; memories made
+    by :func:`~hdl.ram_init.undefined_memory` without their initial blocks."""
     from amaranth.hdl._ir import PortDirection     # what verilog.convert uses for a component's ports
     ports = {}
     for path, member, value in _signature_ports(component):
         value = value.as_value() if isinstance(value, ValueCastable) else value
         ports["__".join(map(str, path))] = (
             value, PortDirection.Input if member.flow == wiring.Flow.In else PortDirection.Output)
-    return verilog.convert(component, name=module, emit_src=False, ports=ports)
+    return strip_undefined_init(verilog.convert(component, name=module, emit_src=False, ports=ports))
 
 
 def ports_of(component):

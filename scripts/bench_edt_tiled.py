@@ -18,14 +18,21 @@ on the same machine in the same run: scipy.ndimage.distance_transform_edt
 (scripts/software.py, median of 3 runs, graph construction included).
 
 Clock: the tile engine's own, from place and route on the LFE5U-85F
-(``make fit TOP=edt_tile_engine PARAMS="t_r=R t_c=C max_h=256 max_w=256"
+(``make fit TOP=edt_tile_engine PARAMS="t_r=R t_c=C max_h=224 max_w=224"
 PART=lfe5u-85f``: build/fit/<module>--LFE5U-85F.json, read here; the RAM
-of a 256x256 map, the largest the part's EBRs hold).  The job's time is
-its cycles at that clock; an array without a fit result shows the
-break-even clock only (cycles / software seconds: any clock above it is
-faster than the software).  A map larger than the RAM (maze512-1-0) needs
-an external state store with StateRam's timing, which is not built: its
-time is that of the same top at the same clock.
+of a 224x224 map: with 256x256 the engine needs 210 of the part's 208 EBRs
+at 4x4, the state store 189..198 at T_c = 4..8 and the worklist, its queued
+bits, the frontier flags and the line buffer about 21 more;
+scripts/tile_engine_size.py --ram counts the store).  The job's time is
+its cycles at that clock, only for an array whose engine fits the part
+and a map whose state fits the part's block RAM; an array that does not
+fit, or has no fit result, has no time (never the clock of another top,
+e.g. the cell alone), only the break-even clock (cycles / software
+seconds: any clock above it is faster than the software).  A map larger
+than the RAM (maze512-1-0) says so, with the largest map the part holds;
+its time beside it (and the issue's goal line under the table) is its
+cycles at the same engine's own clock with an external state store of
+StateRam's timing, which is not built.
 
 Memory: bits of state per pixel (models.edt_bfs_tiled.state_bits) times the
 map, the EBRs that needs (8 pixels a word), and the largest square map the
@@ -61,10 +68,10 @@ from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 MAPS = ("maze512-1-0", "den312d", "room-64-64-8", "random-64-64-10", "room-64-64-8x4")
 ARRAYS = ((8, 8), (16, 16))
 # make bench: also the smallest array and the largest that may fit the LFE5U-85F (hdl/edt_bfs/README.md)
-BENCH_ARRAYS = ((2, 2), (6, 6), (8, 8), (16, 16))
+BENCH_ARRAYS = ((4, 4), (6, 6), (8, 8), (16, 16))
 DFAR = 0
 PART = "LFE5U-85F"
-RAM = (256, 256)            # the fitted tops' RAM: the largest square map the part's EBRs hold
+RAM = (224, 224)            # the fitted tops' RAM (module docstring: 256x256 overflows the part's EBRs)
 SECTION = "EDT/BFS tile engine: whole jobs at its own clock against scipy (issue 18)"
 
 
@@ -104,11 +111,10 @@ def measure(name, arrays=ARRAYS, repeats=3):
     bits = state_bits(h, w)
     ebr = ram_blocks(h, w, 8)["blocks"]
     rows = []
-    cell = cell_bound(arrays)
+    in_ram = h <= RAM[0] and w <= RAM[1]
     for array in arrays:
         fit = fit_result(array)
-        mhz = fit["fmax_mhz"] if fit and fit["fits"] else None
-        bound = cell["fmax_mhz"] if cell and not mhz else None     # the engine's clock is at most the cell's
+        mhz = fit["fmax_mhz"] if fit and fit["fits"] else None      # the engine's own clock, or none
         t0, c0 = time.perf_counter(), time.process_time()
         res = plan_path_tiled(obstacle, [goal], start, DFAR, array=array)
         wall, cpu = time.perf_counter() - t0, time.process_time() - c0
@@ -123,9 +129,9 @@ def measure(name, arrays=ARRAYS, repeats=3):
             "cycles_split": st["cycles"], "model_wall_s": wall, "model_cpu_s": cpu,
             "sw_seconds": sw["sw_seconds"], "sw_edt_s": sw["edt_seconds"], "sw_bfs_s": sw["bfs_csgraph_seconds"],
             "break_even_mhz": res.cycles / sw["sw_seconds"] / 1e6,
-            "mhz": mhz or bound, "bound": bool(bound),
-            "hw_seconds": res.cycles / ((mhz or bound) * 1e6) if (mhz or bound) else None,
-            "fit": fit, "in_ram": h <= RAM[0] and w <= RAM[1],
+            "mhz": mhz,
+            "hw_seconds": res.cycles / (mhz * 1e6) if mhz else None,
+            "fit": fit, "in_ram": in_ram,
             "cycles_per_visit": (st["cycles"]["edt"] + st["cycles"]["bfs"]) / max(1, st["visits_edt"] + st["visits_bfs"]),
             "state_bits": bits["total"], "ebr": ebr,
         })
@@ -144,12 +150,16 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
         "|---|---|---:|---|---|---:|---|---|---|---:|---|---:|---:|---|",
     ]
     for r in rows:
+        held = _held(r)
         c = r["cycles_split"]
-        le, ge = ("<= ", ">= ") if r["bound"] else ("", "")
-        clock = f"{le}{r['mhz']:.1f} MHz" if r["mhz"] else "no fit result"
-        speedup = f"{le}{r['sw_seconds'] / r['hw_seconds']:.1f}x" if r["hw_seconds"] else "-"
-        when = (f"{ge}{r['hw_seconds'] * 1e3:.3f} ms" + ("" if r["in_ram"] else " (external RAM)")
-                if r["hw_seconds"] else "-")
+        clock = f"{r['mhz']:.1f} MHz" if r["mhz"] else _no_clock(r["fit"], r["array"])
+        speedup = (f"{r['sw_seconds'] / r['hw_seconds']:.1f}x" + ("" if r["in_ram"] else " (ext.)")
+                   if r["hw_seconds"] else "-")
+        when = (f"{r['hw_seconds'] * 1e3:.3f} ms" if r["hw_seconds"] and r["in_ram"] else
+                f"{held}; "
+                f"external store: {r['hw_seconds'] * 1e3:.3f} ms" if r["hw_seconds"] else
+                "-" if r["in_ram"] else
+                held)
         lines.append(
             f"| {r['map']} ({r['shape'][0]}x{r['shape'][1]}) | {r['array'][0]}x{r['array'][1]} | {r['levels']} "
             f"| {r['visits_edt']:,} / {r['visits_bfs']:,} ({r['tiles']:,}) "
@@ -160,6 +170,22 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
             f"| {r['sw_seconds'] * 1e3:.2f} ms ({r['sw_edt_s'] * 1e3:.2f} + {r['sw_bfs_s'] * 1e3:.2f}) "
             f"| {speedup} | {r['break_even_mhz']:.1f} MHz | {r['model_wall_s']:.2f} ({r['model_cpu_s']:.2f}) |")
     lines += ["", f"The paper's own figure for its map: {PAPER_JOBS['edt_job']}.", ""]
+    for r in rows:
+        if r["map"] != "maze512-1-0":
+            continue
+        a = f"{r['array'][0]}x{r['array'][1]}"
+        if r["hw_seconds"]:
+            lines.append(f"* Goal, maze512-1-0 at {a}: {r['cycles']:,} cycles at the engine's own "
+                         f"{r['mhz']:.1f} MHz ({PART}) = {r['hw_seconds'] * 1e3:.2f} ms against "
+                         f"{r['sw_seconds'] * 1e3:.0f} ms for scipy's EDT + csgraph BFS in this run: "
+                         f"{'met' if r['hw_seconds'] < r['sw_seconds'] else 'NOT met'}, "
+                         f"{r['sw_seconds'] / r['hw_seconds']:.0f}x; the state ({r['ebr']} EBR) needs an external "
+                         f"store with StateRam's timing (not built). Cost: {r['visits_edt'] + r['visits_bfs']:,} "
+                         f"tile visits at {r['cycles_per_visit']:.1f} cycles each, {r['words_moved']:,} RAM words "
+                         f"moved against a floor of {r['words_floor']:,} ({r['words_moved'] / r['words_floor']:.2f}x).")
+        else:
+            lines.append(f"* maze512-1-0 at {a}: {_no_clock(r['fit'], r['array'])}; no time.")
+    lines.append("")
     fits = {tuple(r["array"]): r["fit"] for r in rows}
     cell = cell_bound(arrays)
     lines += [f"| tile engine on the {PART} (RAM {RAM[0]}x{RAM[1]}) | fits | LUT4 | FF | EBR | DSP | clock "
@@ -170,24 +196,20 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
                      f"| {cell['resources']['ff']} | 0 | 0 | {cell['fmax_mhz']:.1f} MHz (a bound on the engine's) "
                      f"| {cp['from']['cell']} -> {cp['to']['cell']} ({cp['to']['port']}), {cp['delay_ns']} ns, "
                      f"{cp['logic_levels']} levels |")
-    luts = cell["utilisation"]["TRELLIS_COMB"][1] if cell else None
     for array, fit in fits.items():
         if fit is None:
-            need = array[0] * array[1] * cell["resources"]["lut4"] if cell else None
-            verdict = ("" if need is None else "no" if need > luts else "likely" if need <= 0.8 * luts
-                       else "borderline")
-            est = (f"no fit result; estimate: {array[0] * array[1]} cells x {cell['resources']['lut4']:,} = "
-                   f"{need:,} LUT4 of {luts:,}: {verdict}" if cell else "no fit result")
-            lines.append(f"| {array[0]}x{array[1]} | {est} | | | | | | |")
+            lines.append(f"| {array[0]}x{array[1]} | {_no_clock(None, array)} | | | | | | |")
             continue
         cp = fit.get("critical_path") or {}
         path = (f"{cp['from']['cell']} -> {cp['to']['cell']}, {cp.get('delay_ns', '?')} ns, "
                 f"{cp.get('logic_levels', '?')} levels" if cp else "-")
-        clock = f"{fit['fmax_mhz']:.1f} MHz" if fit["fits"] else "-"
-        lines.append(f"| {array[0]}x{array[1]} | {'yes' if fit['fits'] else 'no'} | {fit['lut4']:,} | {fit['ff']:,} "
+        clock = (f"{fit['fmax_mhz']:.1f} MHz (seeds " + ", ".join(f"{x['fmax_mhz']:.1f}" for x in fit["seeds"]) + ")"
+                 if fit["fits"] else "-")
+        lines.append(f"| {array[0]}x{array[1]} | {'yes' if fit['fits'] else _no_clock(fit)} | {fit['lut4']:,} | {fit['ff']:,} "
                      f"| {fit['bram']} | {fit['dsp']} | {clock} | {path} |")
     n = largest_map(LFE5U_85F_EBR, 8)
-    lines += ["", "| map | bits / pixel | state | EBRs (8 pixels a word) | fits the LFE5U-85F (208 EBR)? |",
+    lines += ["", f"| map | bits / pixel | state | EBRs (model's count, 8 pixels a word) | fits the {PART}'s "
+              f"{LFE5U_85F_EBR} EBR: the count / the engine placed there (RAM {RAM[0]}x{RAM[1]}) |",
               "|---|---:|---:|---:|---|"]
     seen = set()
     for r in rows:
@@ -196,11 +218,47 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
         seen.add(r["map"])
         h, w = r["shape"]
         lines.append(f"| {r['map']} | {r['state_bits']} | {h * w * r['state_bits'] / 8192:,.0f} KiB "
-                     f"| {r['ebr']} | {'yes' if r['ebr'] <= LFE5U_85F_EBR else 'no'} |")
+                     f"| {r['ebr']} | {'yes' if r['ebr'] <= LFE5U_85F_EBR else 'no'} / {'yes' if r['in_ram'] else 'no'} |")
     lines += ["", f"Largest square map whose state fits the LFE5U-85F's {LFE5U_85F_EBR} EBRs "
               f"({LFE5U_85F_EBR * EBR_BITS:,} bits): {n}x{n} at {state_bits(n, n)['total']} bits a pixel "
-              f"(worklist FIFOs and line buffers not counted)."]
+              f"(worklist FIFOs and line buffers not counted); this RTL's store (3 banks x 2 field groups) holds "
+              f"264x264 at T_c = 8 (scripts/tile_engine_size.py --ram), and the whole engine (worklist, queued "
+              f"bits, frontier flags, line buffer: about 21 EBR more) was placed with a {RAM[0]}x{RAM[1]} RAM: "
+              f"with 256x256 the 4x4 engine needs 210 EBR (make fit, does not fit)."]
     return "\n".join(lines), rows
+
+
+def _held(r):
+    """A map beyond the fitted engines' RAM: what the part holds (the RTL's store packs less densely
+    than the model's count of EBRs)."""
+    return (f"state does not fit: map beyond the engine's RAM, {RAM[0]}x{RAM[1]}, the largest that fits the "
+            f"part with this store (the model's count for this map: {r['ebr']} EBR of {LFE5U_85F_EBR})")
+
+
+def estimate(array):
+    """(LUT4, available) of an engine not placed: the cell alone's LUT4 times the cells plus the rest
+    (lanes, controller, worklist) as measured in the smallest placed engine, or None without both.
+    The rest grows a little with T_c (T_c + 2 lanes): an estimate, said so where it is shown."""
+    cell = cell_bound([array])
+    placed = next((f for f in (fit_result(a) for a in BENCH_ARRAYS) if f), None)
+    if not cell or not placed:
+        return None
+    t_r, t_c = placed["params"]["t_r"], placed["params"]["t_c"]
+    rest = placed["lut4"] - t_r * t_c * cell["resources"]["lut4"]
+    return rest + array[0] * array[1] * cell["resources"]["lut4"], placed["utilisation"]["TRELLIS_COMB"][1]
+
+
+def _no_clock(fit, array=None):
+    """Why an array has no clock of its own: it does not fit (what overflowed), or it was not placed
+    (with the estimate of its size when there is one)."""
+    if fit is None:
+        est = estimate(array) if array else None
+        if est:
+            verdict = "does not fit" if est[0] > est[1] else "may fit"
+            return f"not placed; estimate {est[0]:,} LUT4 of {est[1]:,}: {verdict}"
+        return "not placed"
+    over = ", ".join(f"{o['resource']} {o['used']:,}/{o['available']:,}" for o in fit.get("overflow", []))
+    return f"does not fit ({over})" if over else "does not fit"
 
 
 def section(maps=MAPS, arrays=ARRAYS):
@@ -214,10 +272,10 @@ def section(maps=MAPS, arrays=ARRAYS):
             "runs, the clock's source). room-64-64-8x4 is room-64-64-8 with each cell drawn as 4 x 4 pixels. "
             "Cycles are the tiled model's, which the regression proves equal to the tile engine's RTL; the cost "
             "breakdown: tile visits, cycles per visit (EDT and BFS cycles over their visits), RAM words moved "
-            "against the floor of reading and writing each visited tile once. A clock marked <= is the cell "
-            "alone's (the engine's own place and route did not finish on the shared machine), so the job "
-            "times are lower bounds and the speed-ups upper bounds; maze512-1-0 does not fit the part's block "
-            "RAM and would need an external store with StateRam's timing (not built).\n\n" + text)
+            "against the floor of reading and writing each visited tile once. The clock is the tile engine's "
+            f"own (make fit, RAM {RAM[0]}x{RAM[1]}, median of the seeds in its JSON); an array that does not fit "
+            f"the {PART} or was not placed has no job time; maze512-1-0's state does not fit the part's block "
+            "RAM: its time (marked ext.) assumes an external store with StateRam's timing (not built).\n\n" + text)
     return text
 
 

@@ -2,9 +2,9 @@
 
 from amaranth.hdl import Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
-from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..ram_init import undefined_memory
 from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, flat, named, pixel_layout
 
 __all__ = ["StateRam", "StateSignature", "read_layout", "read_data_layout", "write_layout", "BANKS"]
@@ -39,8 +39,12 @@ class StateSignature(wiring.Signature):
 
     Contract, for any implementation (this block RAM, or an SDRAM
     controller with a cache of window rows): a read accepted after a write
-    (in a later cycle) returns the written fields; the pixels of words
-    outside the map are don't-care but never X; ``rd.ready`` may depend on
+    (in a later cycle) returns the written fields; a word never written
+    since power-up (outside the map of every job so far) is don't-care and
+    may be X in simulation: the engine reads such words only for pixels
+    outside the map, whose flags it gates with ``present``
+    (:class:`~hdl.edt_bfs.tile_array.TileArray`), so they reach no output and
+    no decision; ``rd.ready`` may depend on
     ``rd_data.ready``, valid never on ready.  The engine accepts every
     answer the cycle it is valid while it loads a tile, so a store with a
     variable latency needs no buffer of its own beyond the pipeline.  The
@@ -69,6 +73,10 @@ class StateRam(wiring.Component):
     address ``row * S + wcol // 3`` with ``S = ceil(words / 3)``.  The words
     left of column 0 and right of the widest map's last column do not exist:
     their reads return the middle word's address (don't-care pixels).
+    The memories have no initial value (:func:`~hdl.ram_init.undefined_memory`:
+    no per-word init in the Verilog, which stalled yosys): every job's load
+    writes each word of its map before any read of it, and a block RAM
+    powers up cleared anyway.
 
     Parameters
     ----------
@@ -132,7 +140,7 @@ class StateRam(wiring.Component):
             got = []
             for g, lay in (("edt", edt_layout(w)), ("bfs", bfs_layout(w))):
                 group = data.ArrayLayout(lay, p)        # plain-width memories: see tile_layouts.flat
-                mem = Memory(shape=group.size, depth=self.depth, init=[])
+                mem = undefined_memory(shape=group.size, depth=self.depth)
                 m.submodules[f"{g}{k}"] = mem
                 rp = mem.read_port()
                 wp = mem.write_port()

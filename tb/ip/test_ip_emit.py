@@ -300,3 +300,32 @@ def test_every_default_set_is_valid():
         given = {p.name: params.get(p.name, p.default) for p in decl}
         assert all(v is not REQUIRED for v in given.values()), (name, params)
         emit.manifest(name, params)         # builds the component: its checks pass
+
+
+def test_undefined_memory_has_no_initial_block():
+    """A memory from hdl.ram_init.undefined_memory is emitted without its word-by-word zero init
+    (the tile engine's state store: yosys' Verilog front end stalls on it); a plain Memory keeps
+    its init; a marked memory with a non-zero init is refused, never dropped."""
+    from amaranth.hdl import Module, Signal
+    from amaranth.lib.memory import Memory
+    from navcores.hdl.ram_init import UNDEFINED_INIT, strip_undefined_init, undefined_memory
+
+    def verilog(mem_kind):
+        m = Module()
+        m.submodules.plain = plain = Memory(shape=8, depth=4, init=[])
+        m.submodules.undef = undef = mem_kind()
+        a, d, q1, q2 = Signal(2), Signal(8), Signal(8), Signal(8)
+        for mem, q in ((plain, q1), (undef, q2)):
+            rp, wp = mem.read_port(), mem.write_port()
+            m.d.comb += [rp.addr.eq(a), wp.addr.eq(a), wp.data.eq(d), wp.en.eq(1), q.eq(rp.data)]
+        return emit.verilog.convert(m, ports=[a, d, q1, q2], emit_src=False)
+
+    raw = verilog(lambda: undefined_memory(shape=8, depth=4))
+    text = strip_undefined_init(raw)
+    assert raw.count("initial begin") == 2 and text.count("initial begin") == 1
+    assert re.search(r"reg \[7:0\] plain \[3:0\];\n\s*initial begin", text)
+    assert "undef[0] =" not in text and "undef[0] =" in raw
+    assert "always @(posedge clk)" in text.split("reg [7:0] undef [3:0];")[1]   # the rest stays
+    bad = verilog(lambda: Memory(shape=8, depth=4, init=[0, 5], attrs={UNDEFINED_INIT: 1}))
+    with pytest.raises(ValueError, match="initial value"):
+        strip_undefined_init(bad)

@@ -1,0 +1,60 @@
+"""Memories whose contents are undefined until written: no initial block in the Verilog.
+
+Amaranth 0.5's ``Memory`` always has an initial value (``init=[]`` means
+zeros) and its Verilog backend writes it word by word (``initial begin
+mem[0] = 34'h0; ... end``).  For the EDT/BFS tile engine's state store (6
+memories of up to ``max_h * ceil(ceil(max_w / T_c) / 3)`` words) that is most
+of the file, and yosys' Verilog front end turns each line into a memory
+initialisation of its own: at 2x2 cells on a 256x256 map (3.5 MB of Verilog,
+66 048 init lines) ``read_verilog`` alone ran for more than 6 minutes without
+finishing, against 99 s for the whole ``synth_ecp5`` without them.
+
+A memory built by :func:`undefined_memory` carries the attribute
+:data:`UNDEFINED_INIT`, and :func:`strip_undefined_init` (which
+``hdl.emit.verilog_text`` applies to every emitted module) removes its
+initial block.  Its contents are then undefined until written: X in Icarus,
+zero in Verilator (its default ``--x-initial``) and in an ECP5 or iCE40
+block RAM without INITVAL (the bitstream clears them); the component that
+uses one must never let an unwritten word reach an output or a decision
+(its docstring says how), and the RTL tests on Icarus, where such a word is
+X, check it.
+"""
+
+import re
+
+from amaranth.lib.memory import Memory
+
+__all__ = ["UNDEFINED_INIT", "undefined_memory", "strip_undefined_init"]
+
+UNDEFINED_INIT = "navcores.undefined_init"
+
+# yosys' write_verilog: the attribute, the memory's declaration, then (if any) its initial block.
+_DECL = re.compile(r"^[ \t]*\(\* \\" + re.escape(UNDEFINED_INIT) + r"\s*=\s*[^*]*\*\)\n"
+                   r"[ \t]*reg (?:\[\d+:\d+\] )?(\S+) +\[\d+:\d+\];\n", re.M)
+_ZERO = re.compile(r"[ \t]*(\S+) ?\[\d+\] = \d+'[bdh]0+;")
+
+
+def undefined_memory(*, shape, depth, src_loc_at=0):
+    """A ``Memory(shape=shape, depth=depth)`` whose Verilog has no initial block."""
+    return Memory(shape=shape, depth=depth, init=[], attrs={UNDEFINED_INIT: 1}, src_loc_at=1 + src_loc_at)
+
+
+def strip_undefined_init(text):
+    """``text`` (yosys' Verilog) without the initial blocks of the memories marked
+    :data:`UNDEFINED_INIT`.  Such a block must set every word to zero (the
+    memory was made with no init): anything else is an error, never dropped."""
+    out, pos = [], 0
+    for m in _DECL.finditer(text):
+        name = m[1]
+        start = m.end()
+        if not text.startswith("  initial begin\n", start):
+            continue
+        end = text.index("\n  end\n", start) + len("\n  end\n")
+        for line in text[start:end].splitlines()[1:-1]:
+            z = _ZERO.fullmatch(line)
+            if not z or z[1] != name:
+                raise ValueError(f"memory {name} is marked {UNDEFINED_INIT} but has an initial value: {line.strip()}")
+        out.append(text[pos:start])
+        pos = end
+    out.append(text[pos:])
+    return "".join(out)
