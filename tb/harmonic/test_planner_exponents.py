@@ -71,6 +71,10 @@ SETS = {
 if os.environ.get("PLANNER_EXP_WIDE") == "1":
     SETS["wide"] = (_straight(WIDE), [("straight", 0, (8, 12, 16), 3, ())], ("repick", "converged", "wide"))
 ONLY = os.environ.get("PLANNER_EXP_ONLY")
+# Icarus runs these runs of a set (indices), Verilator all of them: the
+# corridor and the random map with orders still reach every claim of the set
+# (asserted below); the other two random runs add values, not kinds.
+ICARUS_RUNS = {"default": (2, 3)}
 
 
 def _model(name, seed, sched, iters, events, bounds, shape=(9, 18)):
@@ -93,6 +97,8 @@ async def planner_exponents_against_model(dut):
                           "directions", "left", "right", "clamped", "wide"), 0)
     if ONLY and not extra:
         runs = [runs[int(i)] for i in ONLY.split(",")]
+    elif os.environ.get("PLANNER_EXP_RUNS"):
+        runs = [runs[int(i)] for i in os.environ["PLANNER_EXP_RUNS"].split(",")]
     for name, seed, sched, iters, events in runs:
         ob, goals, res = _model(name, seed, sched, iters, events, bounds, (P["br"] * P["n"], P["bc"] * P["m"]))
         goal = np.zeros(ob.shape, dtype=bool)
@@ -154,7 +160,8 @@ async def _directions(dut, drv, res, tag, seen):
 @pytest.mark.parametrize("name", SETS)
 def test_planner_exponents(sim, name):
     run("harmonic_planner", exponent_params({**PARAMS, **SETS[name][0]}), sim, "test_planner_exponents",
-        env={"PLANNER_EXP_SET": name})
+        env={"PLANNER_EXP_SET": name,
+             "PLANNER_EXP_RUNS": ",".join(map(str, ICARUS_RUNS.get(name, ()))) if sim == "icarus" else ""})
 
 
 @pytest.mark.parametrize("geometry,zeros,top", [(STRAIGHT, 10, 64), (WIDE, 100, 256)])
