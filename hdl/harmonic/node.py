@@ -1,6 +1,6 @@
 """Node module of the harmonic planner (paper 000, section 5.2, Fig. 8)."""
 
-from amaranth.hdl import Cat, Module, Signal
+from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -42,8 +42,9 @@ class Node(wiring.Component):
     low bits, i.e. writing each sum bit two bit positions late, divides it
     by four.  The write window of one iteration runs from its cycle S+2 to
     cycle 1 of the next one (the cycles 2 .. S+1 of a padded iteration
-    write nothing: the cluster holds ``enable`` low there).  ``w`` is a
-    register: the bit computed in cycle u is on ``w`` in cycle u+1, when
+    write nothing: the cluster holds ``enable`` low there).  ``w`` comes
+    from registers (one LUT after them, none from the inputs): the bit
+    computed in cycle u is on ``w`` in cycle u+1, when
     the cluster writes it.
 
     In an iteration with ``enable`` low ("check" iteration) nothing changes:
@@ -90,7 +91,7 @@ class Node(wiring.Component):
         The node's value, LSB first, for its four neighbours (the paper's
         to_N, to_E, to_W, to_S are this one signal) and the decision module.
     w : Out(1)
-        Bit to write to the RAM (Mem multiplexer, registered): the update,
+        Bit to write to the RAM (Mem multiplexer; from registers: a LUT after three flip-flops): the update,
         the stored bit (constant node or check iteration) or the saturation
         constant.
     stable : Out(1)
@@ -134,23 +135,30 @@ class Node(wiring.Component):
         # Update: one serial adder of the four neighbours, (N + S + E + W)
         # LSB first, whose carry k (0 .. 3: at most (4 + 3) // 2) takes two
         # flip-flops where three chained full adders take three.  While
-        # masked the carry flushes: sum bit p+1 (result bit p-1) is written
-        # at u = 0, sum bit p+2 is k[0] at u = 1 (result bit p), and the
-        # adder starts afresh there (kin masked; k[1] is 0 by then).
-        live = ~self.zero
-        a, b = self.h_N & live, self.h_S & live
-        c, d = self.h_E & live, self.h_W & live
-        k = Signal(2)
-        kin = k[0] & ~self.ph1
-        # a + b + c + d + kin + 2*k[1] as two full adders of weight 1 and
-        # one of weight 2 (plain gates: no carry chain for a 3-bit sum).
-        s1, g1 = a ^ b ^ c, _maj(a, b, c)
-        total, g2 = s1 ^ d ^ kin, _maj(s1, d, kin)
-        m.d.sync += k.eq(Cat(g1 ^ g2 ^ k[1], _maj(g1, g2, k[1])))
+        # masked (``zero``) the adder's inputs are 0 and the carry flushes:
+        # sum bit p+1 (result bit p-1) is k[0], the sum bit at u = 0, and
+        # sum bit p+2 (result bit p) is k[1] then, which ``hi`` holds for
+        # u = 1.  A masked cycle clears k (a synchronous reset, so ``zero``
+        # stays out of the carry's LUTs); the adder thus starts afresh at
+        # u = 1 with no carry to gate, and k stays 0 through pads and clear
+        # iterations (the masked sum is the carry alone: 0).
+        h4 = Cat(self.h_N, self.h_S, self.h_E, self.h_W)
+        n0, n1, n2 = Signal(), Signal(), Signal()      # the count of the four bits: n2 n1 n0
+        m.d.comb += [n0.eq(h4.xor()),
+                     n1.eq(Cat(*((a & b) for i, a in enumerate(h4) for b in h4[i + 1:])).xor()),
+                     n2.eq(h4.all())]
+        k, hi = Signal(2), Signal()
+        # k' = (count + k[0] + 2 k[1]) >> 1 = n2 n1 + k[1] + (n0 & k[0]) (plain gates: no carry chain)
+        c = n0 & k[0]
+        with m.If(self.zero):
+            m.d.sync += k.eq(0)
+        with m.Else():
+            m.d.sync += k.eq(Cat(n1 ^ k[1] ^ c, n2 | _maj(n1, k[1], c)))
+        m.d.sync += hi.eq(k[1])
 
         # Mem: the stored stream delayed by two flip-flops lines up with the
         # bit being computed, so it is both the write-back value and, one
-        # flip-flop later (old_r), the Stable reference of the registered w.
+        # flip-flop later (old_r), the Stable reference of w (one cycle later).
         d1, old, old_r = Signal(), Signal(), Signal()
         m.d.sync += [d1.eq(self.h), old.eq(d1), old_r.eq(old)]
 
@@ -161,25 +169,35 @@ class Node(wiring.Component):
         with m.If(self.ph2):
             m.d.sync += const.eq(flag)
 
-        w = Signal()
-        with m.If(self.ph2):
-            m.d.comb += w.eq(flag)
-        with m.Elif(saturate):
-            m.d.comb += w.eq(self.ph1 & self.Sat)    # only bit p may be 1
-        with m.Elif(~self.enable | const):
-            m.d.comb += w.eq(old)
-        with m.Elif(self.ph1):
-            m.d.comb += w.eq(k[0])
-        with m.Else():
-            m.d.comb += w.eq(total)
-        m.d.sync += self.w.eq(w)
+        # The bit of cycle u, on w in cycle u+1 (Mem multiplexer):
+        #   ph2: the flag; saturate: bit p = Sat (at ph1), the rest 0;
+        #   check iteration or constant node: the stored bit; ph1: the
+        #   carry's high bit (hi); else the sum bit.
+        # Timing (issue 17): the neighbour bits come from flip-flops (the
+        # RAM's output register), and each register they reach is two LUT4s
+        # away (the count of the four bits, then one LUT with the carry).
+        # So the selection is decided beside the sum, from the strobes, into
+        # registers that hold the bit XOR the stored bit (``x_sum``, ``x_alt``:
+        # the Stable comparison comes with it), and ``w`` is the selected one
+        # XOR the stored bit (old_r) after the clock edge: the same bit in
+        # the same cycle as one ``w`` register behind the multiplexer.
+        x_sum, x_alt, s_sum = Signal(), Signal(), Signal()
+        m.d.sync += [
+            x_sum.eq((n0 & ~self.zero) ^ k[0] ^ old),
+            # the stored bit (check iteration, constant node, the flag of a
+            # constant) XOR itself is 0; the rest as above
+            x_alt.eq(self.enable & Mux(self.Sel, (self.ph2 | (self.ph1 & self.Sat)) ^ old,
+                                       ~(self.ph2 | const) & (hi ^ old))),
+            s_sum.eq(~self.ph2 & self.enable & ~self.Sel & ~const & ~self.ph1),
+        ]
+        changed = Signal()      # the bit on w differs from the stored one
+        m.d.comb += [changed.eq(Mux(s_sum, x_sum, x_alt)), self.w.eq(changed ^ old_r)]
 
-        # Stable: serial compare of the written word (registered) with the
-        # stored one; the window starts with the flag's write (ph2 one cycle
-        # earlier clears the record).  Its last bit is compared in cycle 2
-        # of the next iteration, combinationally into the output.
+        # Stable: serial compare of the written word with the stored one;
+        # the window starts with the flag's write (ph2 one cycle earlier
+        # clears the record).  Its last bit is compared in cycle 2 of the
+        # next iteration, combinationally into the output.
         diff = Signal()
-        changed = self.w ^ old_r
         m.d.sync += diff.eq(~self.ph2 & (diff | changed))
         m.d.comb += self.stable.eq(~(diff | changed))
 
