@@ -6,7 +6,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..params import Constraint, Param, check, checked_init
-from .counters import Counters
+from .counters import Counters, le_const
 from .limits import DEPTH_WHY, MAX_DEPTH
 from .node import Node
 
@@ -222,9 +222,11 @@ class Cluster(wiring.Component):
         sel_b, sat_b = Signal(NODES), Signal()
         last_win, last_upd = Signal(), Signal()
 
-        p_ok = self.p >= 2
+        # p in 2 .. p_max, as plain gates (issue 17: yosys maps ``>=`` /
+        # ``<=`` to carry chains, slower here than a LUT tree)
+        p_ok = self.p[1:].any()
         if (1 << len(self.p)) - 1 > self.p_max:     # p's port can exceed p_max
-            p_ok &= self.p <= self.p_max
+            p_ok &= le_const(self.p, self.p_max)
         # A start request loads the counters and the command registers
         # whether or not p is supported (harmless while idle): only
         # ``running`` waits for the range check, so the wide loads do not
@@ -313,8 +315,12 @@ class Cluster(wiring.Component):
         # The nodes' strobes: clr_a masks the adders over the bits of a
         # clear iteration (cycles 1 .. L-1 and 0 of the next: cycle 0 and the
         # pads are masked anyway); enable low in the non-writing cycles of a
-        # padded iteration.
-        enable = upd_b & cnt.wcyc
+        # padded iteration.  ``enable`` = upd_b & wcyc, a register (issue 17:
+        # no LUT between the strobes and the nodes' selection logic), loaded
+        # from the next values of both.
+        enable = Signal()
+        upd_b_next = Mux(load, 0, Mux(running & cnt.ph1, upd_a, upd_b))
+        m.d.sync += enable.eq(upd_b_next & cnt.wcyc_next)
 
         # The 3x6 node grid: each node streams its word from the RAM and
         # passes it on to its neighbours; edge nodes take the edge inputs.

@@ -1,5 +1,7 @@
 """Node module of the harmonic planner (paper 000, section 5.2, Fig. 8)."""
 
+from itertools import combinations
+
 from amaranth.hdl import Cat, Module, Mux, Signal
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
@@ -7,9 +9,9 @@ from amaranth.lib.wiring import In, Out
 __all__ = ["Node"]
 
 
-def _maj(a, b, c):
-    """Carry of a full adder."""
-    return (a & b) | (a & c) | (b & c)
+def _at_least(bits, t):
+    """At least t of the bits are set, as AND / OR gates (no adder, no carry chain)."""
+    return Cat(*(Cat(*c).all() for c in combinations(bits, t))).any()
 
 
 class Node(wiring.Component):
@@ -143,17 +145,26 @@ class Node(wiring.Component):
         # u = 1 with no carry to gate, and k stays 0 through pads and clear
         # iterations (the masked sum is the carry alone: 0).
         h4 = Cat(self.h_N, self.h_S, self.h_E, self.h_W)
-        n0, n1, n2 = Signal(), Signal(), Signal()      # the count of the four bits: n2 n1 n0
-        m.d.comb += [n0.eq(h4.xor()),
-                     n1.eq(Cat(*((a & b) for i, a in enumerate(h4) for b in h4[i + 1:])).xor()),
-                     n2.eq(h4.all())]
         k, hi = Signal(2), Signal()
-        # k' = (count + k[0] + 2 k[1]) >> 1 = n2 n1 + k[1] + (n0 & k[0]) (plain gates: no carry chain)
-        c = n0 & k[0]
+        # k' = (n + k[0] + 2 k[1]) >> 1 with n the count of the four bits:
+        # with c = n + k[0] (0 .. 5), k'[1] = c >= (2 if k[1] else 4) and
+        # k'[0] = (bit 1 of c) ^ k[1], bit 1 of c = c >= 2 and not c >= 4.
+        # The thresholds of c are nets of their own, kept through synthesis
+        # (issue 17): each is one LUT (of five inputs) after the RAM's output
+        # register, then one LUT with k[1], so that synthesis neither merges
+        # them with the neighbours' (a shared sub-expression costs a LUT
+        # level and a route on the RAM's read path) nor chains them.
+        n0, ge2, ge4 = (Signal(name=name, attrs={"keep": 1}) for name in ("n0", "ge2", "ge4"))
+        bits = [*h4, k[0]]
+        m.d.comb += [
+            n0.eq(h4.xor()),                  # the sum bit's parity
+            ge2.eq(_at_least(bits, 2)),
+            ge4.eq(_at_least(bits, 4)),
+        ]
         with m.If(self.zero):
             m.d.sync += k.eq(0)
         with m.Else():
-            m.d.sync += k.eq(Cat(n1 ^ k[1] ^ c, n2 | _maj(n1, k[1], c)))
+            m.d.sync += k.eq(Cat((ge2 & ~ge4) ^ k[1], Mux(k[1], ge2, ge4)))
         m.d.sync += hi.eq(k[1])
 
         # Mem: the stored stream delayed by two flip-flops lines up with the
