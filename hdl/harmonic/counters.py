@@ -1,6 +1,6 @@
 """Counters unit shared by the 18 nodes of a cluster (paper 000, section 5.2)."""
 
-from amaranth.hdl import Module, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -187,7 +187,9 @@ class Counters(wiring.Component):
         s_new = Signal(2)
         small = Signal()        # p < P_MIN (gates: no carry chain on the start's paths)
         m.d.comb += [small.eq(le_const(self.p, P_MIN - 1)),
-                     s_new.eq(Mux(small, (P_MIN - self.p)[:2], self.shift))]
+                     # P_MIN - p for p < P_MIN, a lookup of p's two low bits (no subtractor)
+                     s_new.eq(Mux(small, Cat(*(Cat(*(self.p[:2] == v for v in range(P_MIN) if (P_MIN - v) >> b & 1)).any()
+                                               for b in range(2))), self.shift))]
         with m.If(self.start):
             m.d.sync += [S.eq(s_new), p1.eq(self.p + 1), self.cntR.eq(0), qR.eq(0), self.r_cnt.eq(0),
                          base_p1.eq(self.base + self.p + 1), self.addrR.eq(self.base),

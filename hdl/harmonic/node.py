@@ -97,7 +97,8 @@ class Node(wiring.Component):
         the stored bit (constant node or check iteration) or the saturation
         constant.
     stable : Out(1)
-        The word written in the previous iteration equals the stored one.
+        The word written in the previous iteration equals the stored one
+        (valid in cycles 2 .. S+2 of the next iteration; undefined else).
     local_max : Out(1)
         Free node whose value is >= its four neighbours' (the values the
         previous iteration read, update, check or clear).
@@ -206,11 +207,15 @@ class Node(wiring.Component):
 
         # Stable: serial compare of the written word with the stored one;
         # the window starts with the flag's write (ph2 one cycle earlier
-        # clears the record).  Its last bit is compared in cycle 2 of the
-        # next iteration, combinationally into the output.
+        # clears the record).  Its last bit (bit p, on w in cycle 2 of the
+        # next iteration) is compared in that cycle, combinationally into
+        # the output.  Bit p is computed at u = 1 (ph1), where the sum is
+        # never selected (s_sum is low in cycles 2 .. S+2, the flags'
+        # window), so the output takes x_alt for ``changed``: two flip-flops,
+        # which keeps the block's AND of all Stable flags (Early) short.
         diff = Signal()
         m.d.sync += diff.eq(~self.ph2 & (diff | changed))
-        m.d.comb += self.stable.eq(~(diff | changed))
+        m.d.comb += self.stable.eq(~(diff | x_alt))
 
         # Maximum, LSB first: ge[n] says h >= neighbour n on the bits seen so
         # far (the highest differing bit decides); masked cycles (pads, the
