@@ -142,10 +142,9 @@ class Counters(wiring.Component):
             zero = Signal(name=f"{value.name}_zero", init=1)        # value == 0
             one = Signal(name=f"{value.name}_one")                  # value == 1
             q_end = Signal(name=f"{value.name}_q_end", init=1)      # q == S
-            reload = zero & q_end
             count_pad = zero & ~q_end
-            # (value and absolute hold in the pad cycles: a clock enable;
-            # ``start`` loads them below)
+            # (value and absolute hold in the pad cycles, a clock enable, and
+            # reload when zero and q == S; ``start`` loads them below)
             with m.If(self.advance & ~self.start & ~count_pad):
                 m.d.sync += [value.eq(Mux(zero, p1, value - 1)),
                              absolute.eq(Mux(zero, base_p1, absolute - 1))]
