@@ -194,12 +194,16 @@ class Node(wiring.Component):
         # XOR the stored bit (old_r) after the clock edge: the same bit in
         # the same cycle as one ``w`` register behind the multiplexer.
         x_sum, x_alt, s_sum = Signal(), Signal(), Signal()
+        # x_alt's two halves (saturating or not) are kept nets: one LUT4 each
+        # from flip-flops, then one LUT4 with enable and Sel
+        alt_sat, alt_free = Signal(attrs={"keep": 1}), Signal(attrs={"keep": 1})
+        m.d.comb += [alt_sat.eq((self.ph2 | (self.ph1 & self.Sat)) ^ old),
+                     alt_free.eq(~(self.ph2 | const) & (hi ^ old))]
         m.d.sync += [
             x_sum.eq((n0 & ~self.zero) ^ k[0] ^ old),
             # the stored bit (check iteration, constant node, the flag of a
             # constant) XOR itself is 0; the rest as above
-            x_alt.eq(self.enable & Mux(self.Sel, (self.ph2 | (self.ph1 & self.Sat)) ^ old,
-                                       ~(self.ph2 | const) & (hi ^ old))),
+            x_alt.eq(self.enable & Mux(self.Sel, alt_sat, alt_free)),
             s_sum.eq(~self.ph2 & self.enable & ~self.Sel & ~const & ~self.ph1),
         ]
         changed = Signal()      # the bit on w differs from the stored one
