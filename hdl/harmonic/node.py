@@ -31,8 +31,9 @@ class Node(wiring.Component):
     0          ``z``: the Maximum result of the previous iteration is
                latched; ``w`` = result bit p-1 of the previous iteration
                (the carry flushing: the adder's inputs are masked)
-    1          ``ph1``: ``w`` = result bit p (the carry's low bit); the
-               adder restarts
+    1          ``ph1``: ``w`` = result bit p (the flushed carry's high
+               bit, held in ``hi``); the adder restarts (the mask cleared
+               its carry at u = 0)
     < S        pads (``mask``): nothing read, the adder's inputs masked
     S          the constant flag (``mask``: the adder sees 0)
     S+1+k      value bit k; ``w`` = result bit k-2 (k >= 2)
