@@ -82,9 +82,10 @@ class Cluster(wiring.Component):
         Word base of the block being computed (block b at b*(p_max+2)): added
         to the address counters while iterating.  Hold it while busy.
     w_addr : Out(range(depth)); w_data : Out(18); w_en : Out(1)
-        The RAM write port (address, the nodes' ``w`` bits) and the enable
-        of the iterations' writes (not the host's), for the border storage
-        that mirrors the block's edge nodes.
+        The RAM write port's address, the nodes' ``w`` bits (what the port
+        writes while iterating; meaningful with ``w_en``) and the enable of
+        the iterations' writes (not the host's), for the border storage that
+        mirrors the block's edge nodes.
     abort : In(1)
         With ``done``: stop now (see above).
     h_N_in, h_S_in : In(6); h_E_in, h_W_in : In(3)
@@ -304,7 +305,7 @@ class Cluster(wiring.Component):
             self.h.eq(data),
             self.host_rdata.eq(data),
         ]
-        m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(running & write)]
+        m.d.comb += [self.w_addr.eq(port_w.addr), self.w_en.eq(running & write)]
 
         # The nodes' adder mask, a register (one LUT level less before the
         # nodes' sum): mask | clr_a of the next cycle.
@@ -354,6 +355,10 @@ class Cluster(wiring.Component):
         w_bits = [nodes[r][c].w for r in range(ROWS) for c in range(COLS)]
         with m.If(running):
             m.d.comb += port_w.data.eq(Cat(*w_bits))
+        # The nodes' bits themselves, not the host multiplexer's output: the
+        # border storage writes them with w_en (issue 17: one LUT less
+        # between the nodes' registers and the border RAMs' data pins).
+        m.d.comb += self.w_data.eq(Cat(*w_bits))
 
         m.d.comb += [
             self.done.eq(running & cnt.fl & last_win),

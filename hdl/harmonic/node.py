@@ -64,10 +64,10 @@ class Node(wiring.Component):
     which folds the check pass into the visits: see
     :mod:`models.harmonic.schedule`.)
 
-    Flags: ``stable`` and ``local_max`` of an iteration are valid in cycle 2
-    of the next one (``local_max`` from cycle 1, ``stable`` once the last
-    written bit has been compared), until its cycle S+2 (``stable``) / 0
-    (``local_max``).
+    Flags: ``stable`` and ``local_max`` of an iteration are registers valid
+    in cycle 2 of the next one (``local_max`` loaded at cycle 0, until the
+    next cycle 0; ``stable``, loaded at cycle 1 with the last written bit's
+    comparison, until the next cycle 1).
 
     Ports
     -----
@@ -99,7 +99,8 @@ class Node(wiring.Component):
         constant.
     stable : Out(1)
         The word written in the previous iteration equals the stored one
-        (valid in cycles 2 .. S+2 of the next iteration; undefined else).
+        (a register: valid from cycle 2 of the next iteration to its next
+        cycle 1).
     local_max : Out(1)
         Free node whose value is >= its four neighbours' (the values the
         previous iteration read, update, check or clear).
@@ -198,13 +199,15 @@ class Node(wiring.Component):
         # x_alt's two halves (saturating or not) are kept nets: one LUT4 each
         # from flip-flops, then one LUT4 with enable and Sel
         alt_sat, alt_free = Signal(attrs={"keep": 1}), Signal(attrs={"keep": 1})
+        x_alt_next = Signal()
         m.d.comb += [alt_sat.eq((self.ph2 | (self.ph1 & self.Sat)) ^ old),
-                     alt_free.eq(~(self.ph2 | const) & (hi ^ old))]
+                     alt_free.eq(~(self.ph2 | const) & (hi ^ old)),
+                     # the stored bit (check iteration, constant node, the
+                     # flag of a constant) XOR itself is 0; the rest as above
+                     x_alt_next.eq(self.enable & Mux(self.Sel, alt_sat, alt_free))]
         m.d.sync += [
             x_sum.eq((n0 & ~self.zero) ^ k[0] ^ old),
-            # the stored bit (check iteration, constant node, the flag of a
-            # constant) XOR itself is 0; the rest as above
-            x_alt.eq(self.enable & Mux(self.Sel, alt_sat, alt_free)),
+            x_alt.eq(x_alt_next),
             s_sum.eq(~self.ph2 & self.enable & ~self.Sel & ~const & ~self.ph1),
         ]
         changed = Signal()      # the bit on w differs from the stored one
@@ -213,14 +216,17 @@ class Node(wiring.Component):
         # Stable: serial compare of the written word with the stored one;
         # the window starts with the flag's write (ph2 one cycle earlier
         # clears the record).  Its last bit (bit p, on w in cycle 2 of the
-        # next iteration) is compared in that cycle, combinationally into
-        # the output.  Bit p is computed at u = 1 (ph1), where the sum is
-        # never selected (s_sum is low in cycles 2 .. S+2, the flags'
-        # window), so the output takes x_alt for ``changed``: two flip-flops,
-        # which keeps the block's AND of all Stable flags (Early) short.
+        # next iteration) is computed at u = 1 (ph1), where the sum is never
+        # selected (s_sum is low then), so its comparison is x_alt's next
+        # value: the flag is a register loaded at u = 1, valid from cycle 2
+        # to the next cycle 1 (issue 17: the block's AND of all Stable flags,
+        # Early, starts at flip-flops).
         diff = Signal()
         m.d.sync += diff.eq(~self.ph2 & (diff | changed))
-        m.d.comb += self.stable.eq(~(diff | x_alt))
+        stable = Signal()
+        with m.If(self.ph1):
+            m.d.sync += stable.eq(~(diff | changed | x_alt_next))
+        m.d.comb += self.stable.eq(stable)
 
         # Maximum, LSB first: ge[n] says h >= neighbour n on the bits seen so
         # far (the highest differing bit decides); masked cycles (pads, the
@@ -230,9 +236,12 @@ class Node(wiring.Component):
             ge = Signal(init=1)
             m.d.sync += ge.eq(self.mask | ((self.h ^ nb) & self.h) | (~(self.h ^ nb) & ge))
             ges.append(ge)
+        # (a free node: const changes at ph2 only, after cycle 2, so the
+        # flag is one register, loaded at u = 0: issue 17, the block's OR of
+        # all Maximum flags, Cvg, starts at flip-flops)
         lm = Signal()
         with m.If(self.z):
-            m.d.sync += lm.eq(Cat(*ges).all())
-        m.d.comb += self.local_max.eq(lm & ~const)
+            m.d.sync += lm.eq(Cat(*ges).all() & ~const)
+        m.d.comb += self.local_max.eq(lm)
 
         return m
