@@ -323,7 +323,12 @@ class Block(wiring.Component):
                      fills[0][2].eq(host.cluster), fills[0][3].eq(host.wdata)]
         for a, b in zip(fills, fills[1:]):
             m.d.sync += [y.eq(x) for x, y in zip(a, b)]
-        fill, fill_addr, fill_k, fill_data = fills[-1]
+        fill, fill_addr, _, fill_data = fills[-1]
+        # which cluster's word the last stage holds, one-hot, registered
+        # beside it (issue 17: no comparator between a cluster RAM's read
+        # and the border RAMs' data pins)
+        fill_hit = Signal(CR * CC, name="fill_hit")
+        m.d.sync += fill_hit.eq(Cat(*(fills[-2][2] == k for k in range(CR * CC))))
         m.d.comb += [border.w_addr.eq(Mux(fill, fill_addr, c0.w_addr)),
                      border.w_en.eq(fill | c0.w_en)]
         # The border nodes by cluster edge segment: each cluster edge that
@@ -340,7 +345,7 @@ class Block(wiring.Component):
                          ("right", i, CC - 1, rows, [bit(r, COLS - 1) for r in range(ROWS)])]
         for side, i, j, sl, bits in segments:
             c = cl[i][j]
-            word = Mux(fill_k == i * CC + j, fill_data, c.host_rdata)
+            word = Mux(fill_hit[i * CC + j], fill_data, c.host_rdata)
             m.d.comb += getattr(border, f"w_{side}")[sl].eq(
                 Mux(fill, Cat(word[b] for b in bits), Cat(c.w_data[b] for b in bits)))
         if self.exponents:

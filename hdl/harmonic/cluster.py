@@ -6,7 +6,7 @@ from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..params import Constraint, Param, check, checked_init
-from .counters import Counters
+from .counters import Counters, le_const
 from .limits import DEPTH_WHY, MAX_DEPTH
 from .node import Node
 
@@ -82,9 +82,10 @@ class Cluster(wiring.Component):
         Word base of the block being computed (block b at b*(p_max+2)): added
         to the address counters while iterating.  Hold it while busy.
     w_addr : Out(range(depth)); w_data : Out(18); w_en : Out(1)
-        The RAM write port (address, the nodes' ``w`` bits) and the enable
-        of the iterations' writes (not the host's), for the border storage
-        that mirrors the block's edge nodes.
+        The RAM write port's address, the nodes' ``w`` bits (what the port
+        writes while iterating; meaningful with ``w_en``) and the enable of
+        the iterations' writes (not the host's), for the border storage that
+        mirrors the block's edge nodes.
     abort : In(1)
         With ``done``: stop now (see above).
     h_N_in, h_S_in : In(6); h_E_in, h_W_in : In(3)
@@ -222,9 +223,11 @@ class Cluster(wiring.Component):
         sel_b, sat_b = Signal(NODES), Signal()
         last_win, last_upd = Signal(), Signal()
 
-        p_ok = self.p >= 2
+        # p in 2 .. p_max, as plain gates (issue 17: yosys maps ``>=`` /
+        # ``<=`` to carry chains, slower here than a LUT tree)
+        p_ok = self.p[1:].any()
         if (1 << len(self.p)) - 1 > self.p_max:     # p's port can exceed p_max
-            p_ok &= self.p <= self.p_max
+            p_ok &= le_const(self.p, self.p_max)
         # A start request loads the counters and the command registers
         # whether or not p is supported (harmless while idle): only
         # ``running`` waits for the range check, so the wide loads do not
@@ -302,7 +305,7 @@ class Cluster(wiring.Component):
             self.h.eq(data),
             self.host_rdata.eq(data),
         ]
-        m.d.comb += [self.w_addr.eq(port_w.addr), self.w_data.eq(port_w.data), self.w_en.eq(running & write)]
+        m.d.comb += [self.w_addr.eq(port_w.addr), self.w_en.eq(running & write)]
 
         # The nodes' adder mask, a register (one LUT level less before the
         # nodes' sum): mask | clr_a of the next cycle.
@@ -313,8 +316,12 @@ class Cluster(wiring.Component):
         # The nodes' strobes: clr_a masks the adders over the bits of a
         # clear iteration (cycles 1 .. L-1 and 0 of the next: cycle 0 and the
         # pads are masked anyway); enable low in the non-writing cycles of a
-        # padded iteration.
-        enable = upd_b & cnt.wcyc
+        # padded iteration.  ``enable`` = upd_b & wcyc, a register (issue 17:
+        # no LUT between the strobes and the nodes' selection logic), loaded
+        # from the next values of both.
+        enable = Signal()
+        upd_b_next = Mux(load, 0, Mux(running & cnt.ph1, upd_a, upd_b))
+        m.d.sync += enable.eq(upd_b_next & cnt.wcyc_next)
 
         # The 3x6 node grid: each node streams its word from the RAM and
         # passes it on to its neighbours; edge nodes take the edge inputs.
@@ -348,6 +355,10 @@ class Cluster(wiring.Component):
         w_bits = [nodes[r][c].w for r in range(ROWS) for c in range(COLS)]
         with m.If(running):
             m.d.comb += port_w.data.eq(Cat(*w_bits))
+        # The nodes' bits themselves, not the host multiplexer's output: the
+        # border storage writes them with w_en (issue 17: one LUT less
+        # between the nodes' registers and the border RAMs' data pins).
+        m.d.comb += self.w_data.eq(Cat(*w_bits))
 
         m.d.comb += [
             self.done.eq(running & cnt.fl & last_win),

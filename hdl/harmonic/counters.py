@@ -1,6 +1,6 @@
 """Counters unit shared by the 18 nodes of a cluster (paper 000, section 5.2)."""
 
-from amaranth.hdl import Module, Mux, Signal, unsigned
+from amaranth.hdl import Cat, Module, Mux, Signal, unsigned
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
@@ -8,7 +8,15 @@ from ...models.harmonic.ram import P_MIN, READ_LATENCY, WRITE_LATENCY
 from ..params import Constraint, Param, check, checked_init
 from .limits import DEPTH_WHY, MAX_DEPTH
 
-__all__ = ["Counters"]
+__all__ = ["Counters", "le_const"]
+
+
+def le_const(x, c):
+    """x <= c for a constant c, as AND / OR gates from the LSB up (no carry chain)."""
+    le = 1
+    for i in range(len(x)):         # le: x[:i] <= c[:i]
+        le = (~x[i] & le) if not (c >> i) & 1 else (~x[i] | le)
+    return le if c < 1 << len(x) else 1
 
 
 class Counters(wiring.Component):
@@ -67,6 +75,9 @@ class Counters(wiring.Component):
     mask_next : Out(1)
         ``mask`` of the next advancing cycle (a register: the cluster
         registers the nodes' adder mask from it).
+    wcyc_next : Out(1)
+        ``wcyc`` of the next cycle (after this cycle's ``start`` /
+        ``advance``; the cluster registers the nodes' ``enable`` from it).
     """
 
     PARAMS = (Param("p_max", int, lo=2, hi=MAX_DEPTH - 2,
@@ -99,7 +110,7 @@ class Counters(wiring.Component):
             "cntR": Out(addr),
             "r_cnt": Out(addr),
             "cntW": Out(addr),
-            "mask_next": Out(1),
+            "mask_next": Out(1), "wcyc_next": Out(1),
             "mask": Out(1), "z": Out(1), "ph1": Out(1), "fl": Out(1), "ph2": Out(1), "wcyc": Out(1, init=1),
         })
 
@@ -121,28 +132,39 @@ class Counters(wiring.Component):
 
         def phase(value, q, absolute):
             """One read-slot counter: value p+1 .. 1, then 0 for S+1 cycles
-            (q counts them), and base + value beside it; returns (slot is 0,
-            slot is the flag)."""
-            zero = Signal(name=f"{value.name}_zero")
-            m.d.comb += zero.eq(value == 0)
-            reload = zero & (q == S)
+            (q counts them), and base + value beside it; returns its flags
+            (value == 0, value == 1, q == S).
+
+            Timing (issue 17): the flags are registers, updated from the
+            comparisons one slot earlier (value == 2, q + 1 == S), so that
+            the multiplexers of the wide counters select on flip-flops and
+            no comparator of the counter's width sits before their enables."""
+            zero = Signal(name=f"{value.name}_zero", init=1)        # value == 0
+            one = Signal(name=f"{value.name}_one")                  # value == 1
+            q_end = Signal(name=f"{value.name}_q_end", init=1)      # q == S
+            count_pad = zero & ~q_end
+            # (value and absolute hold in the pad cycles, a clock enable, and
+            # reload when zero and q == S; ``start`` loads them below)
+            with m.If(self.advance & ~self.start & ~count_pad):
+                m.d.sync += [value.eq(Mux(zero, p1, value - 1)),
+                             absolute.eq(Mux(zero, base_p1, absolute - 1))]
             with m.If(self.advance & ~self.start):
-                m.d.sync += [value.eq(Mux(reload, p1, Mux(zero, 0, value - 1))),
-                             absolute.eq(Mux(reload, base_p1, Mux(zero, absolute, absolute - 1))),
-                             q.eq(Mux(zero & ~reload, q + 1, 0))]
-            return zero, reload
+                m.d.sync += [q.eq(Mux(count_pad, q + 1, 0)),
+                             zero.eq(count_pad | one),          # a reload (p + 1 >= 3) is neither 0 nor 1
+                             one.eq(~zero & (value == 2)),
+                             q_end.eq(Mux(count_pad, q + 1 == S, S == 0))]
+            return zero, one, q_end
 
         qR, qW = Signal(2), Signal(2)
-        zR, reloadR = phase(self.cntR, qR, self.addrR)
-        phase(self.cntW, qW, self.addrW)
-        one = Signal()
-        m.d.comb += one.eq(self.cntR == 1)
+        zR, oneR, qendR = phase(self.cntR, qR, self.addrR)
+        reloadR = zR & qendR
+        zW, oneW, qendW = phase(self.cntW, qW, self.addrW)
         with m.If(self.advance & ~self.start):
-            m.d.sync += self.r_cnt.eq(Mux(reloadR, 1, Mux((self.r_cnt == 0) | one, 0, self.r_cnt + 1)))
+            m.d.sync += self.r_cnt.eq(Mux(reloadR, 1, Mux(zR | oneR, 0, self.r_cnt + 1)))
 
         # The read slot's markers, delayed to the nodes' cycle u (slot - 2).
         x0 = zR & (qR == 0)             # slot 0: u = 0 two cycles later
-        pad = zR & (qR != S)            # slot < S: u = slot + 2 writes nothing, two cycles after that
+        pad = zR & ~qendR               # slot < S: u = slot + 2 writes nothing, two cycles after that
         chain = {}
         for name, src, n in (("mask", zR, 2), ("zc", x0, 4), ("ph2", reloadR, 4), ("pad", pad, 4)):
             regs = [Signal(name=f"{name}_d{i}") for i in range(1, n + 1)]
@@ -155,18 +177,26 @@ class Counters(wiring.Component):
             self.mask.eq(chain["mask"][1]), self.mask_next.eq(chain["mask"][0]),
             self.z.eq(chain["zc"][1]), self.ph1.eq(chain["zc"][2]), self.fl.eq(chain["zc"][3]),
             self.ph2.eq(chain["ph2"][3]), self.wcyc.eq(~chain["pad"][3]),
+            self.wcyc_next.eq(~Mux(self.start, 0, Mux(self.advance, chain["pad"][2], chain["pad"][3]))),
         ]
 
         # The lead-in: slot 0 next (cntR 0, its pad count 0); cntW five slots
         # behind, slot L-5 (L >= 6): a value slot (offset 5) for p >= 4, else
         # the pad / flag slot p + S - 3 <= S.
         s_new = Signal(2)
-        m.d.comb += s_new.eq(Mux(self.p < P_MIN, P_MIN - self.p, self.shift))
+        small = Signal()        # p < P_MIN (gates: no carry chain on the start's paths)
+        m.d.comb += [small.eq(le_const(self.p, P_MIN - 1)),
+                     # P_MIN - p for p < P_MIN, a lookup of p's two low bits (no subtractor)
+                     s_new.eq(Mux(small, Cat(*(Cat(*(self.p[:2] == v for v in range(P_MIN) if (P_MIN - v) >> b & 1)).any()
+                                               for b in range(2))), self.shift))]
         with m.If(self.start):
             m.d.sync += [S.eq(s_new), p1.eq(self.p + 1), self.cntR.eq(0), qR.eq(0), self.r_cnt.eq(0),
-                         base_p1.eq(self.base + self.p + 1), self.addrR.eq(self.base)]
-            with m.If(self.p < P_MIN):
-                m.d.sync += [self.cntW.eq(0), qW.eq(self.p + s_new - 3), self.addrW.eq(self.base)]
+                         base_p1.eq(self.base + self.p + 1), self.addrR.eq(self.base),
+                         zR.eq(1), oneR.eq(0), qendR.eq(s_new == 0)]
+            with m.If(small):
+                m.d.sync += [self.cntW.eq(0), qW.eq(self.p + s_new - 3), self.addrW.eq(self.base),
+                             zW.eq(1), oneW.eq(0), qendW.eq(self.p == 3)]    # q = p + S - 3 = 1 == S
             with m.Else():
-                m.d.sync += [self.cntW.eq(lag), qW.eq(0), self.addrW.eq(self.base + lag)]
+                m.d.sync += [self.cntW.eq(lag), qW.eq(0), self.addrW.eq(self.base + lag),
+                             zW.eq(0), oneW.eq(0), qendW.eq(s_new == 0)]
         return m
