@@ -16,6 +16,7 @@ results cached under build/cache), and writes ``build/fit/<module>--<part>.json`
   critical_path   of the median seed: start and end cell and port, delay,
                   logic levels, nets (cells core.* are the core's)
   tools           yosys and nextpnr versions, as the tools report them
+  router          nextpnr's router (--router; router1 unless asked)
   cells, utilisation, target_mhz, synthesis, harness, seconds
 
 and prints one summary line.  Parts (case-insensitive): LFE5U-12F / 25F /
@@ -53,6 +54,8 @@ def parse_args(argv):
     ap.add_argument("--part", help="FPGA part: " + ", ".join(p.name for p in fmax.PARTS.values()))
     ap.add_argument("--seeds", type=int, default=3, help="place-and-route seeds, odd (default 3; the median is reported)")
     ap.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="seeds placed at once (default 2)")
+    ap.add_argument("--router", default="router1", choices=fmax.ROUTERS,
+                    help="nextpnr's router (default router1; router2 for large arrays)")
     ap.add_argument("--out", help="output JSON (default build/fit/<module>--<part>.json)")
     ap.error = _fail
     args = ap.parse_args(argv)
@@ -119,14 +122,15 @@ def main(argv=None):
     out = output_path(args)
     try:
         result = fmax.fit(args.top, args.params, args.part, seeds=tuple(range(1, args.seeds + 1)),
-                          jobs=args.jobs, progress=_progress())
+                          jobs=args.jobs, progress=_progress(), router=args.router)
     except (fmax.FlowError, toolchain.ToolError) as e:
         _fail(str(e).splitlines()[0], 1)
     except KeyboardInterrupt:
         _fail("interrupted", 130)
     result["generator"] = " ".join(["python scripts/fit.py", args.top,
                                     *(f"{k}={v}" for k, v in sorted(args.params.items())),
-                                    "--part", args.part.name, "--seeds", str(args.seeds)])
+                                    "--part", args.part.name, "--seeds", str(args.seeds),
+                                    *(("--router", args.router) if args.router != "router1" else ())])
     result["date"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     tmp = _temporary(out)
     tmp.write_text(json.dumps(result, indent=1) + "\n")

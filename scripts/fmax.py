@@ -240,13 +240,23 @@ def critical_path(report):
             "nets": [s["net"] for s in steps if s.get("net")]}
 
 
-def place(netlist, prt, seed, progress=None):
+ROUTERS = ("router1", "router2")
+
+
+def place(netlist, prt, seed, progress=None, router="router1"):
     """One nextpnr run of ``netlist`` on ``prt`` with ``seed``: a dict with
-    seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow."""
+    seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow.
+
+    ``router`` is nextpnr's router: router1 (its default, used for every
+    figure unless a JSON says otherwise) or router2, which resolves the
+    congestion of large regular arrays (a 24x48 harmonic block did not
+    converge in two hours of router1)."""
+    if router not in ROUTERS:
+        raise ValueError(f"router {router!r}: one of {', '.join(ROUTERS)}")
     pin_flag = "--lpf-allow-unconstrained" if prt.family == "ecp5" else "--pcf-allow-unconstrained"
     args = [*prt.device_args, "--json", "{netlist}", pin_flag, "--seed", str(seed),
             "--freq", str(prt.target_mhz), "--timing-allow-fail", "--report", "report.json",
-            "--log", "nextpnr.log", "-q"]
+            "--log", "nextpnr.log", "-q", *(("--router", router) if router != "router1" else ())]
     run = toolchain.run(prt.nextpnr, args, {"netlist": netlist}, progress)
     log = run.text("nextpnr.log")
     util = utilisation(log)
@@ -285,7 +295,7 @@ def _took(run):
     return " (cached)" if cached else f" ({seconds:.0f} s)"
 
 
-def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None):
+def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1"):
     """The fit of ``name`` at ``params`` on Part ``prt``: a JSON-ready dict
     (see scripts/fit.py).  Raises FlowError when a tool fails otherwise than
     by the design's size, toolchain.ToolError when a tool is missing."""
@@ -311,7 +321,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None):
     def one(seed):
         if progress:
             progress(f"{module} on {prt.name}, seed {seed}: placing and routing")
-        r = place(netlist, prt, seed, progress)
+        r = place(netlist, prt, seed, progress, router)
         if progress:
             what = (f"{r['fmax_mhz']:.1f} MHz" if "fmax_mhz" in r else
                     "does not fit: " + ", ".join(f"{o['resource']} {o['used']}/{o['available']}"
@@ -345,6 +355,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None):
         "synthesis": prt.synth + (f" (+ {packed} read registers packed into DP16KD OUTREG: scripts/ecp5_pack.py)"
                                    if packed else ""),
         "tools": {"yosys": syn.version, "nextpnr": first["version"]},
+        "router": router,
         "seconds": {"synthesis": syn.seconds, "place_and_route": [r["seconds"] for r in runs],
                     "cached": syn.cached and all(r["cached"] for r in runs)},
     }

@@ -42,21 +42,25 @@ class Code(enum.Enum, shape=3):
 # LOCATE (its cluster, bit and RAM base registered: the table look-ups are
 # kept out of FETCH's path, issue 17).
 READ_SETUP = 2
+# DECODE: a command's checks are registered in the cycle that takes it and
+# acted on in the next (issue 17), before any response.
+DECODE_CYCLES = 1
 
 
 def direction_latency(p, inside=4):
     """DIRECTION's response latency at precision ``p`` (fixed point), in
     cycles from the clock edge that takes the command to the one that
-    raises ``o_stream.valid``: the node and its ``inside`` neighbours in the
-    map are read serially (p+2+READ_SETUP+READ_LATENCY = p+6 cycles each:
+    raises ``o_stream.valid``: DECODE_CYCLES to act on the registered checks,
+    then the node and its ``inside`` neighbours in the map are read serially (p+2+READ_SETUP+READ_LATENCY = p+6 cycles each:
     FETCH registers the node, LOCATE its cluster, bit and RAM base, then the
     flag and p+1 value bits through the host port, whose data come
     READ_LATENCY cycles after the address), a neighbour outside the map
     costs 1 cycle, then 1 cycle starts the Decision, whose 2p+5 cycles (two
-    serial passes) end with the response: 7p+36 inside the map, 6p+31 on an
-    edge, 5p+26 in a corner.  With block exponents each value read adds its
+    serial passes) end with the response: 7p+37 inside the map, 6p+32 on an
+    edge, 5p+27 in a corner.  With block exponents each value read adds its
     conversion: 1 + the shift cycles."""
-    return (1 + inside) * (p + 2 + READ_SETUP + READ_LATENCY) + (4 - inside) + 1 + (2 * p + 5)
+    return (DECODE_CYCLES + (1 + inside) * (p + 2 + READ_SETUP + READ_LATENCY) + (4 - inside) + 1
+            + (2 * p + 5))
 
 
 def times(x, k):
@@ -132,7 +136,7 @@ class Planner(wiring.Component):
                gradient (g_row, g_col) of :func:`models.harmonic.decision`
                (block exponents: of :func:`models.harmonic.decision_exponents`,
                in the centre's units; ``exponent`` = its e_b).  Response
-               after :func:`direction_latency` cycles (7p+36 inside the map).
+               after :func:`direction_latency` cycles (7p+37 inside the map).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
@@ -219,7 +223,7 @@ class Planner(wiring.Component):
                 "block_visit_cycles": "K*L+7 for K iterations",
                 "schedule": "paper's" if self.paper else "still blocks",
                 "response": "one o_stream beat per i_stream command, in order",
-                "direction_latency": "7p+36 cycles (a node with 4 neighbours in the map; "
+                "direction_latency": "7p+37 cycles (a node with 4 neighbours in the map; "
                                      "p+5 fewer per neighbour outside it: direction_latency())",
                 "run_cycles": "reported by STATUS (cycles field)"}
 
@@ -259,7 +263,6 @@ class Planner(wiring.Component):
 
         in_map = (cmd.block < B) & (cmd.row < n) & (cmd.col < mm)
         c_br, c_bc, c_ci, c_bit = locate(c.block, c.row, c.col, "c")
-        _, _, cmd_ci, _ = locate(cmd.block, cmd.row, cmd.col, "cmd")
 
         # Status fields ride on every response.
         def respond(code, op):
@@ -361,55 +364,65 @@ class Planner(wiring.Component):
             m.d.comb += [s_sh.eq(dir_e - ctl.e_rd), s_abs.eq(Mux(s_sh < 0, -s_sh, s_sh))]
 
         accept = Signal()
+        # The checks of a command are registered when it is taken and acted on
+        # in DECODE, a cycle later: the payload -> comparators and carry chains
+        # -> the response's wide load enable was the fixed-point planner's
+        # critical path (10.8 ns, issue 17).  Every response comes one cycle
+        # later for it (DECODE_CYCLES in direction_latency).
+        k_in_map, k_p_bad, k_iters0, k_goals = Signal(), Signal(), Signal(), Signal()
         with m.FSM() as fsm:
             with m.State("IDLE"):
                 with m.If(accept):
-                    m.d.sync += c.eq(cmd)
-                    with m.Switch(cmd.op):
-                        with m.Case(Op.LOAD):
-                            with m.If(~in_map):
-                                respond(Code.BAD_NODE, cmd.op)
-                            with m.Elif(ctl.busy):
-                                respond(Code.BUSY, cmd.op)
+                    m.d.sync += [c.eq(cmd), k_in_map.eq(in_map), k_p_bad.eq(p_bad),
+                                 k_iters0.eq(cmd.iters == 0), k_goals.eq(cmd.goals != 0)]
+                    m.next = "DECODE"
+            with m.State("DECODE"):
+                m.next = "IDLE"
+                with m.Switch(c.op):
+                    with m.Case(Op.LOAD):
+                        with m.If(~k_in_map):
+                            respond(Code.BAD_NODE, c.op)
+                        with m.Elif(ctl.busy):
+                            respond(Code.BUSY, c.op)
+                        with m.Else():
+                            # LOAD's RAM base and cluster registered now (as
+                            # LOCATE does for a read): the host port's cluster
+                            # select is then a flip-flop in every state.
+                            m.d.sync += [load_a.eq(0), rd_base.eq(times(c.block, S) if B > 1 else 0),
+                                         rd_ci.eq(c_ci)]
+                            with m.If(c.flag):
+                                m.d.sync += has_goal.eq(k_goals)
                             with m.Else():
-                                # LOAD's RAM base and cluster registered now (as
-                                # LOCATE does for a read): the host port's cluster
-                                # select is then a flip-flop in every state.
-                                m.d.sync += [load_a.eq(0), rd_base.eq(times(cmd.block, S) if B > 1 else 0),
-                                             rd_ci.eq(cmd_ci)]
-                                with m.If(cmd.flag):
-                                    m.d.sync += has_goal.eq(cmd.goals != 0)
-                                with m.Else():
-                                    m.d.sync += has_goal.eq(has_goal | (cmd.goals != 0))
-                                m.next = "LOAD"
-                        with m.Case(Op.SET):
-                            with m.If(~in_map):
-                                respond(Code.BAD_NODE, cmd.op)
-                            with m.Else():
-                                m.next = "SET"
-                        with m.Case(Op.START):
-                            with m.If(ctl.busy):
-                                respond(Code.BUSY, cmd.op)
-                            with m.Elif(p_bad):
-                                respond(Code.BAD_PRECISION, cmd.op)
-                            with m.Elif(cmd.iters == 0):
-                                respond(Code.BAD_ITERS, cmd.op)
-                            with m.Elif(~has_goal):
-                                respond(Code.NO_GOAL, cmd.op)
-                            with m.Else():
-                                m.next = "START_GO"
-                        with m.Case(Op.STATUS):
-                            respond(Code.OK, cmd.op)
-                        with m.Case(Op.READ, Op.DIRECTION):
-                            with m.If(~in_map):
-                                respond(Code.BAD_NODE, cmd.op)
-                            with m.Elif(ctl.busy):
-                                respond(Code.BUSY, cmd.op)
-                            with m.Else():
-                                m.d.sync += q.eq(0)
-                                m.next = "FETCH"
-                        with m.Default():
-                            respond(Code.BAD_OP, cmd.op)
+                                m.d.sync += has_goal.eq(has_goal | k_goals)
+                            m.next = "LOAD"
+                    with m.Case(Op.SET):
+                        with m.If(~k_in_map):
+                            respond(Code.BAD_NODE, c.op)
+                        with m.Else():
+                            m.next = "SET"
+                    with m.Case(Op.START):
+                        with m.If(ctl.busy):
+                            respond(Code.BUSY, c.op)
+                        with m.Elif(k_p_bad):
+                            respond(Code.BAD_PRECISION, c.op)
+                        with m.Elif(k_iters0):
+                            respond(Code.BAD_ITERS, c.op)
+                        with m.Elif(~has_goal):
+                            respond(Code.NO_GOAL, c.op)
+                        with m.Else():
+                            m.next = "START_GO"
+                    with m.Case(Op.STATUS):
+                        respond(Code.OK, c.op)
+                    with m.Case(Op.READ, Op.DIRECTION):
+                        with m.If(~k_in_map):
+                            respond(Code.BAD_NODE, c.op)
+                        with m.Elif(ctl.busy):
+                            respond(Code.BUSY, c.op)
+                        with m.Else():
+                            m.d.sync += q.eq(0)
+                            m.next = "FETCH"
+                    with m.Default():
+                        respond(Code.BAD_OP, c.op)
             with m.State("START_GO"):       # the Controller starts from the registered command
                 m.next = "STARTED"
             with m.State("STARTED"):        # the response shows the run begun
