@@ -290,10 +290,15 @@ class Planner(wiring.Component):
         p_top = Signal(range(p_max + 2))
         rd_end = Signal(range(S + 2))
         m.d.sync += [p_top.eq(ctl.p + 1), rd_end.eq(ctl.p + 1 + READ_LATENCY)]
+        # The host port's cluster select is the register rd_ci in every state
+        # (LOAD and reads set it a cycle ahead; it only selects read data and
+        # gates host.we): no FSM state on the RAM's read multiplexer, which
+        # was the planner's critical path after DECODE (issue 17).
+        m.d.comb += host.cluster.eq(rd_ci)
         with m.If(rd_go):
             m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0)]
         with m.Elif(rd_busy):
-            m.d.comb += [host.addr.eq(rd_base + rd_j), host.cluster.eq(rd_ci)]
+            m.d.comb += host.addr.eq(rd_base + rd_j)
             m.d.sync += rd_j.eq(rd_j + 1)
             got = host.rdata.bit_select(rd_bit, 1)
             with m.If(rd_j == READ_LATENCY):
@@ -429,7 +434,7 @@ class Planner(wiring.Component):
                 respond(Code.OK, Op.START)
                 m.next = "IDLE"
             with m.State("LOAD"):
-                m.d.comb += [host.addr.eq(rd_base + load_a), host.cluster.eq(rd_ci)]
+                m.d.comb += host.addr.eq(rd_base + load_a)
                 with m.If(load_a == 0):
                     m.d.comb += host.wdata.eq(c.flags | c.goals)
                 with m.Elif(load_a == 1):
