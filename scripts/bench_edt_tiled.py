@@ -18,9 +18,11 @@ on the same machine in the same run: scipy.ndimage.distance_transform_edt
 (scripts/software.py, median of 3 runs, graph construction included).
 
 Clock: the tile engine's own, from place and route on the LFE5U-85F
-(``make fit TOP=edt_tile_engine PARAMS="t_r=R t_c=C max_h=224 max_w=224"
-PART=lfe5u-85f``: build/fit/<module>--LFE5U-85F.json, read here; the RAM
-of a 224x224 map: with 256x256 the engine needs 210 of the part's 208 EBRs
+(``make fit TOP=edt_tile_engine PARAMS="t_r=R t_c=C max_h=H max_w=W"
+PART=lfe5u-85f``: build/fit/<module>--LFE5U-85F.json, read here), of the
+engine that runs the job: the smallest of RAMS (128x128, 224x224) that
+holds the map (the cell's widths, hence its clock, follow the RAM's map
+size).  224x224 is the largest: with 256x256 the engine needs 210 of the part's 208 EBRs
 at 4x4, the state store 189..198 at T_c = 4..8 and the worklist, its queued
 bits, the frontier flags and the line buffer about 21 more;
 scripts/tile_engine_size.py --ram counts the store).  The job's time is
@@ -71,7 +73,8 @@ ARRAYS = ((8, 8), (16, 16))
 BENCH_ARRAYS = ((4, 4), (6, 6), (8, 8), (16, 16))
 DFAR = 0
 PART = "LFE5U-85F"
-RAM = (224, 224)            # the fitted tops' RAM (module docstring: 256x256 overflows the part's EBRs)
+RAMS = ((128, 128), (224, 224))     # the fitted engines' RAMs, smallest first (module docstring)
+RAM = RAMS[-1]                      # the largest (256x256 overflows the part's EBRs)
 SECTION = "EDT/BFS tile engine: whole jobs at its own clock against scipy (issue 18)"
 
 
@@ -89,6 +92,11 @@ def job(name):
         obstacle = np.kron(obstacle, np.ones((f, f), dtype=bool)).astype(bool)
         goal, start = (tuple(f * v + f // 2 for v in p) for p in (goal, start))
     return obstacle, goal, start
+
+
+def engine_ram(h, w):
+    """The RAM of the engine that runs an ``h`` x ``w`` map: the smallest of RAMS holding it, else the largest."""
+    return next((r for r in RAMS if h <= r[0] and w <= r[1]), RAM)
 
 
 def fit_result(array, ram=RAM, part=PART, top="edt_tile_engine"):
@@ -112,8 +120,9 @@ def measure(name, arrays=ARRAYS, repeats=3):
     ebr = ram_blocks(h, w, 8)["blocks"]
     rows = []
     in_ram = h <= RAM[0] and w <= RAM[1]
+    ram = engine_ram(h, w)
     for array in arrays:
-        fit = fit_result(array)
+        fit = fit_result(array, ram)
         mhz = fit["fmax_mhz"] if fit and fit["fits"] else None      # the engine's own clock, or none
         t0, c0 = time.perf_counter(), time.process_time()
         res = plan_path_tiled(obstacle, [goal], start, DFAR, array=array)
@@ -131,7 +140,7 @@ def measure(name, arrays=ARRAYS, repeats=3):
             "break_even_mhz": res.cycles / sw["sw_seconds"] / 1e6,
             "mhz": mhz,
             "hw_seconds": res.cycles / (mhz * 1e6) if mhz else None,
-            "fit": fit, "in_ram": in_ram,
+            "fit": fit, "in_ram": in_ram, "ram": ram,
             "cycles_per_visit": (st["cycles"]["edt"] + st["cycles"]["bfs"]) / max(1, st["visits_edt"] + st["visits_bfs"]),
             "state_bits": bits["total"], "ebr": ebr,
         })
@@ -186,9 +195,9 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
         else:
             lines.append(f"* maze512-1-0 at {a}: {_no_clock(r['fit'], r['array'])}; no time.")
     lines.append("")
-    fits = {tuple(r["array"]): r["fit"] for r in rows}
+    fits = {(tuple(r["array"]), tuple(r["ram"])): r["fit"] for r in rows}
     cell = cell_bound(arrays)
-    lines += [f"| tile engine on the {PART} (RAM {RAM[0]}x{RAM[1]}) | fits | LUT4 | FF | EBR | DSP | clock "
+    lines += [f"| tile engine on the {PART} (array, RAM) | fits | LUT4 | FF | EBR | DSP | clock "
               "| critical path |", "|---|---|---:|---:|---:|---:|---|---|"]
     if cell:
         cp = cell["critical_path"]
@@ -196,16 +205,17 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
                      f"| {cell['resources']['ff']} | 0 | 0 | {cell['fmax_mhz']:.1f} MHz (a bound on the engine's) "
                      f"| {cp['from']['cell']} -> {cp['to']['cell']} ({cp['to']['port']}), {cp['delay_ns']} ns, "
                      f"{cp['logic_levels']} levels |")
-    for array, fit in fits.items():
+    for (array, ram), fit in sorted(fits.items()):
+        name = f"{array[0]}x{array[1]}, RAM {ram[0]}x{ram[1]}"
         if fit is None:
-            lines.append(f"| {array[0]}x{array[1]} | {_no_clock(None, array)} | | | | | | |")
+            lines.append(f"| {name} | {_no_clock(None, array)} | | | | | | |")
             continue
         cp = fit.get("critical_path") or {}
         path = (f"{cp['from']['cell']} -> {cp['to']['cell']}, {cp.get('delay_ns', '?')} ns, "
                 f"{cp.get('logic_levels', '?')} levels" if cp else "-")
         clock = (f"{fit['fmax_mhz']:.1f} MHz (seeds " + ", ".join(f"{x['fmax_mhz']:.1f}" for x in fit["seeds"]) + ")"
                  if fit["fits"] else "-")
-        lines.append(f"| {array[0]}x{array[1]} | {'yes' if fit['fits'] else _no_clock(fit)} | {fit['lut4']:,} | {fit['ff']:,} "
+        lines.append(f"| {name} | {'yes' if fit['fits'] else _no_clock(fit)} | {fit['lut4']:,} | {fit['ff']:,} "
                      f"| {fit['bram']} | {fit['dsp']} | {clock} | {path} |")
     n = largest_map(LFE5U_85F_EBR, 8)
     lines += ["", f"| map | bits / pixel | state | EBRs (model's count, 8 pixels a word) | fits the {PART}'s "
@@ -240,7 +250,7 @@ def estimate(array):
     (lanes, controller, worklist) as measured in the smallest placed engine, or None without both.
     The rest grows a little with T_c (T_c + 2 lanes): an estimate, said so where it is shown."""
     cell = cell_bound([array])
-    placed = next((f for f in (fit_result(a) for a in BENCH_ARRAYS) if f), None)
+    placed = next((f for f in (fit_result(a, r) for r in reversed(RAMS) for a in BENCH_ARRAYS) if f), None)
     if not cell or not placed:
         return None
     t_r, t_c = placed["params"]["t_r"], placed["params"]["t_c"]
@@ -273,7 +283,8 @@ def section(maps=MAPS, arrays=ARRAYS):
             "Cycles are the tiled model's, which the regression proves equal to the tile engine's RTL; the cost "
             "breakdown: tile visits, cycles per visit (EDT and BFS cycles over their visits), RAM words moved "
             "against the floor of reading and writing each visited tile once. The clock is the tile engine's "
-            f"own (make fit, RAM {RAM[0]}x{RAM[1]}, median of the seeds in its JSON); an array that does not fit "
+            "own (make fit, median of the seeds in its JSON), the engine's RAM the smallest of "
+            + ", ".join(f"{r[0]}x{r[1]}" for r in RAMS) + " that holds the map; an array that does not fit "
             f"the {PART} or was not placed has no job time; maze512-1-0's state does not fit the part's block "
             "RAM: its time (marked ext.) assumes an external store with StateRam's timing (not built).\n\n" + text)
     return text
