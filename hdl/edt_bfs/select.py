@@ -1,0 +1,77 @@
+"""The cells' ADD-SUB / INC and flat MIN selection (Fig. 2 in the squared-distance form).
+
+Paper 004's cell takes the largest delta_i of its done neighbours through a
+tree of seven CMP-MUX in three levels, each keeping its left (lower-indexed)
+input unless the right one is valid and strictly greater, so the winner is
+the smallest index among the largest.  The cells here hold ``d2`` (or a BFS
+hop) where the paper holds delta = k^2 + k - d2 (:func:`models.edt_bfs.edt_step_d2`),
+so the tree is a MIN with the same tie-break, and it is built flat: the 28
+pairwise comparisons of the eight candidates at once, a one-hot winner, an
+AND-OR multiplexer.  The logic between the neighbours' registers and the
+cell's is then one comparator and a few LUT levels instead of seven
+comparators and multiplexers in series.  :class:`~hdl.edt_bfs.cell.EdtCell`
+and :class:`~hdl.edt_bfs.tile_cell.TileCell` share it, and the candidates
+before it (:func:`candidate`).
+"""
+
+from functools import reduce
+from operator import or_
+
+from amaranth.hdl import C, Cat, Mux, Signal, Value, signed
+
+from navcores.models.edt_bfs import OFFSETS
+
+__all__ = ["candidate", "min_select", "pick"]
+
+
+def candidate(m, i, d2, dx, dy, d2_shape, dx_bits, dy_bits):
+    """Neighbour p_i's proposal to the cell p: ``(d2_i, dx_i, dy_i)`` (eq. 1-3 in the d2 form).
+
+    With ``(sr, sc) = p - p_i``: INC ``dx_i = dx(p_i) + sr``, ``dy_i =
+    dy(p_i) + sc`` (eq. 1); ADD-SUB ``d2_i = d2(p_i) + DX_i + DY_i`` with
+    ``DX_i = 2 sr dx(p_i) + 1`` (0 when sr = 0), DY_i likewise (eq. 2), so
+    ``d2_i = dx_i^2 + dy_i^2`` = ``K(k-1) - delta_i`` of eq. 3.  ``d2_i`` is
+    computed in ``d2_shape`` (the caller states why it cannot wrap).
+    """
+    sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
+    # 2 sr dx + 1 without a multiplier: {dx, 1} or 1 - {dx, 0}
+    big_x = (Cat(C(1, 1), dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), dx).as_signed()) if sr else 0
+    big_y = (Cat(C(1, 1), dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), dy).as_signed()) if sc else 0
+    d = Signal(d2_shape, name=f"d2_{i}")
+    x = Signal(signed(dx_bits), name=f"dx_{i}")
+    y = Signal(signed(dy_bits), name=f"dy_{i}")
+    m.d.comb += [d.eq(d2 + big_x + big_y), x.eq((dx + sr) if sr else dx), y.eq((dy + sc) if sc else dy)]
+    return d, x, y
+
+
+def min_select(m, valid, keys):
+    """The one-hot winner of the MIN over the valid candidates, ties to the smallest index.
+
+    ``valid[i]``, ``keys[i]`` (unsigned, or all of one signedness) for
+    candidates i = 0 .. n-1 (neighbours 1 .. n).  Candidate i wins when it is
+    valid and no valid candidate beats it: one of lower index with a key <=
+    its own, or one of higher index with a smaller key (the CMP-MUX tree's
+    result).  Returns the list of ``win`` signals (all 0 when none is valid).
+    """
+    n = len(keys)
+    better = {}             # better[a, b], a < b: candidate b's key is smaller than a's
+    for a in range(n):
+        for b in range(a + 1, n):
+            better[a, b] = Signal(name=f"lt_{b + 1}_{a + 1}")
+            m.d.comb += better[a, b].eq(keys[b] < keys[a])
+    win = []
+    for i in range(n):
+        beaten = [valid[j] & ~better[j, i] for j in range(i)] + \
+                 [valid[j] & better[i, j] for j in range(i + 1, n)]
+        wi = Signal(name=f"win_{i + 1}")
+        m.d.comb += wi.eq(valid[i] & ~Cat(*beaten).any())
+        win.append(wi)
+    return win
+
+
+def pick(m, win, values, shape, name):
+    """The winner's value: an AND-OR multiplexer of ``values`` on the one-hot ``win`` (0 when none wins)."""
+    out = Signal(shape, name=name)
+    terms = [Mux(w, Value.cast(v).as_unsigned()[:len(out)], 0) for w, v in zip(win, values)]
+    m.d.comb += out.eq(reduce(or_, terms))
+    return out
