@@ -127,7 +127,7 @@ class TileArray(wiring.Component):
                     m.d.comb += [cell.phase.eq(self.phase), cell.step.eq(self.step), cell.k.eq(self.k),
                                  cell.kk.eq(self.kk), cell.clear.eq(self.clear), cell.load.eq(load),
                                  cell.ld.eq(lanes[b])]
-                    regs[a, b], nbs[a, b] = cell_layout(w)(cell.reg), cell.nb
+                    regs[a, b], nbs[a, b] = cell_layout(w)(cell.state), cell.nb
                 else:
                     # A halo cell: a register the lanes load, read by its tile neighbours.
                     bits, r = flat(cell_layout(w), f"halo_{a}_{b}")

@@ -72,7 +72,7 @@ class TileCell(wiring.Component):
         The neighbours' ``nb`` (``val``: d2 in the EDT, hop in the BFS).
     nb : Out(nb_layout's width)
         What the neighbours read.
-    reg : Out(cell_layout's width)
+    state : Out(cell_layout's width)
         The register (write-back, marks).
     upd : Out(1)
         This iteration changes the cell (combinational).
@@ -87,7 +87,7 @@ class TileCell(wiring.Component):
         cl, nl = cell_layout(w).size, nb_layout(w).size
         ports = {"phase": In(1), "step": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "clear": In(1), "load": In(1), "ld": In(cl)}
         ports.update({f"n{i}": In(nl) for i in OFFSETS})
-        ports.update({"nb": Out(nl), "reg": Out(cl), "upd": Out(1), "smark": Out(1)})
+        ports.update({"nb": Out(nl), "state": Out(cl), "upd": Out(1), "smark": Out(1)})
         super().__init__(ports)
 
     def elaborate(self, platform):
@@ -97,7 +97,7 @@ class TileCell(wiring.Component):
         # One register for the whole state (Icarus wakes one process per register per edge).
         r_bits, r = flat(cell_layout(w), "r")
         nb_out = nb_layout(w)(self.nb)
-        m.d.comb += [self.reg.eq(r_bits), nb_out.flag.eq(r.flag), nb_out.ram.eq(r.flag | r.fresh),
+        m.d.comb += [self.state.eq(r_bits), nb_out.flag.eq(r.flag), nb_out.ram.eq(r.flag | r.fresh),
                      nb_out.val.eq(r.val), nb_out.dx.eq(r.dx), nb_out.dy.eq(r.dy)]
         n = {i: nb_layout(w)(getattr(self, f"n{i}")) for i in OFFSETS}
 
