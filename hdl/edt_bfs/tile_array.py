@@ -155,7 +155,7 @@ class TileArray(wiring.Component):
                         if (a + dr, b + dc) in inside]
                 edt = x.present & ~x.flag & ~x.fresh & Cat(*[q.chg for _, q in near]).any()
                 # BFS: the best offer hop(q) + 1 of the tile neighbours that fell, the
-                # smallest index (seen from x) among equals, as x's own MAX tree takes it.
+                # smallest index (seen from x) among equals, as x's own MIN selection takes it.
                 vb, jb = near[0][1].chg, near[0][0]
                 best = named(m, f"offer_{a}_{b}_{jb}", near[0][1].val[:hb] + 1, hb + 1)
                 for j, q in near[1:]:
