@@ -4,10 +4,10 @@ from amaranth.hdl import C, Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
 
-from navcores.models.edt_bfs import widths
+from navcores.models.edt_bfs import OFFSETS, widths
 
 from ..params import Param, check, checked_init
-from .select import candidate, min_select, pick
+from .select import candidate, inc, min_select, pick
 
 __all__ = ["EdtCell", "cell_widths", "state_layout", "result_layout"]
 
@@ -166,7 +166,8 @@ def cell_logic(m, w, ctl, regs, nbs):
     cands = []
     for i in range(1, 9):
         nb = nbs[i]
-        d, x, y = candidate(m, i, nb.d2, nb.dx, nb.dy, signed(cw), w["dx"], w["dy"])
+        d = candidate(m, i, nb.d2, nb.dx, nb.dy, signed(cw))
+        x, y = inc(m, str(i), nb.dx, nb.dy, -OFFSETS[i][0], -OFFSETS[i][1], w["dx"], w["dy"])
         near = Signal(name=f"near_{i}")
         m.d.comb += near.eq(nb.done & (d <= ctl["kk"]))
         cands.append((nb.done, d, x, y, near))

@@ -10,8 +10,8 @@ pairwise comparisons of the eight candidates at once, a one-hot winner, an
 AND-OR multiplexer.  The logic between the neighbours' registers and the
 cell's is then one comparator and a few LUT levels instead of seven
 comparators and multiplexers in series.  :class:`~hdl.edt_bfs.cell.EdtCell`
-and :class:`~hdl.edt_bfs.tile_cell.TileCell` share it, and the candidates
-before it (:func:`candidate`).
+and :class:`~hdl.edt_bfs.tile_cell.TileCell` share it, and the ADD-SUB and
+INC around it (:func:`candidate`, :func:`inc`).
 """
 
 from functools import reduce
@@ -21,27 +21,34 @@ from amaranth.hdl import C, Cat, Mux, Signal, Value, signed
 
 from navcores.models.edt_bfs import OFFSETS
 
-__all__ = ["candidate", "min_select", "pick"]
+__all__ = ["candidate", "inc", "min_select", "pick"]
 
 
-def candidate(m, i, d2, dx, dy, d2_shape, dx_bits, dy_bits):
-    """Neighbour p_i's proposal to the cell p: ``(d2_i, dx_i, dy_i)`` (eq. 1-3 in the d2 form).
+def candidate(m, i, d2, dx, dy, d2_shape):
+    """ADD-SUB: neighbour p_i's squared distance to its obstacle seen from the cell p (eq. 2-3 in the d2 form).
 
-    With ``(sr, sc) = p - p_i``: INC ``dx_i = dx(p_i) + sr``, ``dy_i =
-    dy(p_i) + sc`` (eq. 1); ADD-SUB ``d2_i = d2(p_i) + DX_i + DY_i`` with
+    With ``(sr, sc) = p - p_i``: ``d2_i = d2(p_i) + DX_i + DY_i`` with
     ``DX_i = 2 sr dx(p_i) + 1`` (0 when sr = 0), DY_i likewise (eq. 2), so
-    ``d2_i = dx_i^2 + dy_i^2`` = ``K(k-1) - delta_i`` of eq. 3.  ``d2_i`` is
-    computed in ``d2_shape`` (the caller states why it cannot wrap).
+    ``d2_i = dx_i^2 + dy_i^2`` (:func:`inc`'s vector) = ``K(k-1) - delta_i``
+    of eq. 3.  Computed in ``d2_shape`` (the caller states why it cannot wrap).
     """
     sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
     # 2 sr dx + 1 without a multiplier: {dx, 1} or 1 - {dx, 0}
     big_x = (Cat(C(1, 1), dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), dx).as_signed()) if sr else 0
     big_y = (Cat(C(1, 1), dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), dy).as_signed()) if sc else 0
     d = Signal(d2_shape, name=f"d2_{i}")
-    x = Signal(signed(dx_bits), name=f"dx_{i}")
-    y = Signal(signed(dy_bits), name=f"dy_{i}")
-    m.d.comb += [d.eq(d2 + big_x + big_y), x.eq((dx + sr) if sr else dx), y.eq((dy + sc) if sc else dy)]
-    return d, x, y
+    m.d.comb += d.eq(d2 + big_x + big_y)
+    return d
+
+
+def inc(m, name, dx, dy, sr, sc, dx_bits, dy_bits):
+    """INC: the vector ``(dx + sr, dy + sc)`` (eq. 1); ``sr``, ``sc``: -1, 0, 1 or a signal holding one."""
+    x = Signal(signed(dx_bits), name=f"dx_{name}")
+    y = Signal(signed(dy_bits), name=f"dy_{name}")
+    def plus(v, step):
+        return v if isinstance(step, int) and step == 0 else v + step
+    m.d.comb += [x.eq(plus(dx, sr)), y.eq(plus(dy, sc))]
+    return x, y
 
 
 def min_select(m, valid, keys):

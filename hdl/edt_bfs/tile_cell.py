@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
-from .select import candidate, min_select, pick
+from .select import candidate, inc, min_select, pick
 from .tile_layouts import cell_layout, flat, nb_layout
 
 __all__ = ["TileCell"]
@@ -101,13 +101,14 @@ class TileCell(wiring.Component):
                      nb_out.val.eq(r.val), nb_out.dx.eq(r.dx), nb_out.dy.eq(r.dy)]
         n = {i: nb_layout(w)(getattr(self, f"n{i}")) for i in OFFSETS}
 
-        # ADD-SUB and INC (eq. 1-2 in the d2 form): one candidate per neighbour;
+        # ADD-SUB and INC (eq. 1-3 in the d2 form): one candidate per neighbour;
         # the key is d2_i (EDT) or the hop (BFS).  d2_i cannot wrap where it
         # counts (tile_layouts.tile_widths).
         cands = []
         for i in OFFSETS:
             nb = n[i]
-            d2, x, y = candidate(m, i, nb.val[:w["d2"]], nb.dx, nb.dy, w["d2"], w["dx"], w["dy"])
+            d2 = candidate(m, i, nb.val[:w["d2"]], nb.dx, nb.dy, w["d2"])
+            x, y = inc(m, str(i), nb.dx, nb.dy, -OFFSETS[i][0], -OFFSETS[i][1], w["dx"], w["dy"])
             key = Signal(w["val"], name=f"key_{i}")
             near = Signal(name=f"near_{i}")
             m.d.comb += [key.eq(Mux(self.phase, nb.val[:hb], d2)), near.eq(nb.flag & (d2 <= self.kk))]
