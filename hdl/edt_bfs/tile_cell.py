@@ -107,11 +107,10 @@ class TileCell(wiring.Component):
         cands = []
         for i in OFFSETS:
             nb = n[i]
-            d2 = candidate(m, i, nb.val[:w["d2"]], nb.dx, nb.dy, w["d2"])
+            key = candidate(m, i, nb.val, nb.dx, nb.dy, w["val"], gate=~self.phase)
             x, y = inc(m, str(i), nb.dx, nb.dy, -OFFSETS[i][0], -OFFSETS[i][1], w["dx"], w["dy"])
-            key = Signal(w["val"], name=f"key_{i}")
             near = Signal(name=f"near_{i}")
-            m.d.comb += [key.eq(Mux(self.phase, nb.val[:hb], d2)), near.eq(nb.flag & (d2 <= self.kk))]
+            m.d.comb += near.eq(nb.flag & (key <= self.kk))
             cands.append((nb.flag, key, x, y, nb.val[:hb], near))
 
         # MIN: flat, ties to the smallest index.
