@@ -101,9 +101,11 @@ class TileCell(wiring.Component):
                      nb_out.val.eq(r.val), nb_out.dx.eq(r.dx), nb_out.dy.eq(r.dy)]
         n = {i: nb_layout(w)(getattr(self, f"n{i}")) for i in OFFSETS}
 
-        # ADD-SUB and INC (eq. 1-3 in the d2 form): one candidate per neighbour;
-        # the key is d2_i (EDT) or the hop (BFS).  d2_i cannot wrap where it
-        # counts (tile_layouts.tile_widths).
+        # ADD-SUB and INC (eq. 1-3 in the d2 form): one candidate per neighbour.
+        # The key is d2_i (EDT) or the hop (BFS: DX_i, DY_i gated to 0, so the
+        # comparators take val as it is, a hop below 2^hop with the upper bits 0;
+        # one adder instead of an adder and a multiplexer in front of them).
+        # d2_i cannot wrap where it counts (tile_layouts.tile_widths).
         cands = []
         for i in OFFSETS:
             nb = n[i]
