@@ -24,12 +24,12 @@ vectors, far candidates and parents are asserted.
 import cocotb
 import numpy as np
 import pytest
-from cocotb.clock import Clock
 from cocotb.triggers import ReadOnly, RisingEdge, Timer
 
 from navcores.hdl.edt_bfs.tile_cell import TileCell
 from navcores.hdl.edt_bfs.tile_layouts import cell_layout, nb_layout, tile_widths
 from navcores.models.edt_bfs import OFFSETS, edt_step, k_square
+from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
 from navcores.sim.rtl.stream import pack, unpack
 
@@ -80,15 +80,10 @@ async def random_cycles(dut):
     H, W, hb = PARAMS["max_h"], PARAMS["max_w"], w["hop"]
     cl, nl = cell_layout(w), nb_layout(w)
     none_hop = (1 << hb) - 1
-    Clock(dut.clk, 10, unit="ns").start()
     for name in ("phase", "step", "clear", "load"):
         getattr(dut, name).value = 0
-    dut.rst.value = 1
-    await RisingEdge(dut.clk)
-    dut.rst.value = 0
-    await ReadOnly()
+    await start(dut)
     reg = unpack(cl, int(dut.state.value))
-    await Timer(1, unit="ns")
     counts = {"edt_en": 0, "edt_refused": 0, "not_first": 0, "ties": 0, "far": 0, "bfs_en": 0, "parent": 0, "smark": 0}
     for cyc in range(CYCLES):
         mode = rng.choice(["clear", "load", "edt", "bfs", "idle"], p=[0.05, 0.25, 0.4, 0.25, 0.05])
