@@ -47,6 +47,7 @@ def inc(m, name, dx, dy, sr, sc, dx_bits, dy_bits):
     """INC: the vector ``(dx + sr, dy + sc)`` (eq. 1); ``sr``, ``sc``: -1, 0, 1 or a signal holding one."""
     x = Signal(signed(dx_bits), name=f"dx_{name}")
     y = Signal(signed(dy_bits), name=f"dy_{name}")
+
     def plus(v, step):
         return v if isinstance(step, int) and step == 0 else v + step
     m.d.comb += [x.eq(plus(dx, sr)), y.eq(plus(dy, sc))]

@@ -85,7 +85,8 @@ class TileCell(wiring.Component):
         self.w = w
         # Plain vectors (the layouts are views inside): see tile_layouts.flat.
         cl, nl = cell_layout(w).size, nb_layout(w).size
-        ports = {"phase": In(1), "step": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "clear": In(1), "load": In(1), "ld": In(cl)}
+        ports = {"phase": In(1), "step": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "clear": In(1), "load": In(1),
+                 "ld": In(cl)}
         ports.update({f"n{i}": In(nl) for i in OFFSETS})
         ports.update({"nb": Out(nl), "state": Out(cl), "upd": Out(1), "smark": Out(1)})
         super().__init__(ports)

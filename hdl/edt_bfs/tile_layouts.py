@@ -51,7 +51,7 @@ def tile_widths(t_r, t_c, max_h, max_w):
     assert w["d2_max"] < 1 << d2 and w["k_max"] ** 2 + w["k_max"] < 1 << w["delta"], (w, d2)
     assert w["k_di"] ** 2 + w["k_di"] >= w["d2_max"] and w["k_max"] < 1 << w["k"], w
     assert max_h - 1 < 1 << (f["dx"] - 1) and max_w - 1 < 1 << (f["dy"] - 1), f
-    assert max_h * max_w < (1 << f["hop"]) - 1 and w["k_di"] < (1 << f["di"]) - 1, f
+    assert max_h * max_w <= (1 << f["hop"]) - 1 and w["k_di"] < (1 << f["di"]) - 1, f     # NONE above every value
     return {
         "di": f["di"], "dx": f["dx"], "dy": f["dy"], "hop": f["hop"], "parent": f["parent"],
         "bits": sum(f.values()),

@@ -1,4 +1,4 @@
-"""One TileCell (hdl/edt_bfs/tile_cell.py) against the paper's cell (models.edt_bfs.edt_step) and the BFS relaxation, every cycle.
+"""One TileCell (hdl/edt_bfs/tile_cell.py) against the paper's cell (models.edt_bfs.edt_step) and the BFS, every cycle.
 
 The cell holds the squared distance d2 where paper 004's cell holds delta;
 this test drives it with what the tile engine's loader gives it and checks
@@ -152,7 +152,8 @@ async def random_cycles(dut):
             valid = [i for i in OFFSETS if nb[i]["flag"]]
             if reg["present"] and not reg["flag"] and valid:
                 counts["edt_en" if changed else "edt_refused"] += 1
-                counts["far"] += changed and min(nb[i]["val"] for i in valid) > (H - 1) ** 2 + (W - 1) ** 2 - 8 * (H + W)
+                d2_max = (H - 1) ** 2 + (W - 1) ** 2
+                counts["far"] += changed and min(nb[i]["val"] for i in valid) > d2_max - 8 * (H + W)
                 if changed:
                     cand = {i: (nb[i]["dx"] - OFFSETS[i][0], nb[i]["dy"] - OFFSETS[i][1]) for i in valid}
                     best = min(x * x + y * y for x, y in cand.values())
