@@ -29,9 +29,11 @@ class TileCell(wiring.Component):
     ``d2_i = d2(p_i) + DX_i + DY_i``, ``DX_i = 2 sr dx(p_i) + 1``,
     ``dx_i = dx(p_i) + sr``), the MIN over the done neighbours picks the
     vector, and a present cell not done with a done neighbour becomes done
-    with ``di = k`` and the winner's vector when ``d2_m <= kk``
-    (tested on every candidate beside the selection: some done d2_i <= kk
-    iff the smallest does).  ``kk`` = K(k) = k^2 + k comes from the engine.
+    with ``di = k`` and the winner's vector when ``d2_m <= kk``, one
+    comparator on the winner's d2 (the untiled cell tests every candidate
+    beside the selection instead: here eight comparators cost 10 % of the
+    cell for 5 % of its clock).  ``kk`` = K(k) = k^2 + k comes from the
+    engine.
 
     This is the paper's cell, bit for bit.  The loader gives a done
     neighbour ``delta_{k-1}(p_i) = K(k-1) - d2(p_i)`` (the invariant of
@@ -112,22 +114,21 @@ class TileCell(wiring.Component):
             nb = n[i]
             key = candidate(m, i, nb.val, nb.dx, nb.dy, w["val"], gate=~self.phase)
             x, y = inc(m, str(i), nb.dx, nb.dy, -OFFSETS[i][0], -OFFSETS[i][1], w["dx"], w["dy"])
-            near = Signal(name=f"near_{i}")
-            m.d.comb += near.eq(nb.flag & (key <= self.kk))
-            cands.append((nb.flag, key, x, y, nb.val[:hb], near))
+            cands.append((nb.flag, key, x, y, nb.val[:hb]))
 
-        # MIN: flat, ties to the smallest index.
+        # MIN: flat, ties to the smallest index; the winner's d2 (EDT), vector, hop (BFS), index.
         win = min_select(m, [c[0] for c in cands], [c[1] for c in cands])
         xm = pick(m, win, [c[2] for c in cands], signed(w["dx"]), "x_m")
         ym = pick(m, win, [c[3] for c in cands], signed(w["dy"]), "y_m")
+        km = pick(m, win, [c[1] for c in cands], w["val"], "key_m")
         hm = pick(m, win, [c[4] for c in cands], hb, "hop_m")
         im = pick(m, win, list(OFFSETS), 4, "i_m")
         vm = Signal(name="v_m")
         m.d.comb += vm.eq(Cat(*[c[0] for c in cands]).any())
 
-        # EDT: the third enable, d2_m <= kk (delta_m + 2k >= 0), on every candidate.
+        # EDT: the third enable, d2_m <= kk (delta_m + 2k >= 0), on the winner's d2.
         en_edt = Signal(name="en_edt")
-        m.d.comb += en_edt.eq(self.step & ~self.phase & r.present & ~r.flag & Cat(*[c[5] for c in cands]).any())
+        m.d.comb += en_edt.eq(self.step & ~self.phase & r.present & ~r.flag & vm & (km <= self.kk))
 
         # BFS: m = the smallest visited neighbour hop.
         m1 = Signal(hb + 1, name="m1")
