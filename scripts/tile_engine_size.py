@@ -104,11 +104,11 @@ def stat(log):
     """Cell counts of the last ``stat`` in a yosys log."""
     text = Path(log).read_text()
     tail = text[text.rindex("Printing statistics"):]
-    cells = {m[2]: int(m[1]) for m in re.finditer(r"^\s+(\d+)\s+(?:[\d.]+\s+)?\$?(\S+)$", tail, re.M)
-             if not m[2].startswith("$")} if False else {}
+    cells = {}
+    # "  CELL  COUNT" (older yosys) or "  COUNT  [AREA]  CELL" (yosys 0.70)
     for m in re.finditer(r"^\s+(\S+)\s+(\d+)\s*$", tail, re.M):
         cells[m[1]] = int(m[2])
-    for m in re.finditer(r"^\s+(\d+)\s+\S*\s*(\S+)\s*$", tail, re.M):
+    for m in re.finditer(r"^\s+(\d+)\s+(?:[\d.]+\s+)?(\S+)\s*$", tail, re.M):
         cells.setdefault(m[2], int(m[1]))
     return cells
 

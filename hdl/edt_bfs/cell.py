@@ -1,8 +1,5 @@
 """One cell of the EDT/NNT + BFS array (paper 004, section IV, Fig. 2)."""
 
-from functools import reduce
-from operator import or_
-
 from amaranth.hdl import C, Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, wiring
 from amaranth.lib.wiring import In, Out
@@ -10,6 +7,7 @@ from amaranth.lib.wiring import In, Out
 from navcores.models.edt_bfs import OFFSETS, widths
 
 from ..params import Param, check, checked_init
+from .select import candidate, inc, min_select, pick
 
 __all__ = ["EdtCell", "cell_widths", "state_layout", "result_layout"]
 
@@ -168,44 +166,17 @@ def cell_logic(m, w, ctl, regs, nbs):
     cands = []
     for i in range(1, 9):
         nb = nbs[i]
-        sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
-        big_x = (Cat(C(1, 1), nb.dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), nb.dx).as_signed()) if sr else 0
-        big_y = (Cat(C(1, 1), nb.dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), nb.dy).as_signed()) if sc else 0
-        d = Signal(signed(cw), name=f"d2_{i}")
-        m.d.comb += d.eq(nb.d2 + big_x + big_y)
-        x = Signal(signed(w["dx"]), name=f"dx_{i}")
-        y = Signal(signed(w["dy"]), name=f"dy_{i}")
-        m.d.comb += [x.eq((nb.dx + sr) if sr else nb.dx), y.eq((nb.dy + sc) if sc else nb.dy)]   # INC (eq. 1)
+        d = candidate(m, i, nb.d2, nb.dx, nb.dy, signed(cw))
+        x, y = inc(m, str(i), nb.dx, nb.dy, -OFFSETS[i][0], -OFFSETS[i][1], w["dx"], w["dy"])
         near = Signal(name=f"near_{i}")
         m.d.comb += near.eq(nb.done & (d <= ctl["kk"]))
         cands.append((nb.done, d, x, y, near))
 
-    # MIN: candidate i wins when it is valid and no valid candidate beats it:
-    # one of lower index with a d2 <= its own, or of higher index with a
-    # smaller d2 (the CMP-MUX tree's result: the smallest index among the
-    # smallest d2).  One comparator per pair, all at once.
-    better = {}             # better[a, b], a < b: candidate b's d2 is smaller than a's
-    for a in range(8):
-        for b in range(a + 1, 8):
-            better[a, b] = Signal(name=f"lt_{b + 1}_{a + 1}")
-            m.d.comb += better[a, b].eq(cands[b][1] < cands[a][1])
-    win = []
-    for i in range(8):
-        beaten = [cands[j][0] & ~better[j, i] for j in range(i)] + \
-                 [cands[j][0] & better[i, j] for j in range(i + 1, 8)]
-        wi = Signal(name=f"win_{i + 1}")
-        m.d.comb += wi.eq(cands[i][0] & ~Cat(*beaten).any())
-        win.append(wi)
-
-    def pick(field, shape, name):
-        """The winner's ``field``: an AND-OR multiplexer on the one-hot ``win``."""
-        out = Signal(shape, name=name)
-        terms = [Mux(win[i], cands[i][field].as_unsigned()[:len(out)], 0) for i in range(8)]
-        m.d.comb += out.eq(reduce(or_, terms))
-        return out
-    dm = pick(1, w["delta"], "d2_m")
-    xm = pick(2, signed(w["dx"]), "x_m")
-    ym = pick(3, signed(w["dy"]), "y_m")
+    # MIN (flat, ties to the smallest index: the CMP-MUX tree's result).
+    win = min_select(m, [c[0] for c in cands], [c[1] for c in cands])
+    dm = pick(m, win, [c[1] for c in cands], w["delta"], "d2_m")
+    xm = pick(m, win, [c[2] for c in cands], signed(w["dx"]), "x_m")
+    ym = pick(m, win, [c[3] for c in cands], signed(w["dy"]), "y_m")
     en_edt = Signal(name="en_edt")
     m.d.comb += en_edt.eq(ctl["step_edt"] & ~regs.done & Cat(*[c[4] for c in cands]).any())
 

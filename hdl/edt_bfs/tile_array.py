@@ -43,8 +43,8 @@ class TileArray(wiring.Component):
     The loader's lanes (one per window column) turn a RAM pixel into a cell
     register: EDT level k: ``flag`` = done before the level (``di <= k-1``:
     a halo pixel made done earlier in the level, ``di = k``, is masked and
-    ``fresh``), ``val`` = the paper's delta entering iteration k,
-    ``k(k-1) - dx^2 - dy^2`` (the untiled invariant; two squarers per lane),
+    ``fresh``), ``val`` = d2 = ``dx^2 + dy^2`` (two squarers per lane; the
+    paper's delta entering iteration k is ``k(k-1) - d2``, :class:`TileCell`),
     ``aux`` = di; BFS: ``flag`` = visited (hop != NONE), ``cfr`` = not done or
     ``di > d_far``, ``chg`` = a root (hop 0), ``val`` = hop, ``aux`` =
     parent.  Every flag is gated by ``present`` (``ld_present``, the lane's
@@ -55,8 +55,8 @@ class TileArray(wiring.Component):
     -----
     phase : In(1)
         0: EDT, 1: BFS.
-    k : In, kk1 : In
-        The level k and k(k-1) (EDT).
+    k : In, kk : In
+        The level k and K(k) = k^2 + k (EDT: di of a new pixel, the cells' threshold).
     dfar : In
         d_far (the cfr, BFS).
     clear : In(1)
@@ -84,7 +84,7 @@ class TileArray(wiring.Component):
         self.t_r, self.t_c, self.w = t_r, t_c, w
         px = pixel_layout(w)
         super().__init__({
-            "phase": In(1), "k": In(w["k"]), "kk1": In(w["delta"]), "dfar": In(w["di"]),
+            "phase": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "dfar": In(w["di"]),
             "clear": In(1),
             "ld_en": In(1), "ld_row": In(range(t_r + 2)), "ld_px": In(data.ArrayLayout(px, t_c + 2)),
             "ld_present": In(t_c + 2),
@@ -107,7 +107,7 @@ class TileArray(wiring.Component):
                          v.chg.eq(present & (px.hop == 0)), v.val.eq(px.hop), v.aux.eq(px.parent)]
         with m.Else():
             m.d.comb += [v.flag.eq(present & (px.di < self.k)), v.fresh.eq(present & (px.di == self.k)),
-                         v.val.eq(self.kk1 - sq), v.aux.eq(px.di)]
+                         v.val.eq(sq), v.aux.eq(px.di)]
         return bits
 
     def elaborate(self, platform):
@@ -125,8 +125,9 @@ class TileArray(wiring.Component):
                     cell = cells[a, b] = TileCell(w)
                     m.submodules[f"cell_{a - 1}_{b - 1}"] = cell
                     m.d.comb += [cell.phase.eq(self.phase), cell.step.eq(self.step), cell.k.eq(self.k),
-                                 cell.clear.eq(self.clear), cell.load.eq(load), cell.ld.eq(lanes[b])]
-                    regs[a, b], nbs[a, b] = cell_layout(w)(cell.reg), cell.nb
+                                 cell.kk.eq(self.kk), cell.clear.eq(self.clear), cell.load.eq(load),
+                                 cell.ld.eq(lanes[b])]
+                    regs[a, b], nbs[a, b] = cell_layout(w)(cell.state), cell.nb
                 else:
                     # A halo cell: a register the lanes load, read by its tile neighbours.
                     bits, r = flat(cell_layout(w), f"halo_{a}_{b}")
@@ -154,7 +155,7 @@ class TileArray(wiring.Component):
                         if (a + dr, b + dc) in inside]
                 edt = x.present & ~x.flag & ~x.fresh & Cat(*[q.chg for _, q in near]).any()
                 # BFS: the best offer hop(q) + 1 of the tile neighbours that fell, the
-                # smallest index (seen from x) among equals, as x's own MAX tree takes it.
+                # smallest index (seen from x) among equals, as x's own MIN selection takes it.
                 vb, jb = near[0][1].chg, near[0][0]
                 best = named(m, f"offer_{a}_{b}_{jb}", near[0][1].val[:hb] + 1, hb + 1)
                 for j, q in near[1:]:

@@ -1,11 +1,12 @@
-"""One cell of the tile engine's array: Fig. 2's EDT cell and the BFS relaxation on one MAX tree."""
+"""One cell of the tile engine's array: Fig. 2's EDT cell in the squared-distance form and the BFS relaxation."""
 
-from amaranth.hdl import C, Cat, Module, Mux, Signal, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import wiring
 from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
+from .select import candidate, inc, min_select, pick
 from .tile_layouts import cell_layout, flat, nb_layout
 
 __all__ = ["TileCell"]
@@ -15,20 +16,40 @@ class TileCell(wiring.Component):
     """A pixel of the tile: paper 004's cell (Fig. 2) for the EDT, a hop relaxation for the BFS.
 
     Neighbour i = 1..8 as in Fig. 1 (``6 2 5 / 3 0 1 / 7 4 8``); at the
-    tile's edge the neighbours are the halo's registers.
+    tile's edge the neighbours are the halo's registers.  Both phases share
+    one flat MIN selection (:func:`~hdl.edt_bfs.select.min_select`: the 28
+    pairwise comparisons of the eight keys at once, a one-hot winner, the
+    smallest index among the smallest key; AND-OR multiplexers), as the
+    untiled :class:`~hdl.edt_bfs.cell.EdtCell`.
 
-    *EDT* (one iteration k per visit, :func:`models.edt_bfs.edt_step`):
-    ADD-SUB and INC give each neighbour's candidate (eq. 1-3:
-    ``delta_i = delta(p_i) - DX_i - DY_i``, ``dx_i = dx(p_i) + sr``), the MAX
-    tree of seven CMP-MUX in three levels takes the largest over the done
-    neighbours, ties to the smallest index (a CMP-MUX keeps its left input
-    unless the right one is valid and strictly greater), and the +2k adder's
-    sign is the third enable: a present cell not done with a done neighbour
-    and ``delta_m + 2k >= 0`` becomes done with ``di = k`` and the winner's
-    vector.  delta is not kept: the loader rebuilds it each level.
+    *EDT* (one iteration k per visit, :func:`models.edt_bfs.edt_step`, computed
+    here as :func:`models.edt_bfs.edt_step_d2`): a neighbour shows ``d2`` =
+    dx^2 + dy^2 where the paper's cell shows delta.  ADD-SUB and INC give
+    each neighbour's candidate (eq. 1-2, :func:`~hdl.edt_bfs.select.candidate`:
+    ``d2_i = d2(p_i) + DX_i + DY_i``, ``DX_i = 2 sr dx(p_i) + 1``,
+    ``dx_i = dx(p_i) + sr``), the MIN over the done neighbours picks the
+    vector, and a present cell not done with a done neighbour becomes done
+    with ``di = k`` and the winner's vector when ``d2_m <= kk``, one
+    comparator on the winner's d2 (the untiled cell tests every candidate
+    beside the selection instead: here eight comparators cost 10 % of the
+    cell for 5 % of its clock).  ``kk`` = K(k) = k^2 + k comes from the
+    engine.
 
-    *BFS* (relaxation, one iteration per clock): the same tree on the key
-    ``~hop`` (largest key = smallest hop, ties to the smallest index) gives
+    This is the paper's cell, bit for bit.  The loader gives a done
+    neighbour ``delta_{k-1}(p_i) = K(k-1) - d2(p_i)`` (the invariant of
+    :mod:`models.edt_bfs`, with K(k-1) = k(k-1)), so eq. 3 gives
+    ``delta_i = K(k-1) - DX_i - DY_i - d2(p_i) = K(k-1) - d2_i``: delta_i is
+    a strictly decreasing function of d2_i, so the MAX tree's winner (the
+    largest delta_i, ties to the smallest index) is the MIN's (the smallest
+    d2_i, ties to the smallest index), and the third enable, the +2k
+    adder's sign ``delta_m + 2k >= 0`` (eq. 4's growth, applied to the
+    winner), is ``K(k-1) + 2k - d2_m = k^2 + k - d2_m >= 0``, i.e.
+    ``d2_m <= kk``.  The engine keeps kk as it kept k(k-1), by increments
+    (``kk += 2k + 2`` as k becomes k + 1).  d2 is not kept: the visit runs
+    one iteration, and the loader computes each level's d2 from the vector.
+
+    *BFS* (relaxation, one iteration per clock): the same MIN on the
+    neighbours' ``hop`` (smallest hop, ties to the smallest index) gives
     ``m`` and its index; a cfr cell with a visited neighbour takes
     ``hop = m + 1`` when that is below its hop (or it is not visited); the
     parent register takes that index when ``hop = m + 1`` (else 0) in every
@@ -42,16 +63,18 @@ class TileCell(wiring.Component):
     step : In(1)
         Run one iteration.
     k : In(k bits)
-        The EDT's level (the paper's iteration number).
+        The EDT's level (the paper's iteration number k: di of a new cell).
+    kk : In(kk bits)
+        K(k) = k^2 + k (:func:`models.edt_bfs.k_square`), the EDT's threshold.
     clear : In(1)
         Clear ``present``, ``flag``, ``fresh``, ``cfr``, ``chg`` (a visit's schedule).
     load : In(1), ld : In(cell_layout's width)
         Load the register from the loader's lane (``clear`` and ``load`` win over ``step``).
     n1 .. n8 : In(nb_layout's width)
-        The neighbours' ``nb``.
+        The neighbours' ``nb`` (``val``: d2 in the EDT, hop in the BFS).
     nb : Out(nb_layout's width)
         What the neighbours read.
-    reg : Out(cell_layout's width)
+    state : Out(cell_layout's width)
         The register (write-back, marks).
     upd : Out(1)
         This iteration changes the cell (combinational).
@@ -64,57 +87,52 @@ class TileCell(wiring.Component):
         self.w = w
         # Plain vectors (the layouts are views inside): see tile_layouts.flat.
         cl, nl = cell_layout(w).size, nb_layout(w).size
-        ports = {"phase": In(1), "step": In(1), "k": In(w["k"]), "clear": In(1), "load": In(1), "ld": In(cl)}
+        ports = {"phase": In(1), "step": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "clear": In(1), "load": In(1),
+                 "ld": In(cl)}
         ports.update({f"n{i}": In(nl) for i in OFFSETS})
-        ports.update({"nb": Out(nl), "reg": Out(cl), "upd": Out(1), "smark": Out(1)})
+        ports.update({"nb": Out(nl), "state": Out(cl), "upd": Out(1), "smark": Out(1)})
         super().__init__(ports)
 
     def elaborate(self, platform):
         m = Module()
         w = self.w
-        kw, hb = w["key"], w["hop"]
+        hb = w["hop"]
         # One register for the whole state (Icarus wakes one process per register per edge).
         r_bits, r = flat(cell_layout(w), "r")
         nb_out = nb_layout(w)(self.nb)
-        m.d.comb += [self.reg.eq(r_bits), nb_out.flag.eq(r.flag), nb_out.ram.eq(r.flag | r.fresh),
+        m.d.comb += [self.state.eq(r_bits), nb_out.flag.eq(r.flag), nb_out.ram.eq(r.flag | r.fresh),
                      nb_out.val.eq(r.val), nb_out.dx.eq(r.dx), nb_out.dy.eq(r.dy)]
         n = {i: nb_layout(w)(getattr(self, f"n{i}")) for i in OFFSETS}
 
-        # ADD-SUB and INC (eq. 1-3), or the BFS key: one candidate per neighbour.
+        # ADD-SUB and INC (eq. 1-3 in the d2 form): one candidate per neighbour.
+        # The key is d2_i (EDT) or the hop (BFS: DX_i, DY_i gated to 0, so the
+        # comparators take val as it is, a hop below 2^hop with the upper bits 0;
+        # one adder instead of an adder and a multiplexer in front of them).
+        # d2_i cannot wrap where it counts (tile_layouts.tile_widths).
         cands = []
-        for i, (dr, dc) in OFFSETS.items():
+        for i in OFFSETS:
             nb = n[i]
-            sr, sc = -dr, -dc                   # p - p_i
-            big_x = (Cat(C(1, 1), nb.dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), nb.dx).as_signed()) if sr else 0
-            big_y = (Cat(C(1, 1), nb.dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), nb.dy).as_signed()) if sc else 0
-            key = Signal(signed(kw), name=f"key_{i}")
-            m.d.comb += key.eq(Mux(self.phase, ~nb.val[:hb], nb.val - big_x - big_y))
-            cands.append((nb.flag, key, (nb.dx + sr) if sr else nb.dx, (nb.dy + sc) if sc else nb.dy, C(i, 4)))
+            key = candidate(m, i, nb.val, nb.dx, nb.dy, w["val"], gate=~self.phase)
+            x, y = inc(m, str(i), nb.dx, nb.dy, -OFFSETS[i][0], -OFFSETS[i][1], w["dx"], w["dy"])
+            cands.append((nb.flag, key, x, y, nb.val[:hb]))
 
-        # MAX: seven CMP-MUX in three levels, ties to the left (smaller index).
-        def cmp_mux(a, b, name):
-            sel = Signal(name=f"sel_{name}")
-            m.d.comb += sel.eq(b[0] & (~a[0] | (b[1] > a[1])))
-            out = []
-            for j, shape in enumerate((1, signed(kw), signed(w["dx"]), signed(w["dy"]), 4)):
-                s = Signal(shape, name=f"{'vkxyi'[j]}_{name}")
-                m.d.comb += s.eq(a[0] | b[0] if j == 0 else Mux(sel, b[j], a[j]))
-                out.append(s)
-            return out
+        # MIN: flat, ties to the smallest index; the winner's d2 (EDT), vector, hop (BFS), index.
+        win = min_select(m, [c[0] for c in cands], [c[1] for c in cands])
+        xm = pick(m, win, [c[2] for c in cands], signed(w["dx"]), "x_m")
+        ym = pick(m, win, [c[3] for c in cands], signed(w["dy"]), "y_m")
+        km = pick(m, win, [c[1] for c in cands], w["val"], "key_m")
+        hm = pick(m, win, [c[4] for c in cands], hb, "hop_m")
+        im = pick(m, win, list(OFFSETS), 4, "i_m")
+        vm = Signal(name="v_m")
+        m.d.comb += vm.eq(Cat(*[c[0] for c in cands]).any())
 
-        l1 = [cmp_mux(cands[j], cands[j + 1], f"{j + 1}{j + 2}") for j in (0, 2, 4, 6)]
-        l2 = [cmp_mux(l1[0], l1[1], "1234"), cmp_mux(l1[2], l1[3], "5678")]
-        vm, km, xm, ym, im = cmp_mux(l2[0], l2[1], "m")
-
-        # EDT: the +2k adder, its sign the third enable.
-        dnew = Signal(signed(kw + 1), name="dnew")
-        m.d.comb += dnew.eq(km + Cat(C(0, 1), self.k))
+        # EDT: the third enable, d2_m <= kk (delta_m + 2k >= 0), on the winner's d2.
         en_edt = Signal(name="en_edt")
-        m.d.comb += en_edt.eq(self.step & ~self.phase & r.present & ~r.flag & vm & ~dnew[-1])
+        m.d.comb += en_edt.eq(self.step & ~self.phase & r.present & ~r.flag & vm & (km <= self.kk))
 
         # BFS: m = the smallest visited neighbour hop.
         m1 = Signal(hb + 1, name="m1")
-        m.d.comb += m1.eq(~km[:hb] + 1)
+        m.d.comb += m1.eq(hm + 1)
         hop = r.val[:hb]
         en_bfs = Signal(name="en_bfs")
         m.d.comb += en_bfs.eq(self.step & self.phase & r.cfr & vm & (~r.flag | (m1 < hop)))

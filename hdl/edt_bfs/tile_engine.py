@@ -236,11 +236,11 @@ class TileEngine(wiring.Component):
         want_readout = Signal()
         bfs = Signal()                            # phase: 0 EDT, 1 BFS
         k = Signal(w["k"])
-        kk1 = Signal(w["delta"])
+        kk = Signal(w["kk"])                      # K(k) = k^2 + k: the cells' EDT threshold (TileCell)
         rem = Signal(range(work.depth + 1))       # tiles of W_k still queued
 
         # -- the array's broadcast inputs
-        m.d.comb += [arr.phase.eq(bfs), arr.k.eq(k), arr.kk1.eq(kk1), arr.dfar.eq(dfar)]
+        m.d.comb += [arr.phase.eq(bfs), arr.k.eq(k), arr.kk.eq(kk), arr.dfar.eq(dfar)]
 
         # -- after a phase: the next one (and its first registers)
         cur = Signal(goal_layout(w))              # path: the pixel read / shown
@@ -292,7 +292,7 @@ class TileEngine(wiring.Component):
                     start.col.eq(cmd.start_col), want_path.eq(cmd.path), want_readout.eq(cmd.readout),
                     self.start_err.eq(cmd.path & ((cmd.start_row >= cmd.height) | (cmd.start_col >= cmd.width))),
                     self.goal_err.eq(0), self.path_found.eq(0), self.levels.eq(0), self.tile_visits.eq(0),
-                    bfs.eq(0), k.eq(0), kk1.eq(0), lr.eq(0), lw.eq(0), ltr.eq(0), lj.eq(0),
+                    bfs.eq(0), k.eq(0), kk.eq(0), lr.eq(0), lw.eq(0), ltr.eq(0), lj.eq(0),
                 ]
                 goto("LOAD")
         m.d.comb += [self.c_stream.ready.eq(at["IDLE"]), self.busy.eq(~at["IDLE"]),
@@ -350,7 +350,7 @@ class TileEngine(wiring.Component):
 
         # -- LEVEL: W_{k+1} becomes W_k
         with m.If(at["LEVEL"]):
-            m.d.sync += [k.eq(k + 1), kk1.eq(kk1 + (k << 1)), self.levels.eq(self.levels + 1),
+            m.d.sync += [k.eq(k + 1), kk.eq(kk + (k << 1) + 2), self.levels.eq(self.levels + 1),
                          rem.eq(work.count)]
             goto("SCHED0")
 

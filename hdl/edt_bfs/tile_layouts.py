@@ -3,8 +3,9 @@
 One pixel's RAM state is :func:`models.edt_bfs_tiled.state_bits`' word: ``di``
 (NONE = all ones while not done), signed ``dx`` / ``dy`` (the NNT vector
 p - nearest obstacle), ``hop`` (NONE = all ones while not visited) and
-``parent`` (0..8).  done, visited, the cfr and the paper's delta are derived
-where a tile is loaded, so they cost no RAM bits.  The RAM holds
+``parent`` (0..8).  done, visited, the cfr and the squared distance d2
+(the paper's delta = k^2 + k - d2) are derived where a tile is loaded, so
+they cost no RAM bits.  The RAM holds
 ``p = T_c`` pixels of a map row per word, and two *field groups* per word
 that are written separately: the EDT's (di, dx, dy) and the BFS's
 (hop, parent).
@@ -28,25 +29,34 @@ def _bits(n):
 
 
 def tile_widths(t_r, t_c, max_h, max_w):
-    """Widths of a ``t_r`` x ``t_c`` engine whose RAM holds maps up to ``max_h`` x ``max_w``.
+    """Widths of a ``t_r`` x ``t_c`` engine whose RAM holds maps up to ``max_h`` x ``max_w``, checked.
 
     ``di``, ``dx``, ``dy``, ``hop``, ``parent``: the RAM fields
     (:func:`models.edt_bfs_tiled.state_bits`); ``k``: the level counter
-    (1..k_di, :func:`models.edt_bfs.widths`); ``delta``: the paper's delta of
-    a done pixel entering level k, ``k(k-1) - dx^2 - dy^2`` in 0..k_max^2;
-    ``key``: the MAX tree's key, signed: the EDT's candidate delta_i (eq. 3,
-    ``widths``' ``cand``) or the BFS's complemented hop; ``val``: the cell
-    register holding delta (EDT) or hop (BFS).
+    (1..k_max, :func:`models.edt_bfs.widths`); ``kk``: ``K(k) = k^2 + k``
+    (0..k_max^2 + k_max), the cells' EDT threshold; ``d2``: the squared
+    distance ``dx^2 + dy^2`` of a done pixel and a cell's candidate d2_i,
+    both at most ``d2_max = (max_h-1)^2 + (max_w-1)^2`` (a candidate only
+    counts for a cell inside the map with a done neighbour, and then its
+    vector ``p - q`` joins two pixels of the map: eq. 1, invariant E of
+    :mod:`models.edt_bfs_tiled`); ``val``: the cell register holding d2
+    (EDT) or hop (BFS), and the MIN selection's unsigned key: the EDT's
+    candidate d2_i or the BFS's hop.
     """
     w = widths(max_h, max_w)
     f = state_bits(max_h, max_w)["fields"]
     words = -(-max_w // t_c)
+    d2 = _bits(w["d2_max"])
+    # the bounds the docstring states, checked at elaboration
+    assert w["d2_max"] < 1 << d2 and w["k_max"] ** 2 + w["k_max"] < 1 << w["delta"], (w, d2)
+    assert w["k_di"] ** 2 + w["k_di"] >= w["d2_max"] and w["k_max"] < 1 << w["k"], w
+    assert max_h - 1 < 1 << (f["dx"] - 1) and max_w - 1 < 1 << (f["dy"] - 1), f
+    assert max_h * max_w <= (1 << f["hop"]) - 1 and w["k_di"] < (1 << f["di"]) - 1, f     # NONE above every value
     return {
         "di": f["di"], "dx": f["dx"], "dy": f["dy"], "hop": f["hop"], "parent": f["parent"],
         "bits": sum(f.values()),
-        "k": w["k"], "k_di": w["k_di"], "delta": w["delta"],
-        "key": max(w["cand"], f["hop"] + 1),
-        "val": max(w["delta"], f["hop"]),
+        "k": w["k"], "k_di": w["k_di"], "kk": w["delta"], "d2": d2,
+        "val": max(d2, f["hop"]),
         "row": _bits(max_h - 1), "col": _bits(max_w - 1),
         "height": _bits(max_h), "width": _bits(max_w),
         "words": words,                                   # word columns of the widest map
@@ -79,8 +89,8 @@ def cell_layout(w):
     di <= k-1) / visited (BFS, hop != NONE); ``fresh``: a halo pixel made done
     earlier in this level (di = k); ``cfr``: in the collision-free region;
     ``chg``: this visit made the pixel done (EDT) / lowered its hop, or it is
-    a root (BFS); ``val``: delta (EDT) / hop (BFS); ``dx``, ``dy``: the
-    vector; ``aux``: di (EDT) / parent (BFS).
+    a root (BFS); ``val``: d2 = dx^2 + dy^2 as loaded (EDT) / hop (BFS);
+    ``dx``, ``dy``: the vector; ``aux``: di (EDT) / parent (BFS).
     """
     return data.StructLayout({
         "present": 1, "flag": 1, "fresh": 1, "cfr": 1, "chg": 1,

@@ -1,0 +1,87 @@
+"""The cells' ADD-SUB / INC and flat MIN selection (Fig. 2 in the squared-distance form).
+
+Paper 004's cell takes the largest delta_i of its done neighbours through a
+tree of seven CMP-MUX in three levels, each keeping its left (lower-indexed)
+input unless the right one is valid and strictly greater, so the winner is
+the smallest index among the largest.  The cells here hold ``d2`` (or a BFS
+hop) where the paper holds delta = k^2 + k - d2 (:func:`models.edt_bfs.edt_step_d2`),
+so the tree is a MIN with the same tie-break, and it is built flat: the 28
+pairwise comparisons of the eight candidates at once, a one-hot winner, an
+AND-OR multiplexer.  The logic between the neighbours' registers and the
+cell's is then one comparator and a few LUT levels instead of seven
+comparators and multiplexers in series.  :class:`~hdl.edt_bfs.cell.EdtCell`
+and :class:`~hdl.edt_bfs.tile_cell.TileCell` share it, and the ADD-SUB and
+INC around it (:func:`candidate`, :func:`inc`).
+"""
+
+from functools import reduce
+from operator import or_
+
+from amaranth.hdl import C, Cat, Mux, Signal, Value, signed
+
+from navcores.models.edt_bfs import OFFSETS
+
+__all__ = ["candidate", "inc", "min_select", "pick"]
+
+
+def candidate(m, i, d2, dx, dy, d2_shape, gate=None):
+    """ADD-SUB: neighbour p_i's squared distance to its obstacle seen from the cell p (eq. 2-3 in the d2 form).
+
+    With ``(sr, sc) = p - p_i``: ``d2_i = d2(p_i) + DX_i + DY_i`` with
+    ``DX_i = 2 sr dx(p_i) + 1`` (0 when sr = 0), DY_i likewise (eq. 2), so
+    ``d2_i = dx_i^2 + dy_i^2`` (:func:`inc`'s vector) = ``K(k-1) - delta_i``
+    of eq. 3.  Computed in ``d2_shape`` (the caller states why it cannot wrap).
+    ``gate``: where 0, DX_i and DY_i are 0 and ``d2_i = d2(p_i)`` (a cell
+    whose comparators also serve another key, the tile cell's BFS hop).
+    """
+    sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
+    # 2 sr dx + 1 without a multiplier: {dx, 1} or 1 - {dx, 0}
+    big_x = (Cat(C(1, 1), dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), dx).as_signed()) if sr else 0
+    big_y = (Cat(C(1, 1), dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), dy).as_signed()) if sc else 0
+    d = Signal(d2_shape, name=f"d2_{i}")
+    m.d.comb += d.eq(d2 + big_x + big_y if gate is None else d2 + Mux(gate, big_x + big_y, 0))
+    return d
+
+
+def inc(m, name, dx, dy, sr, sc, dx_bits, dy_bits):
+    """INC: the vector ``(dx + sr, dy + sc)`` (eq. 1); ``sr``, ``sc``: -1, 0, 1 or a signal holding one."""
+    x = Signal(signed(dx_bits), name=f"dx_{name}")
+    y = Signal(signed(dy_bits), name=f"dy_{name}")
+
+    def plus(v, step):
+        return v if isinstance(step, int) and step == 0 else v + step
+    m.d.comb += [x.eq(plus(dx, sr)), y.eq(plus(dy, sc))]
+    return x, y
+
+
+def min_select(m, valid, keys):
+    """The one-hot winner of the MIN over the valid candidates, ties to the smallest index.
+
+    ``valid[i]``, ``keys[i]`` (unsigned, or all of one signedness) for
+    candidates i = 0 .. n-1 (neighbours 1 .. n).  Candidate i wins when it is
+    valid and no valid candidate beats it: one of lower index with a key <=
+    its own, or one of higher index with a smaller key (the CMP-MUX tree's
+    result).  Returns the list of ``win`` signals (all 0 when none is valid).
+    """
+    n = len(keys)
+    better = {}             # better[a, b], a < b: candidate b's key is smaller than a's
+    for a in range(n):
+        for b in range(a + 1, n):
+            better[a, b] = Signal(name=f"lt_{b + 1}_{a + 1}")
+            m.d.comb += better[a, b].eq(keys[b] < keys[a])
+    win = []
+    for i in range(n):
+        beaten = [valid[j] & ~better[j, i] for j in range(i)] + \
+                 [valid[j] & better[i, j] for j in range(i + 1, n)]
+        wi = Signal(name=f"win_{i + 1}")
+        m.d.comb += wi.eq(valid[i] & ~Cat(*beaten).any())
+        win.append(wi)
+    return win
+
+
+def pick(m, win, values, shape, name):
+    """The winner's value: an AND-OR multiplexer of ``values`` on the one-hot ``win`` (0 when none wins)."""
+    out = Signal(shape, name=name)
+    terms = [Mux(w, Value.cast(v).as_unsigned()[:len(out)], 0) for w, v in zip(win, values)]
+    m.d.comb += out.eq(reduce(or_, terms))
+    return out
