@@ -17,7 +17,6 @@ results cached under build/cache), and writes ``build/fit/<module>--<part>.json`
                   logic levels, nets (cells core.* are the core's)
   tools           yosys and nextpnr versions, as the tools report them
   router          nextpnr's router (--router; router1 unless asked)
-  placer_density  the placer's largest local density (--density; null: nextpnr's 0.9)
   cells, utilisation, target_mhz, synthesis, harness, seconds
 
 and prints one summary line.  Parts (case-insensitive): LFE5U-12F / 25F /
@@ -57,9 +56,6 @@ def parse_args(argv):
     ap.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="seeds placed at once (default 2)")
     ap.add_argument("--router", default="router1", choices=fmax.ROUTERS,
                     help="nextpnr's router (default router1; router2 for large arrays)")
-    ap.add_argument("--density", type=float,
-                    help="the placer's largest local density, 0 < d <= 1 (nextpnr's default 0.9; "
-                         "lower spreads a large regular array so that it routes)")
     ap.add_argument("--out", help="output JSON (default build/fit/<module>--<part>.json)")
     ap.error = _fail
     args = ap.parse_args(argv)
@@ -74,8 +70,6 @@ def parse_args(argv):
         _fail(f"--seeds {args.seeds}: must be odd, 1..99 (the median is one seed's figure)")
     if args.jobs < 1:
         _fail(f"--jobs {args.jobs}: must be >= 1")
-    if args.density is not None and not 0 < args.density <= 1:
-        _fail(f"--density {args.density}: must be in (0, 1]")
     try:
         args.part = fmax.part(args.part)
         args.params = fmax.parse(fmax.params_of(args.top)[0], args.params)
@@ -128,7 +122,7 @@ def main(argv=None):
     out = output_path(args)
     try:
         result = fmax.fit(args.top, args.params, args.part, seeds=tuple(range(1, args.seeds + 1)),
-                          jobs=args.jobs, progress=_progress(), router=args.router, density=args.density)
+                          jobs=args.jobs, progress=_progress(), router=args.router)
     except (fmax.FlowError, toolchain.ToolError) as e:
         _fail(str(e).splitlines()[0], 1)
     except KeyboardInterrupt:
@@ -136,8 +130,7 @@ def main(argv=None):
     result["generator"] = " ".join(["python scripts/fit.py", args.top,
                                     *(f"{k}={v}" for k, v in sorted(args.params.items())),
                                     "--part", args.part.name, "--seeds", str(args.seeds),
-                                    *(("--router", args.router) if args.router != "router1" else ()),
-                                    *(("--density", str(args.density)) if args.density is not None else ())])
+                                    *(("--router", args.router) if args.router != "router1" else ())])
     result["date"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     tmp = _temporary(out)
     tmp.write_text(json.dumps(result, indent=1) + "\n")

@@ -243,26 +243,20 @@ def critical_path(report):
 ROUTERS = ("router1", "router2")
 
 
-def place(netlist, prt, seed, progress=None, router="router1", density=None):
+def place(netlist, prt, seed, progress=None, router="router1"):
     """One nextpnr run of ``netlist`` on ``prt`` with ``seed``: a dict with
     seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow.
 
     ``router`` is nextpnr's router: router1 (its default, used for every
     figure unless a JSON says otherwise) or router2, which resolves the
     congestion of large regular arrays (a 24x48 harmonic block did not
-    converge in two hours of router1).  ``density`` (0 < d <= 1) is the
-    analytic placer's largest local density (``--placer-heap-beta``;
-    nextpnr's default 0.9 packs a small design into a corner of a large
-    part, where regular arrays of many short nets congest the router)."""
+    converge in two hours of router1)."""
     if router not in ROUTERS:
         raise ValueError(f"router {router!r}: one of {', '.join(ROUTERS)}")
-    if density is not None and not 0 < density <= 1:
-        raise ValueError(f"density {density}: must be in (0, 1]")
     pin_flag = "--lpf-allow-unconstrained" if prt.family == "ecp5" else "--pcf-allow-unconstrained"
     args = [*prt.device_args, "--json", "{netlist}", pin_flag, "--seed", str(seed),
             "--freq", str(prt.target_mhz), "--timing-allow-fail", "--report", "report.json",
-            "--log", "nextpnr.log", "-q", *(("--router", router) if router != "router1" else ()),
-            *(("--placer-heap-beta", str(density)) if density is not None else ())]
+            "--log", "nextpnr.log", "-q", *(("--router", router) if router != "router1" else ())]
     run = toolchain.run(prt.nextpnr, args, {"netlist": netlist}, progress)
     log = run.text("nextpnr.log")
     util = utilisation(log)
@@ -301,7 +295,7 @@ def _took(run):
     return " (cached)" if cached else f" ({seconds:.0f} s)"
 
 
-def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1", density=None):
+def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1"):
     """The fit of ``name`` at ``params`` on Part ``prt``: a JSON-ready dict
     (see scripts/fit.py).  Raises FlowError when a tool fails otherwise than
     by the design's size, toolchain.ToolError when a tool is missing."""
@@ -327,7 +321,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
     def one(seed):
         if progress:
             progress(f"{module} on {prt.name}, seed {seed}: placing and routing")
-        r = place(netlist, prt, seed, progress, router, density)
+        r = place(netlist, prt, seed, progress, router)
         if progress:
             what = (f"{r['fmax_mhz']:.1f} MHz" if "fmax_mhz" in r else
                     "does not fit: " + ", ".join(f"{o['resource']} {o['used']}/{o['available']}"
@@ -361,7 +355,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
         "synthesis": prt.synth + (f" (+ {packed} read registers packed into DP16KD OUTREG: scripts/ecp5_pack.py)"
                                    if packed else ""),
         "tools": {"yosys": syn.version, "nextpnr": first["version"]},
-        "router": router, "placer_density": density,
+        "router": router,
         "seconds": {"synthesis": syn.seconds, "place_and_route": [r["seconds"] for r in runs],
                     "cached": syn.cached and all(r["cached"] for r in runs)},
     }

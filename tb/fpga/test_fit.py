@@ -96,8 +96,7 @@ def test_too_large_does_not_fit(tmp_path):
     (["harmonic_node"], "give a PART"),
     (["harmonic_node", "--part", "LFE5U-85F", "--seeds", "2"], "--seeds 2"),
     (["harmonic_node", "--part", "LFE5U-85F", "--router", "router3"], "invalid choice: 'router3'"),
-    (["harmonic_node", "--part", "LFE5U-85F", "--density", "1.5"], "--density 1.5"),
-], ids=["top", "param-range", "param-name", "part", "no-part", "even-seeds", "router", "density"])
+], ids=["top", "param-range", "param-name", "part", "no-part", "even-seeds", "router"])
 def test_refusals(tmp_path, args, says):
     out = tmp_path / "x.json"
     r = fit(*args, out=out)
