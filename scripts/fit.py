@@ -55,7 +55,7 @@ def parse_args(argv):
     ap.add_argument("--seeds", type=int, default=3, help="place-and-route seeds, odd (default 3; the median is reported)")
     ap.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="seeds placed at once (default 2)")
     ap.add_argument("--router", default="router1", choices=fmax.ROUTERS,
-                    help="nextpnr's router (default router1; router2 for large arrays)")
+                    help="nextpnr's router (default router1)")
     ap.add_argument("--out", help="output JSON (default build/fit/<module>--<part>.json)")
     ap.error = _fail
     args = ap.parse_args(argv)

@@ -248,9 +248,9 @@ def place(netlist, prt, seed, progress=None, router="router1"):
     seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow.
 
     ``router`` is nextpnr's router: router1 (its default, used for every
-    figure unless a JSON says otherwise) or router2, which resolves the
-    congestion of large regular arrays (a 24x48 harmonic block did not
-    converge in two hours of router1)."""
+    figure unless a JSON says otherwise) or router2 (faster on large
+    designs; neither routed a harmonic block of 18x36 or more here:
+    hdl/harmonic/README.md)."""
     if router not in ROUTERS:
         raise ValueError(f"router {router!r}: one of {', '.join(ROUTERS)}")
     pin_flag = "--lpf-allow-unconstrained" if prt.family == "ecp5" else "--pcf-allow-unconstrained"
