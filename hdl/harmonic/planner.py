@@ -531,9 +531,9 @@ class Planner(wiring.Component):
         m.d.comb += [
             self.i_stream.ready.eq(fsm.ongoing("IDLE") & ~self.o_stream.valid),
             accept.eq(fsm.ongoing("IDLE") & self.i_stream.valid & ~self.o_stream.valid),
-            # START is checked when taken and run from the registered command a
-            # cycle later (START_GO): the stream's payload -> the checks -> the
-            # Controller's 48-bit counters was one path (issue 17)
+            # START is checked in DECODE (its checks registered when taken) and
+            # run from the registered command a cycle later (START_GO): the
+            # checks -> the Controller's 48-bit counters was one path (issue 17)
             ctl.start.eq(fsm.ongoing("START_GO")), ctl.p1.eq(c.p1), ctl.step.eq(c.step),
             ctl.p_last.eq(c.p_last), ctl.iters.eq(c.iters),
             ctl.order.valid.eq(fsm.ongoing("SET")), ctl.order.payload.br.eq(c_br),
