@@ -1,12 +1,17 @@
 """The one cocotb runner of the project: (top, parameters, simulator) -> a run.
 
 Each (simulator, top module, parameter set) gets its own build directory
-``build/sim/<sim>/<module>/`` holding its own emitted Verilog, so parallel runs
-never share a build, and a rerun only recompiles when the Verilog changed.
+``build/sim/<sim>/<module>/``, so parallel runs never share a build; the
+Verilog is emitted once per top and parameter set for both simulators
+(``build/sim/verilog/<module>/``, :func:`_emitted`), and a rerun only
+recompiles when the Verilog changed.
 """
 
 import contextlib
 import fcntl
+import hashlib
+import inspect
+import json
 import os
 import random
 import shutil
@@ -105,6 +110,40 @@ def run(name, params, sim, test_module, env=None, seed=None, log_file=None, fact
                                build_args)
 
 
+def _source_digest(factory):
+    """A digest of everything an emitted top depends on: the hdl and models
+    layers' sources, the factory's module (a test's own top), Amaranth's version."""
+    import amaranth
+
+    from navcores import hdl, models
+
+    h = hashlib.sha256(amaranth.__version__.encode())
+    files = sorted(f for pkg in (hdl, models) for d in pkg.__path__ for f in Path(d).rglob("*.py"))
+    if factory is not None:
+        files.append(Path(inspect.getsourcefile(factory)))
+    for f in files:
+        h.update(str(f).encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()
+
+
+def _emitted(name, params, factory, module, emit):
+    """The top's Verilog, emitted once for both simulators and every test that
+    runs it (build/sim/verilog/<module>/): elaborating and converting a large
+    top takes seconds, and the regression runs the same top from several
+    tests.  Emitted again when its sources or parameters change (a key file
+    beside it); an unchanged file keeps its time stamp, so the simulators'
+    builds are reused too."""
+    out = BUILD / "sim" / "verilog" / module
+    key = hashlib.sha256(json.dumps([name, params, getattr(factory, "__qualname__", None),
+                                     _source_digest(factory)], sort_keys=True, default=str).encode()).hexdigest()
+    with _locked(out):
+        source, stamp = out / f"{module}.v", out / ".key"
+        if not (source.exists() and stamp.exists() and stamp.read_text() == key):
+            source = emit(name, params, out, factory=factory)
+            stamp.write_text(key)
+    return source
+
+
 @contextlib.contextmanager
 def _locked(build_dir):
     build_dir.mkdir(parents=True, exist_ok=True)
@@ -123,7 +162,7 @@ def _build_and_test(name, params, sim, test_module, env, seed, log_file, module,
     from navcores.hdl.emit import emit
 
     waves = os.environ.get("WAVES") == "1"          # WAVES=1: dump a waveform
-    source = emit(name, params, build_dir, factory=factory)
+    source = _emitted(name, params, factory, module, emit)
     runner = get_runner(sim)
     runner.build(
         sources=[source],
