@@ -110,15 +110,19 @@ def run(name, params, sim, test_module, env=None, seed=None, log_file=None, fact
                                build_args)
 
 
-def _source_digest(factory):
+def _source_digest(params, factory):
     """A digest of everything an emitted top depends on: the hdl and models
-    layers' sources, the factory's module (a test's own top), Amaranth's version."""
+    layers' files (sources and data such as the shipped .fll rule bases), a
+    file a parameter names (a test's .fll), the factory's module (a test's
+    own top), Amaranth's version."""
     import amaranth
 
     from navcores import hdl, models
 
     h = hashlib.sha256(amaranth.__version__.encode())
-    files = sorted(f for pkg in (hdl, models) for d in pkg.__path__ for f in Path(d).rglob("*.py"))
+    files = sorted(f for pkg in (hdl, models) for d in pkg.__path__ for f in Path(d).rglob("*")
+                   if f.is_file() and "__pycache__" not in f.parts)
+    files += [Path(v) for v in params.values() if isinstance(v, str) and Path(v).is_file()]
     if factory is not None:
         files.append(Path(inspect.getsourcefile(factory)))
     for f in files:
@@ -134,8 +138,8 @@ def _emitted(name, params, factory, module, emit):
     beside it); an unchanged file keeps its time stamp, so the simulators'
     builds are reused too."""
     out = BUILD / "sim" / "verilog" / module
-    key = hashlib.sha256(json.dumps([name, params, getattr(factory, "__qualname__", None),
-                                     _source_digest(factory)], sort_keys=True, default=str).encode()).hexdigest()
+    what = [name, params, getattr(factory, "__qualname__", None), _source_digest(params, factory)]
+    key = hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()
     with _locked(out):
         source, stamp = out / f"{module}.v", out / ".key"
         if not (source.exists() and stamp.exists() and stamp.read_text() == key):
