@@ -7,7 +7,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
-from .tile_layouts import named
+from .tile_layouts import named, times
 
 __all__ = ["Worklist", "tile_layout"]
 
@@ -105,7 +105,7 @@ class Worklist(wiring.Component):
         wq = [named(m, n, v, shape) for n, v, shape in (
             ("wq_r", wr_tile.r // 3, range(sr)), ("wm_r", wr_tile.r % 3, 2),
             ("wq_c", wr_tile.c // 3, range(sc)), ("wm_c", wr_tile.c % 3, 2))]
-        waddr = named(m, "waddr", wq[0] * sc + wq[2], range(sr * sc))
+        waddr = named(m, "waddr", times(wq[0], sc) + wq[2], range(sr * sc))
 
         at = self.look_at
         lr, lm = named(m, "lq_r", at.r // 3, range(sr)), named(m, "lm_r", at.r % 3, 2)
@@ -132,7 +132,7 @@ class Worklist(wiring.Component):
                 mem = Memory(shape=1, depth=sr * sc, init=[])
                 m.submodules[f"queued{a}{b}"] = mem
                 qrp, qwp = mem.read_port(), mem.write_port()
-                m.d.comb += [qrp.addr.eq(Mux(oka & okb, qa * sc + qb, 0)), qrp.en.eq(self.look),
+                m.d.comb += [qrp.addr.eq(Mux(oka & okb, times(qa, sc) + qb, 0)), qrp.en.eq(self.look),
                              qwp.addr.eq(waddr), qwp.data.eq(wr_val),
                              qwp.en.eq(wr_en & (wq[1] == a) & (wq[3] == b))]
                 bits[a, b] = qrp.data
