@@ -340,7 +340,7 @@ class TileEngine(wiring.Component):
         push = Signal()
         push_tile = Signal(tile_layout(w))
         m.d.comb += [work.push.eq(push), work.push_tile.eq(push_tile)]
-        queued_after = named(m, "queued_after", work.count + push != 0)     # the FIFO after this cycle
+        queued_after = named(m, "queued_after", (work.count != 0) | push)   # the FIFO after this cycle (no adder)
         with m.If(at["SCAN"]):
             m.d.comb += [push.eq(flag), push_tile.r.eq(sr), push_tile.c.eq(sc),
                          work.clear.eq(~flag), work.clear_tile.r.eq(sr), work.clear_tile.c.eq(sc)]
