@@ -162,8 +162,9 @@ ready, counted from the command (exclusive) to the last beat:
     goals      = goal * len(goals)      read the goal's word, write hop 0 and push its tile
                                         (when in the cfr and not queued) in the same beat
     BFS        = sum over visits: visit
-    path       = latency + len(path)    (latency + 1 without a path; 0 without a start)
-    readout    = latency + H * W        optional: every pixel, one per beat
+    path       = 1 + latency * len(path)   (1 + latency without a path; 0 without a start):
+                                        each pixel's read needs the previous one's parent
+    readout    = latency + H * W        optional: every pixel, one per beat (reads run ahead)
 
     visit(t)   = sched + latency + read_beats(t) + iterations + max(write_beats(t), marks)
 
@@ -174,9 +175,13 @@ relaxation's count per BFS visit; ``marks``: the tiles the visit enqueues
 (self, then each marked direction in Fig. 1 order, when not already queued:
 the engine reads the queued bits of the tile's 3 x 3 tile neighbourhood
 while it schedules the visit), one per beat during the store.  The
-constants are :class:`Timing`'s.  Words moved counts every word read or
-written; the floor is each visit reading and writing each pixel of its tile
-once, ``2 ceil(T_r T_c / p)`` words per visit.
+constants are :class:`Timing`'s; the RTL's (``Timing()``): sched 2 (pop,
+window set-up), latency 2 (the block RAM's read register and its output
+register, which keeps the RAM's slow data output off the clock's paths),
+level 1, goal 3 (= 1 + latency: issue the read, wait for the word).
+Words moved counts every word read or written; the floor is each visit
+reading and writing each pixel of its tile once, ``2 ceil(T_r T_c / p)``
+words per visit.
 """
 
 from collections import deque
@@ -199,9 +204,9 @@ LFE5U_85F_EBR = 208
 class Timing:
     """Cycle constants of the tile engine (module docstring, cycle model)."""
     sched: int = 2        # pop the worklist, set up the window's addresses
-    latency: int = 1      # RAM read latency before the first word of a burst
+    latency: int = 2      # RAM read latency before the first word of a burst (read + output register)
     level: int = 1        # EDT: swap the worklists of levels k and k+1
-    goal: int = 2         # per goal: read its word (cfr?), write hop 0 and push its tile
+    goal: int = 3         # per goal: read its word (cfr?; 1 + latency), write hop 0 and push its tile
 
     def __post_init__(self):
         for name in ("sched", "latency", "level", "goal"):
@@ -634,7 +639,7 @@ def plan_path_tiled(obstacle, goals, start, dfar, array=(8, 8), word_pixels=None
     parent = eng.plain(eng.parent).copy()
     path = trace_path(visited, parent, start)
     if start is not None:
-        eng.cycles["path"] = tm.latency + (len(path) if path else 1)
+        eng.cycles["path"] = 1 + tm.latency * (len(path) if path else 1)
     if readout:
         eng.cycles["readout"] = tm.latency + h * w
     rows, cols = np.indices((h, w))

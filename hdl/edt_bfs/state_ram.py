@@ -5,7 +5,7 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..ram_init import undefined_memory
-from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, flat, named, pixel_layout
+from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, flat, named, pixel_layout, times
 
 __all__ = ["StateRam", "StateSignature", "read_layout", "read_data_layout", "write_layout", "BANKS"]
 
@@ -49,8 +49,9 @@ class StateSignature(wiring.Signature):
     answer the cycle it is valid while it loads a tile, so a store with a
     variable latency needs no buffer of its own beyond the pipeline.  The
     engine's cycle counts (:mod:`models.edt_bfs_tiled`'s cycle model) assume
-    what :class:`StateRam` gives: commands always ready, answers one cycle
-    after the command, a read and a write in the same cycle.
+    what :class:`StateRam` gives: commands always ready, answers two cycles
+    after the command (``Timing.latency``), reads pipelined (a command every
+    cycle while the answers are taken), a read and a write in the same cycle.
     """
 
     def __init__(self, w, p):
@@ -88,8 +89,10 @@ class StateRam(wiring.Component):
     max_h : int
         Rows of the largest map.
 
-    Ports: :class:`StateSignature`.  Reads: latency 1, one per cycle
-    (``rd.ready`` is low only while an answer waits for ``rd_data.ready``);
+    Ports: :class:`StateSignature`.  Reads: latency 2 (the memory's read
+    register, then an output register: the DP16KD's, scripts/ecp5_pack.py),
+    one per cycle, pipelined: two answers in flight; ``rd.ready`` is low only
+    while both stages are full and the answer waits for ``rd_data.ready``;
     the answer is held until taken.  Writes: always ready, one per cycle.
     """
 
@@ -110,25 +113,33 @@ class StateRam(wiring.Component):
         w, p = self.w, self.p
         S = self.stride
 
-        # Reads: bank b reads whichever of wcol - 1, wcol, wcol + 1 it holds.
+        # Reads: bank b reads whichever of wcol - 1, wcol, wcol + 1 it holds.  Two stages: the
+        # memory's own read register (stage 1), then a data register per memory (stage 2), which
+        # the fit flow packs into the DP16KD's output register (scripts/ecp5_pack.py): the
+        # answer leaves a register, not the RAM's 5.8 ns data output.  A stage holds while the
+        # one after it is full and not taken.
         cmd = self.rd.payload
         q = named(m, "rd_q", cmd.wcol // BANKS, range(max(S, 2)))        # no 0-bit signal
         r = named(m, "rd_r", cmd.wcol % BANKS, range(BANKS))
-        base = named(m, "rd_base", cmd.row * S, range(self.depth))
-        take = Signal()
-        m.d.comb += [take.eq(self.rd.valid & self.rd.ready),
-                     self.rd.ready.eq(~self.rd_data.valid | self.rd_data.ready)]
+        base = named(m, "rd_base", times(cmd.row, S), range(self.depth))
+        take, s1_valid, adv1, adv2 = Signal(), Signal(), Signal(), Signal()
+        m.d.comb += [adv2.eq(~self.rd_data.valid | self.rd_data.ready),     # stage 2 may load
+                     adv1.eq(~s1_valid | adv2),                              # stage 1 may load
+                     self.rd.ready.eq(adv1), take.eq(self.rd.valid & adv1)]
+        with m.If(adv1):
+            m.d.sync += s1_valid.eq(take)
+        with m.If(adv2):
+            m.d.sync += self.rd_data.valid.eq(s1_valid)
+        rot1 = Signal(range(BANKS))         # bank of the middle word, in stage 1
+        rot = Signal(range(BANKS))          # and as the answer leaves (stage 2)
         with m.If(take):
-            m.d.sync += self.rd_data.valid.eq(1)
-        with m.Elif(self.rd_data.ready):
-            m.d.sync += self.rd_data.valid.eq(0)
-        rot = Signal(range(BANKS))          # bank of the middle word, as the answer leaves
-        with m.If(take):
-            m.d.sync += rot.eq(r)
+            m.d.sync += rot1.eq(r)
+        with m.If(adv2):
+            m.d.sync += rot.eq(rot1)
         words = []
         wcmd = self.wr.payload
         wr_ = named(m, "wr_r", wcmd.wcol % BANKS, range(BANKS))
-        waddr = named(m, "wr_addr", wcmd.row * S + wcmd.wcol // BANKS, range(self.depth))
+        waddr = named(m, "wr_addr", times(wcmd.row, S) + wcmd.wcol // BANKS, range(self.depth))
         for k in range(BANKS):
             # (k - r) mod 3: 0 middle, 1 right (k = r + 1), 2 left
             rel = Signal(range(BANKS), name=f"rel{k}")
@@ -144,12 +155,16 @@ class StateRam(wiring.Component):
                 m.submodules[f"{g}{k}"] = mem
                 rp = mem.read_port()
                 wp = mem.write_port()
+                # reset-less, as the DP16KD output register it becomes (no set/reset to pack)
+                held = Signal(group.size, name=f"{g}{k}_q", reset_less=True)
+                with m.If(adv2):
+                    m.d.sync += held.eq(rp.data)
                 m.d.comb += [rp.addr.eq(addr), rp.en.eq(take),
                              wp.addr.eq(waddr), wp.en.eq(self.wr.valid & getattr(wcmd, g) & (wr_ == k))]
                 fields = EDT_FIELDS if g == "edt" else BFS_FIELDS
                 wd = group(wp.data)
                 m.d.comb += [getattr(wd[j], f).eq(getattr(wcmd.word[j], f)) for j in range(p) for f in fields]
-                got.append((fields, group(rp.data)))
+                got.append((fields, group(held)))
             _, word = flat(data.ArrayLayout(pixel_layout(w), p), f"bank{k}")
             for fields, d in got:
                 m.d.comb += [getattr(word[j], f).eq(getattr(d[j], f)) for j in range(p) for f in fields]

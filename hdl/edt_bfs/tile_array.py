@@ -37,8 +37,9 @@ class TileArray(wiring.Component):
     window row per ``ld_en`` beat (row ``ld_row`` of the (T_r + 2) x (T_c + 2)
     window, only the rows inside the map), the iterations (``step``), then
     the store: ``wb`` shows tile row ``wb_row`` and ``marks`` the tiles to
-    mark, both combinational from the registers, which the store does not
-    change.
+    mark, from the registers, which the store does not change (the BFS
+    marks through a register of their own: valid from the cycle after the
+    visit's last iteration).
 
     The loader's lanes (one per window column) turn a RAM pixel into a cell
     register: EDT level k: ``flag`` = done before the level (``di <= k-1``:
@@ -166,12 +167,15 @@ class TileArray(wiring.Component):
                     jb = named(m, f"from_{a}_{b}_{j}", Mux(sel, j, jb), 4)
                 hop_x = x.val[:hb]
                 bfs = x.cfr & vb & ((best < hop_x) | ((best == hop_x) & (jb < x.aux[:4])))
-                hit = Signal(name=f"mark_{a}_{b}")
-                m.d.comb += hit.eq(Mux(self.phase, bfs, edt))
-                hits.append(hit)
-            dirs.append(Cat(*hits).any())
+                hits.append((named(m, f"mark_edt_{a}_{b}", edt), named(m, f"mark_bfs_{a}_{b}", bfs)))
+            dirs.append([Cat(*[h[g] for h in hits]).any() for g in range(2)])
+        # The BFS marks' offer chains are registered: in the store they show the registers of the
+        # cycle before, which are the final ones, since a BFS visit's last iteration lowers no hop
+        # (so sets no chg) and the halo registers change only at the load.
+        bfs_dirs = Signal(8)
+        m.d.sync += bfs_dirs.eq(Cat(*[d[1] for d in dirs]))
         self_mark = ~self.phase & Cat(*[c.smark for c in cells.values()]).any()
-        m.d.comb += self.marks.eq(Cat(self_mark, *dirs))
+        m.d.comb += self.marks.eq(Cat(self_mark, Mux(self.phase, bfs_dirs, Cat(*[d[0] for d in dirs]))))
 
         # Write-back: tile row wb_row, each pixel's fields from its register.
         rows = []

@@ -11,7 +11,7 @@ from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
 from .state_ram import StateRam
 from .tile_array import TileArray
-from .tile_layouts import named, pixel_layout, tile_widths
+from .tile_layouts import named, pixel_layout, tile_widths, times
 from .worklist import Worklist, tile_layout
 
 STATES = ("IDLE", "LOAD", "SCAN", "LEVEL", "SCHED0", "SCHED1", "READ", "ITER", "STORE",
@@ -142,17 +142,20 @@ class TileEngine(wiring.Component):
         ``trace``).
 
     Timing (:mod:`models.edt_bfs_tiled`'s cycle model, ``Timing()``: sched
-    2, latency 1, level 1, goal 2; source always valid, sink always ready;
-    cycles from the command's handshake, exclusive, to the last busy cycle)::
+    2, latency 2, level 1, goal 3; source always valid, sink always ready;
+    cycles from the command's handshake, exclusive, to the last busy cycle;
+    the RAM's read latency 2 is its read register and its output register,
+    which keeps the block RAM's slow data output off the clock's paths)::
 
         load    = H * ceil(W / T_c)          one map word per beat (the frontier flags on the fly)
         scan    = tiles                      W_1: one tile per cycle
         EDT     = sum over levels (1 + sum over the level's visits: visit)
-        goals   = 2 * goals                  read the goal's word; write hop 0, push its tile
+        goals   = 3 * goals                  read the goal's word (1 + latency); write hop 0, push its tile
         BFS     = sum over visits: visit
-        path    = 1 + len(path)              (2 without a path; 0 without a start)
-        readout = 1 + H * W                  (0 without)
-        visit   = 2 (pop; address, queued bits) + 1 (RAM latency) + window rows in the map
+        path    = 1 + 2 * len(path)          (3 without a path; 0 without a start): a pixel's
+                                             read needs the previous pixel's parent
+        readout = 2 + H * W                  (0 without; the reads run ahead of the beats)
+        visit   = 2 (pop; address, queued bits) + 2 (RAM latency) + window rows in the map
                   + iterations (EDT 1) + max(tile rows in the map, tiles enqueued)
 
     A synchronous reset at any point returns to idle; the next job rewrites
@@ -203,7 +206,7 @@ class TileEngine(wiring.Component):
         return {"load_cycles": "H * ceil(W / T_c)", "scan_cycles": "tiles",
                 "edt_cycles": f"sum over levels ({t.level} + visits)", "goal_cycles": t.goal,
                 "visit_cycles": f"{t.sched} + {t.latency} + window rows + iterations + max(tile rows, marks)",
-                "path_cycles": f"{t.latency} + len(path)", "readout_cycles": f"{t.latency} + H * W",
+                "path_cycles": f"1 + {t.latency} * len(path)", "readout_cycles": f"{t.latency} + H * W",
                 "note": "source always valid, sink always ready; back-pressure adds cycles"}
 
     def elaborate(self, platform):
@@ -244,11 +247,14 @@ class TileEngine(wiring.Component):
 
         # -- after a phase: the next one (and its first registers)
         cur = Signal(goal_layout(w))              # path: the pixel read / shown
-        p_need = Signal()                         # path / read-out: a read is owed
+        p_need = Signal()                         # path: a read is owed
         p_first = Signal()
         ro_row = Signal(w["row"])
         ro_w = Signal(range(w["words"]))
         ro_j = Signal(range(t_c))
+        rr_row = Signal(w["row"])                 # read-out: the next word to read (ahead of ro_*)
+        rr_w = Signal(range(w["words"]))
+        rr_more = Signal()
 
         def after_bfs():
             with m.If(want_path & ~self.start_err):
@@ -259,7 +265,7 @@ class TileEngine(wiring.Component):
 
         def after_path():
             with m.If(want_readout):
-                m.d.sync += [ro_row.eq(0), ro_w.eq(0), ro_j.eq(0), p_need.eq(1)]
+                m.d.sync += [ro_row.eq(0), ro_w.eq(0), ro_j.eq(0), rr_row.eq(0), rr_w.eq(0), rr_more.eq(1)]
                 goto("READOUT")
             with m.Else():
                 goto("IDLE")
@@ -334,7 +340,7 @@ class TileEngine(wiring.Component):
         push = Signal()
         push_tile = Signal(tile_layout(w))
         m.d.comb += [work.push.eq(push), work.push_tile.eq(push_tile)]
-        queued_after = named(m, "queued_after", work.count + push != 0)     # the FIFO after this cycle
+        queued_after = named(m, "queued_after", (work.count != 0) | push)   # the FIFO after this cycle (no adder)
         with m.If(at["SCAN"]):
             m.d.comb += [push.eq(flag), push_tile.r.eq(sr), push_tile.c.eq(sc),
                          work.clear.eq(~flag), work.clear_tile.r.eq(sr), work.clear_tile.c.eq(sc)]
@@ -373,8 +379,8 @@ class TileEngine(wiring.Component):
             goto("SCHED1")
 
         head = work.head
-        h_r0 = named(m, "h_r0", head.r * t_r, w["row"] + 1)
-        h_c0 = named(m, "h_c0", head.c * t_c, w["col"] + 1)
+        h_r0 = named(m, "h_r0", times(head.r, t_r), w["row"] + 1)
+        h_c0 = named(m, "h_c0", times(head.c, t_c), w["col"] + 1)
         h_first = named(m, "h_first", Mux(head.r == 0, 0, h_r0 - 1), w["row"])
         h_last = named(m, "h_last", Mux(h_r0 + t_r >= H, H - 1, h_r0 + t_r), w["row"])
         h_rows = named(m, "h_rows", h_last - h_first + 1, range(t_r + 3))
@@ -519,23 +525,31 @@ class TileEngine(wiring.Component):
                     with m.Else():
                         m.d.sync += cur.eq(nxt)
 
-        # -- READOUT: every pixel, row-major, one per beat
+        # -- READOUT: every pixel, row-major, one per beat; the reads (rr_*) run ahead of the
+        # beats (ro_*) as far as the RAM's pipeline takes them, so a word costs no latency
         ro_px = named(m, "ro_px", mem.rd_data.payload.word[ro_j], pixel_layout(w))
         ro_last_w = named(m, "ro_last_w", ro_w == ncw - 1)
         word_end = named(m, "word_end", Mux(ro_last_w, ro_j == last_px, ro_j == t_c - 1))
         ro_final = named(m, "ro_final", word_end & ro_last_w & (ro_row == H - 1))
         beat_ro = named(m, "beat_ro", at["READOUT"] & mem.rd_data.valid)
-        ro_next = named(m, "ro_next", beat_ro & self.o_stream.ready & word_end & ~ro_final)
-        ro_nrow = named(m, "ro_next_row", Mux(ro_last_w, ro_row + 1, ro_row), w["row"])
-        ro_nw = named(m, "ro_next_w", Mux(ro_last_w, 0, ro_w + 1), range(w["words"]))
+        rr_last_w = named(m, "rr_last_w", rr_w == ncw - 1)
         with m.If(at["READOUT"]):
-            with m.If(mem.rd.valid):
-                m.d.sync += p_need.eq(~mem.rd.ready)
+            with m.If(mem.rd.valid & mem.rd.ready):
+                with m.If(rr_last_w):
+                    m.d.sync += [rr_w.eq(0), rr_row.eq(rr_row + 1)]
+                    with m.If(rr_row == H - 1):
+                        m.d.sync += rr_more.eq(0)
+                with m.Else():
+                    m.d.sync += rr_w.eq(rr_w + 1)
             with m.If(beat_ro & self.o_stream.ready):
                 with m.If(ro_final):
                     goto("IDLE")
                 with m.Elif(word_end):
-                    m.d.sync += [ro_row.eq(ro_nrow), ro_w.eq(ro_nw), ro_j.eq(0)]
+                    m.d.sync += ro_j.eq(0)
+                    with m.If(ro_last_w):
+                        m.d.sync += [ro_w.eq(0), ro_row.eq(ro_row + 1)]
+                    with m.Else():
+                        m.d.sync += ro_w.eq(ro_w + 1)
                 with m.Else():
                     m.d.sync += ro_j.eq(ro_j + 1)
 
@@ -554,8 +568,7 @@ class TileEngine(wiring.Component):
                          rd.wcol.eq(divmod_const(pos.col, t_c)[0]),
                          mem.rd_data.ready.eq(no_path | self.o_stream.ready)]
         with m.Elif(at["READOUT"]):
-            m.d.comb += [mem.rd.valid.eq(p_need | ro_next), rd.row.eq(Mux(ro_next, ro_nrow, ro_row)),
-                         rd.wcol.eq(Mux(ro_next, ro_nw, ro_w)),
+            m.d.comb += [mem.rd.valid.eq(rr_more), rd.row.eq(rr_row), rd.wcol.eq(rr_w),
                          mem.rd_data.ready.eq(self.o_stream.ready & word_end)]
         with m.If(at["LOAD"]):
             m.d.comb += [mem.wr.valid.eq(self.m_stream.valid), wr.row.eq(lr), wr.wcol.eq(lw),
@@ -575,7 +588,7 @@ class TileEngine(wiring.Component):
             self.o_stream.valid.eq(beat_path | beat_ro),
             o.map.eq(at["READOUT"]),
             o.row.eq(Mux(at["PATH"], cur.row, ro_row)),
-            o.col.eq(Mux(at["PATH"], cur.col, ro_w * t_c + ro_j)),
+            o.col.eq(Mux(at["PATH"], cur.col, times(ro_w, t_c) + ro_j)),
             o.done.eq(px.di != nonedi), o.di.eq(px.di), o.dx.eq(px.dx), o.dy.eq(px.dy),
             o.cfr.eq((px.di == nonedi) | (px.di > dfar)), o.visited.eq(px.hop != nonehop),
             o.hop.eq(px.hop), o.parent.eq(px.parent),

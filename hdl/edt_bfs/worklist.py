@@ -7,7 +7,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
-from .tile_layouts import named
+from .tile_layouts import named, times
 
 __all__ = ["Worklist", "tile_layout"]
 
@@ -49,7 +49,9 @@ class Worklist(wiring.Component):
     clear : In(1), clear_tile : In(tile_layout)
         Clear a tile's queued bit (the scan's tiles without a frontier).
 
-    At most one of push, clear and the pop's clear per cycle.
+    At most one of push, clear and the pop's clear per cycle.  The queued
+    bits are written a cycle later, through a register, and read
+    transparently: ``near`` behaves as if the write were immediate.
     """
 
     def __init__(self, w):
@@ -91,21 +93,25 @@ class Worklist(wiring.Component):
         # with one spare row and column of addresses for the neighbours past the last tile.
         sr = -(-w["tile_rows"] // 3) + 1
         sc = -(-w["tile_cols"] // 3) + 1
+        # A queued bit's write goes through a register (the bank and address logic after it, off
+        # the engine's mark -> push path); the read ports are transparent to it, so a look in the
+        # cycle after a push sees the push as before.
         popped = Signal()
         m.d.sync += popped.eq(self.pop)
         wr_tile = Signal(tl)
         wr_val = Signal()
         wr_en = Signal()
+        m.d.sync += wr_en.eq(popped | self.push | self.clear)
         with m.If(popped):
-            m.d.comb += [wr_tile.eq(rp.data), wr_en.eq(1)]
+            m.d.sync += [wr_tile.eq(rp.data), wr_val.eq(0)]
         with m.Elif(self.push):
-            m.d.comb += [wr_tile.eq(self.push_tile), wr_val.eq(1), wr_en.eq(1)]
+            m.d.sync += [wr_tile.eq(self.push_tile), wr_val.eq(1)]
         with m.Elif(self.clear):
-            m.d.comb += [wr_tile.eq(self.clear_tile), wr_en.eq(1)]
+            m.d.sync += [wr_tile.eq(self.clear_tile), wr_val.eq(0)]
         wq = [named(m, n, v, shape) for n, v, shape in (
             ("wq_r", wr_tile.r // 3, range(sr)), ("wm_r", wr_tile.r % 3, 2),
             ("wq_c", wr_tile.c // 3, range(sc)), ("wm_c", wr_tile.c % 3, 2))]
-        waddr = named(m, "waddr", wq[0] * sc + wq[2], range(sr * sc))
+        waddr = named(m, "waddr", times(wq[0], sc) + wq[2], range(sr * sc))
 
         at = self.look_at
         lr, lm = named(m, "lq_r", at.r // 3, range(sr)), named(m, "lm_r", at.r % 3, 2)
@@ -131,8 +137,9 @@ class Worklist(wiring.Component):
                 qb, okb = cols[b]
                 mem = Memory(shape=1, depth=sr * sc, init=[])
                 m.submodules[f"queued{a}{b}"] = mem
-                qrp, qwp = mem.read_port(), mem.write_port()
-                m.d.comb += [qrp.addr.eq(Mux(oka & okb, qa * sc + qb, 0)), qrp.en.eq(self.look),
+                qwp = mem.write_port()
+                qrp = mem.read_port(transparent_for=(qwp,))
+                m.d.comb += [qrp.addr.eq(Mux(oka & okb, times(qa, sc) + qb, 0)), qrp.en.eq(self.look),
                              qwp.addr.eq(waddr), qwp.data.eq(wr_val),
                              qwp.en.eq(wr_en & (wq[1] == a) & (wq[3] == b))]
                 bits[a, b] = qrp.data

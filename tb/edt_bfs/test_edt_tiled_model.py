@@ -303,7 +303,7 @@ def test_cycle_model_brute_force():
         cyc["edt"] += tm.level * res.stats["levels"]
         goals = tm.goal * len(cells[1:3])
         total = (h * -(-w // p) + res.stats["tiles"] + cyc["edt"] + goals + cyc["bfs"]
-                 + (tm.latency + max(1, len(res.path)) if start else 0) + (tm.latency + h * w if n % 2 else 0))
+                 + (1 + tm.latency * max(1, len(res.path)) if start else 0) + (tm.latency + h * w if n % 2 else 0))
         assert (res.stats["words_read"], res.stats["words_written"]) == (read, written)
         assert res.stats["cycles"]["edt"] == cyc["edt"] and res.stats["cycles"]["bfs"] == cyc["bfs"]
         assert res.cycles == total
@@ -316,14 +316,15 @@ def test_cycles_by_hand():
     img[0, 0] = True
     res = plan_path_tiled(img, [(1, 2)], (0, 1), 0, array=(8, 8), readout=True)
     # EDT: level 1 makes (0,1), (1,0), (1,1) done and keeps a frontier (self mark);
-    # level 2 the rest.  A visit: sched 2 + latency 1 + 2 rows x 1 word + 1 iteration
-    # + max(2 stores, marks) = 8; plus 1 per level.
+    # level 2 the rest.  A visit: sched 2 + latency 2 + 2 rows x 1 word + 1 iteration
+    # + max(2 stores, marks) = 9; plus 1 per level.
     assert [e[:2] + e[3:] for e in res.trace] == [("edt", 1, 1, 1), ("edt", 2, 1, 0), ("bfs", 0, 3, 0)]
-    assert res.stats["cycles"] == {"load": 2, "scan": 1, "edt": 2 * 8 + 2, "goals": 2,
+    assert res.stats["cycles"] == {"load": 2, "scan": 1, "edt": 2 * 9 + 2, "goals": 3,
                                    # BFS: hop 1 at iteration 1, (1, 0) hop 2 at 2, nothing at 3
-                                   "bfs": 2 + 1 + 2 + 3 + 2,
-                                   "path": 1 + 2, "readout": 1 + 6}
-    assert res.cycles == 2 + 1 + 18 + 2 + 10 + 3 + 7
+                                   "bfs": 2 + 2 + 2 + 3 + 2,
+                                   # path: the issue, then latency 2 per pixel (each needs its parent)
+                                   "path": 1 + 2 * 2, "readout": 2 + 6}
+    assert res.cycles == 2 + 1 + 20 + 3 + 11 + 5 + 8
     assert res.path == [(0, 1), (1, 2)] and res.parent[0, 1] == 8 and res.parent[1, 0] == 1
 
 
