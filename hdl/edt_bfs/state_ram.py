@@ -5,7 +5,8 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ..ram_init import undefined_memory
-from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, flat, named, pixel_layout, times
+from ..arith import times
+from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, flat, named, pixel_layout
 
 __all__ = ["StateRam", "StateSignature", "read_layout", "read_data_layout", "write_layout", "BANKS"]
 

@@ -11,7 +11,8 @@ from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
 from .state_ram import StateRam
 from .tile_array import TileArray
-from .tile_layouts import named, pixel_layout, tile_widths, times
+from ..arith import divmod_const, times
+from .tile_layouts import named, pixel_layout, tile_widths
 from .worklist import Worklist, tile_layout
 
 STATES = ("IDLE", "LOAD", "SCAN", "LEVEL", "SCHED0", "SCHED1", "READ", "ITER", "STORE",
@@ -56,14 +57,6 @@ def visit_layout(w):
     """The visit monitor: one cycle of ``valid`` at the end of each tile visit."""
     return data.StructLayout({"valid": 1, "bfs": 1, "r": range(w["tile_rows"]), "c": range(w["tile_cols"]),
                               "iterations": w["iters"], "marks": 4})
-
-
-def divmod_const(value, d):
-    """(value // d, value % d) for a constant d (slices when d is a power of two)."""
-    if d & (d - 1) == 0:
-        s = d.bit_length() - 1
-        return value >> s, value[:s] if s else Const(0, 1)
-    return value // d, value % d
 
 
 def _above(value, limit):

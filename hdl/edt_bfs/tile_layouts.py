@@ -11,13 +11,13 @@ that are written separately: the EDT's (di, dx, dy) and the BFS's
 (hop, parent).
 """
 
-from amaranth.hdl import Const, Signal, Value, signed
+from amaranth.hdl import Signal, Value, signed
 from amaranth.lib import data
 
 from navcores.models.edt_bfs import widths
 from navcores.models.edt_bfs_tiled import state_bits
 
-__all__ = ["named", "times", "flat", "tile_widths", "pixel_layout", "edt_layout", "bfs_layout", "cell_layout", "nb_layout",
+__all__ = ["named", "flat", "tile_widths", "pixel_layout", "edt_layout", "bfs_layout", "cell_layout", "nb_layout",
            "EDT_FIELDS", "BFS_FIELDS"]
 
 EDT_FIELDS = ("di", "dx", "dy")
@@ -111,23 +111,6 @@ def named(m, name, value, shape=None):
     s = Signal(shape if shape is not None else Value.cast(value).shape(), name=name)
     m.d.comb += s.eq(value)
     return s
-
-
-def times(value, c):
-    """``value * c`` for a constant ``c >= 0`` as shifts and adds (one adder per set bit past the first).
-
-    yosys' synth_ecp5 maps every ``$mul`` wider than 1 bit, constant or not, onto a
-    MULT18X18D, whose combinational delay sat on the tile engine's address paths; a
-    carry chain per set bit of a small constant is faster and costs no DSP.
-    """
-    value = Value.cast(value)
-    terms = [value << i for i in range(int(c).bit_length()) if (c >> i) & 1]
-    if not terms:
-        return Const(0, 1)
-    out = terms[0]
-    for t in terms[1:]:
-        out = out + t
-    return out
 
 
 def flat(layout, name):

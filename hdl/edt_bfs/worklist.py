@@ -7,7 +7,8 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
-from .tile_layouts import named, times
+from ..arith import times
+from .tile_layouts import named
 
 __all__ = ["Worklist", "tile_layout"]
 

@@ -3,11 +3,12 @@ behind one host interface of valid/ready streams (paper 000, section 5)."""
 
 from dataclasses import replace
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed
+from amaranth.hdl import Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, enum, stream, wiring
 from amaranth.lib.wiring import In, Out
 
 from ...models.harmonic.ram import READ_LATENCY
+from ..arith import divmod_const, times
 from ..params import Constraint, Param, check, checked_init
 from .block import Block
 from .cluster import COLS, ROWS
@@ -61,16 +62,6 @@ def direction_latency(p, inside=4):
     conversion: 1 + the shift cycles."""
     return (DECODE_CYCLES + (1 + inside) * (p + 2 + READ_SETUP + READ_LATENCY) + (4 - inside) + 1
             + (2 * p + 5))
-
-
-def times(x, k):
-    """``x * k`` for a constant ``k`` >= 0 as shifts and adds (no $mul cell for
-    yosys to map to a multiplier block)."""
-    terms = [x << i for i in range(k.bit_length()) if k >> i & 1]
-    out = terms[0] if terms else Const(0, 1)
-    for t in terms[1:]:
-        out = out + t
-    return out
 
 
 def _pw(p_max):
@@ -254,10 +245,13 @@ class Planner(wiring.Component):
             tbr, tbc = Signal(range(max(BR, 2)), name=f"{prefix}_br"), Signal(range(max(BC, 2)), name=f"{prefix}_bc")
             ci = Signal(range(max(CC * (n // ROWS), 2)), name=f"{prefix}_ci")
             bit = Signal(range(18), name=f"{prefix}_bit")
+            # row // 3, col // 6 as lookup tables (divmod_const): a divider's
+            # carry chains here were the 12x24 planner's critical path (issue 17)
+            (r_q, r_r), (c_q, c_r) = divmod_const(row, ROWS), divmod_const(col, COLS)
             m.d.comb += [
                 tbr.eq(block // BC), tbc.eq(block % BC),
-                ci.eq(times(row // ROWS, CC) + col // COLS),
-                bit.eq(times(row % ROWS, COLS) + col % COLS),
+                ci.eq(times(r_q, CC) + c_q),
+                bit.eq(times(r_r, COLS) + c_r),
             ]
             return tbr, tbc, ci, bit
 

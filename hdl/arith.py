@@ -1,0 +1,49 @@
+"""Arithmetic by constants, built for the FPGA's LUTs rather than its DSPs or carry chains.
+
+yosys' ``synth_ecp5`` maps every ``$mul`` wider than a bit, constant operand
+or not, onto a MULT18X18D, and a ``$div`` / ``$mod`` by a constant onto a
+divider's carry chains: both sat on the planner's and the tile engine's
+address paths (issue 17).  Shared by every core's RTL.
+"""
+
+from amaranth.hdl import Array, Const, Value
+
+__all__ = ["times", "divmod_const"]
+
+TABLE_BITS = 6      # up to 64 entries: each result bit is one LUT6 (a LUT4 tree on the ECP5 / iCE40)
+
+
+def times(value, c):
+    """``value * c`` for a constant ``c >= 0`` as shifts and adds (one adder
+    per set bit past the first): faster than a MULT18X18D for small constants
+    and costs no DSP."""
+    value = Value.cast(value)
+    c = int(c)
+    if c < 0:
+        raise ValueError(f"times: constant {c} must be >= 0")
+    terms = [value << i for i in range(c.bit_length()) if (c >> i) & 1]
+    out = terms[0] if terms else Const(0, 1)
+    for t in terms[1:]:
+        out = out + t
+    return out
+
+
+def divmod_const(value, d):
+    """``(value // d, value % d)`` for a constant ``d >= 1``: slices when ``d``
+    is a power of two, a lookup table when ``value`` has at most
+    :data:`TABLE_BITS` bits (LUTs, no carry chain), else Amaranth's
+    operators."""
+    value = Value.cast(value)
+    d = int(d)
+    if d < 1:
+        raise ValueError(f"divmod_const: divisor {d} must be >= 1")
+    if d & (d - 1) == 0:
+        s = d.bit_length() - 1
+        return value >> s, value[:s] if s else Const(0, 1)
+    w = len(value)
+    if w <= TABLE_BITS:
+        top = (1 << w) - 1
+        q = Array(Const(i // d, range(top // d + 1)) for i in range(top + 1))
+        r = Array(Const(i % d, range(d)) for i in range(top + 1))
+        return q[value], r[value]
+    return value // d, value % d

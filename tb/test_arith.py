@@ -1,0 +1,45 @@
+"""hdl/arith.py: products and quotients by constants, every input value, against Python's."""
+
+import pytest
+from amaranth.hdl import Module, Signal
+from amaranth.sim import Simulator
+
+from navcores.hdl.arith import TABLE_BITS, divmod_const, times
+
+
+def _check(width, build, want):
+    m = Module()
+    x = Signal(width)
+    outs = [Signal(24) for _ in want(0)]
+    m.d.comb += [o.eq(v) for o, v in zip(outs, build(x))]
+    sim = Simulator(m)
+    seen = []
+
+    async def bench(ctx):
+        for v in range(1 << width):
+            ctx.set(x, v)
+            got = tuple(ctx.get(o) for o in outs)
+            assert got == want(v), (width, v, got, want(v))
+            seen.append(v)
+
+    sim.add_testbench(bench)
+    sim.run()
+    assert len(seen) == 1 << width
+
+
+# (width, divisor): a table (<= TABLE_BITS bits), slices (powers of two), the operators (wider)
+@pytest.mark.parametrize("width,d", [(4, 3), (5, 6), (TABLE_BITS, 3), (TABLE_BITS + 1, 6), (5, 4), (3, 1), (2, 3)])
+def test_divmod_const(width, d):
+    _check(width, lambda x: divmod_const(x, d), lambda v: divmod(v, d))
+
+
+@pytest.mark.parametrize("c", [0, 1, 3, 6, 11, 12])
+def test_times(c):
+    _check(6, lambda x: (times(x, c),), lambda v: (v * c,))
+
+
+def test_refusals():
+    with pytest.raises(ValueError, match="divisor 0"):
+        divmod_const(Signal(4), 0)
+    with pytest.raises(ValueError, match="constant -1"):
+        times(Signal(4), -1)
