@@ -6,7 +6,7 @@ divider's carry chains: both sat on the planner's and the tile engine's
 address paths (issue 17).  Shared by every core's RTL.
 """
 
-from amaranth.hdl import Array, Const, Value
+from amaranth.hdl import Const, Value
 
 __all__ = ["times", "divmod_const"]
 
@@ -42,8 +42,11 @@ def divmod_const(value, d):
         return value >> s, value[:s] if s else Const(0, 1)
     w = len(value)
     if w <= TABLE_BITS:
-        top = (1 << w) - 1
-        q = Array(Const(i // d, range(top // d + 1)) for i in range(top + 1))
-        r = Array(Const(i % d, range(d)) for i in range(top + 1))
-        return q[value], r[value]
+        # a constant word indexed by the value (continuous assignments, no
+        # process: defined from time 0 in every simulator)
+        n = 1 << w
+        qw, rw = ((n - 1) // d).bit_length() or 1, (d - 1).bit_length() or 1
+        q = Const(sum((i // d) << (i * qw) for i in range(n)), n * qw)
+        r = Const(sum((i % d) << (i * rw) for i in range(n)), n * rw)
+        return q.word_select(value, qw), r.word_select(value, rw)
     return value // d, value % d
