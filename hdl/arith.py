@@ -30,9 +30,9 @@ def times(value, c):
 
 def divmod_const(value, d):
     """``(value // d, value % d)`` for a constant ``d >= 1``: slices when ``d``
-    is a power of two, a lookup table when ``value`` has at most
+    is a power of two, a lookup table when ``value`` is unsigned with at most
     :data:`TABLE_BITS` bits (LUTs, no carry chain), else Amaranth's
-    operators."""
+    operators (floor division, as Python's)."""
     value = Value.cast(value)
     d = int(d)
     if d < 1:
@@ -41,7 +41,7 @@ def divmod_const(value, d):
         s = d.bit_length() - 1
         return value >> s, value[:s] if s else Const(0, 1)
     w = len(value)
-    if w <= TABLE_BITS:
+    if w <= TABLE_BITS and not value.shape().signed:
         # a constant word indexed by the value (continuous assignments, no
         # process: defined from time 0 in every simulator)
         n = 1 << w

@@ -38,6 +38,11 @@ def test_times(c):
     _check(6, lambda x: (times(x, c),), lambda v: (v * c,))
 
 
+def test_signed_uses_the_operators():
+    """A signed value (e.g. ``width - 1``) floors as Python does, negative values included."""
+    _check(4, lambda x: divmod_const(x.as_signed(), 3), lambda v: tuple(t % (1 << 24) for t in divmod(v - 16 * (v >> 3), 3)))
+
+
 def test_refusals():
     with pytest.raises(ValueError, match="divisor 0"):
         divmod_const(Signal(4), 0)
