@@ -39,6 +39,10 @@ exponents.py      block exponents (issue 10): ``ExponentGrid``,
                   the exponent width a map needs (:func:`exponent_bound`,
                   :func:`e_max_for`) and the word (:func:`precision_estimate`),
                   :data:`E_MAX`, :data:`REPICK_HEADROOM`, :data:`SHIFT_STEP`
+node_exponents.py one exponent per node (issue 22: block exponents with
+                  blocks of one node, where a block's spread defeats one
+                  exponent a block): :func:`plan_node_exponents`,
+                  :func:`node_update`, :func:`order_key`
 ================  ==============================================================
 
 ``decision.py`` shares its name with hdl/harmonic/decision.py (the house rule:
@@ -53,6 +57,7 @@ from .explore import plan_explore
 from .exponents import (E_MAX, REPICK_HEADROOM, SHIFT_STEP, e_max_for, exponent_bound, plan_exponents,
                         precision_estimate, shift_iterations)
 from .grid import distances, pad_to_blocks, reachable
+from .node_exponents import NodeExponentResult, node_update, order_key, plan_node_exponents
 from .node import local_max, neighbours, one, relax, step, update
 from .planner import plan
 from .ram import (P_MIN, convert_mantissa, counters, from_ram_image, iteration_cycles, pads, ram_image, read_offset,
@@ -70,4 +75,5 @@ __all__ = [
     "plan_explore",
     "E_MAX", "REPICK_HEADROOM", "SHIFT_STEP", "convert_mantissa", "decision_exponents", "plan_exponents",
     "shift_iterations", "exponent_bound", "e_max_for", "precision_estimate", "distances", "decision_step", "decision_paths",
+    "NodeExponentResult", "node_update", "order_key", "plan_node_exponents",
 ]
