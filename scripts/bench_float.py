@@ -22,6 +22,10 @@ Per map:
   exponent planner's clock on a part it fits, which no fit has measured
   (it does not fit the iCE40-HX8K, BENCHMARKS.md "Hardware"; no ECP5 fit
   was run): the column says so.
+* node exponents (models/harmonic/node_exponents.py, p = 16, h = 2, e_max
+  from the map) on every map: converged, iterations, exponent range, state
+  bits, model time, the exact ascent and the Decision module (block (1, 1))
+  from the starts.
 
 Starts: every reachable cell on the crops; on the whole map the starts
 of the longest bucket's scenarios with the chosen goal (one) and 1,000
@@ -48,7 +52,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))       # tb/ (not installed): the references
 
 from navcores.models.harmonic import (ascent_reaches, decision_paths, distances, exponent_bound,  # noqa: E402
-                                      plan, precision_estimate, trajectory, ascent_next)
+                                      plan, plan_node_exponents, precision_estimate, trajectory, ascent_next)
 from navcores.models.maps import load_map, load_scenarios, longest_scenario  # noqa: E402
 from tb.harmonic.dirichlet import dirichlet  # noqa: E402
 from tb.harmonic.logspace import log_harmonic, order_field  # noqa: E402
@@ -98,6 +102,29 @@ def _reached(field, goal, starts):
     return int(ascent_reaches(field, [goal], mask).sum())
 
 
+def _decided(mantissa, exponents, block, p, h, goal, starts):
+    """(starts whose Decision path reaches the goal, starts where it differs from the exact ascent on ``h``)."""
+    pad_goal = np.zeros(mantissa.shape, dtype=bool)
+    pad_goal[goal] = True
+    decided = decision_paths(mantissa, exponents, block, p, pad_goal, starts)
+    nxt = ascent_next(h)
+    return (sum(ok for _, ok in decided),
+            sum(path != trajectory(h, [goal], s, nxt=nxt).path for s, (path, _) in zip(starts, decided)))
+
+
+def measure_nodes(obstacle, goal, starts, log=print):
+    """The node-exponent field (plan_node_exponents, p = 16, h = 2, e_max from the map): its run and reach."""
+    res = plan_node_exponents(obstacle, [goal], progress=lambda i, z, m: log(f"  node exponents: {i} iterations, "
+                                                                            f"{z} nodes at 0") if i % 1024 == 0 else None)
+    row = dict(n_converged=bool(res.converged), n_iterations=res.iterations, n_p=res.p, n_h=res.headroom,
+               n_e_lo=res.e_lo, n_e_hi=res.e_hi, n_e_max=res.e_max, n_seconds=res.seconds,
+               n_state_mbit=obstacle.size * (res.p + 1 + res.exponent_bits) / 1e6)
+    row["n_reached"] = _reached(res.key, goal, starts)
+    row["n_decision_reached"], row["n_decision_differs"] = _decided(
+        res.mantissa, res.exponents, (1, 1), res.p, res.key, goal, starts)
+    return row
+
+
 def node_ram_bits(blocks, p, block=BLOCK):
     """Node RAM bits a planner of ``blocks`` (BR, BC) needs at word
     precision p: each 3x6 cluster of a block holds B words of p+2 bits
@@ -125,6 +152,8 @@ def measure(key, obstacle, goal, scenario, run_planner, log=print):
     row.update(log_seconds=time.perf_counter() - t0, log_sweeps=sweeps, log_converged=conv,
                log_reached=_reached(order_field(u), goal, starts))
     log(f"{key}: {row}")
+    row.update(measure_nodes(obstacle, goal, starts, log))
+    log(f"{key}: {row}")
     est, spread = precision_estimate(obstacle, [goal], BLOCK)
     row.update(p_estimate=est, spread=spread, e_max=exponent_bound(obstacle, [goal]))
     if not run_planner:
@@ -141,13 +170,8 @@ def measure(key, obstacle, goal, scenario, run_planner, log=print):
                e_hi=int(res.exponents.max()), at_e_max=res.at_e_max, cycles=res.cycles,
                block_iterations=res.block_iterations)
     row["ascent_reached"] = _reached(res.h, goal, starts)
-    pad_goal = np.zeros(res.mantissa.shape, dtype=bool)
-    pad_goal[goal] = True
-    decided = decision_paths(res.mantissa, res.exponents, res.block, res.p, pad_goal, starts)
-    nxt = ascent_next(res.h)
-    row["decision_reached"] = sum(ok for _, ok in decided)
-    row["decision_differs"] = sum(path != trajectory(res.h, [goal], s, nxt=nxt).path
-                                  for s, (path, _) in zip(starts, decided))
+    row["decision_reached"], row["decision_differs"] = _decided(res.mantissa, res.exponents, res.block, res.p,
+                                                                res.h, goal, starts)
     log(f"{key}: {row}")
     return row
 
@@ -178,8 +202,9 @@ def section(planner=("64", "128"), log=print):
         "| map | reachable cells | longest BFS distance | float64 spsolve: cells at exactly 0 | log-space: time, "
         "sweeps, ascent reaches goal | p the blocks need (estimate; spread) | planner: converged, p, e_b range "
         "(e_max, register bits) | planner cycles | node RAM | hardware time | model time | planner ascent / Decision "
-        "reach goal (Decision paths differing) |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "reach goal (Decision paths differing) | node exponents: converged, iterations, e range (e_max, bits) | "
+        "node exponents: state, model time | node exponents: ascent / Decision reach goal (differing) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in rows:
         share = 100 * r["f64_zero"] / r["reachable"]
@@ -201,13 +226,25 @@ def section(planner=("64", "128"), log=print):
             blocks = [-(-s // b) for s, b in zip(r["shape"], BLOCK)]
             rest = (f"not run | about {node_ram_bits(blocks, r['p_estimate']) / 1e6:.0f} Mbit at the estimate | "
                     "not measured | - | -")
+        nodes = (f"{'converged' if r['n_converged'] else 'NOT converged'}, {r['n_iterations']:,}, e "
+                 f"{r['n_e_lo']}..{r['n_e_hi']:,} ({r['n_e_max']:,}, {r['n_e_max'].bit_length()} bits) | "
+                 f"{r['n_state_mbit']:.2f} Mbit, {r['n_seconds']:.1f} s | {r['n_reached']:,} / "
+                 f"{r['n_decision_reached']:,} of {r['starts']:,} ({r['n_decision_differs']})")
         lines.append(f"| {labels[r['key']]} | {r['reachable']:,} | {r['longest']:,} | {r['f64_zero']:,} ({share:.0f} %; "
-                     f"smallest {r['f64_min']:.1e}) | {log_col} | {est} | {plan_col} | {rest} |")
+                     f"smallest {r['f64_min']:.1e}) | {log_col} | {est} | {plan_col} | {rest} | {nodes} |")
     lines += ["", "One exponent serves a whole block, so a block's word must span the distances inside the block and "
               "its border rings: about 2 bits a step of that spread (precision_estimate). In a maze two corridors of "
               "one 6x12 block can be thousands of steps apart, so p grows with the maze as in fixed point "
               "(the longest distance) and the exponents only add the rest: the exponent width is small "
               "(bits of 2 x the longest distance), the word is not.",
+              "",
+              "Node exponents (models/harmonic/node_exponents.py: block exponents with blocks of one node, "
+              "a 17-bit mantissa (p = 16, top h = 2 bits empty) and an exponent of the map's e_max bits per node, "
+              "every node updated at once, eq. 2 floored; iterations to no local maximum with every reachable node "
+              "non-zero) take the precision wall away: a node's word spans only its own neighbourhood (the "
+              "spread is one step), so the mantissa does not grow with the maze. State: one mantissa and one "
+              "exponent per cell of the map, in Mbit (the LFE5U-85F has 3.7 Mbit of block RAM). No RTL of "
+              "node exponents is built: no hardware time.",
               "", f"({time.time() - t0:.0f} s of runs)"]
     return "\n".join(lines) + "\n", rows
 

@@ -3,6 +3,7 @@
     python -m sim harmonic MAP (--goal R,C | --goal-xy X,Y) [...] [--start R,C | --start-xy X,Y ...]
         [--block NxM] [--iters I] [--schedule P1,P2,... | P1:STEP:PMAX] [--paper-schedule]
         [--engine model|icarus|verilator|serial:PORT[@BAUD]] [--block-exponents [--e-max N|map]]
+        [--node-exponents [--p P] [--e-max N|map]]
         [--cell METRES] [--unknown obstacle|free] [--json OUT] [--csv OUT] [--plot OUT.png]
 
 MAP is a Moving AI .map, an ASCII grid (.txt: '#'/'@' obstacle, '.' free),
@@ -67,6 +68,21 @@ engines refuse a map that needs more than 65535); the summary names the
 bound, its register width and the blocks that end at it.  The model runs
 its fast visit (bit for bit the reference's, tested).
 
+--node-exponents (issue 22, the model only: no RTL of it is built): one
+exponent per node, block exponents with blocks of one node
+(models.harmonic.plan_node_exponents: a (P+1)-bit mantissa, default P = 16,
+its top 2 bits empty, and an exponent 0..e_max per node, every node updated
+at once, eq. 2 floored).  Where a maze puts corridors thousands of steps
+apart into one block, no block exponent helps (its word needs about 2 bits
+a step of that spread); a node's own exponent does, and the field converges
+once its front has reached every reachable node (about one iteration a
+step of the longest distance).  --block, --iters and --schedule do not
+apply.  The JSON's "precision" is P, "iterations" the iterations run,
+"exponents" the final e per cell (HxW, e_max where the field is 0), "e_max";
+"potential" holds float64 values, which are 0 below about 1e-308: use
+"log2_potential" (log2 of the value, null where it is 0).  Trajectories are
+the Decision module's (as with --block-exponents, on blocks of one node).
+
 Trajectories: steepest 4-neighbour ascent from each start (ties to the
 first of N, E, W, S) until a goal, on the final field.  With
 --block-exponents the trajectories are the Decision module's instead
@@ -120,6 +136,10 @@ WORK_K = 0.25
 MODEL_RATE = 4.0e5
 RTL_CYCLES_PER_UPDATE = 5.0
 RTL_RATE = {"icarus": 4.0e3, "verilator": 2.4e4}
+# --node-exponents: about one iteration a step of the longest distance, every
+# reachable node each (measured on maze512-1-0: 4e6 node updates a second).
+NODE_RATE = 4.0e6
+NODE_P_MIN, NODE_P_MAX = 4, 48      # models.harmonic.node_exponents: P_LIMIT
 
 
 def add_arguments(parser):
@@ -139,9 +159,15 @@ def add_arguments(parser):
     parser.add_argument("--block-exponents", action="store_true",
                         help="one exponent per block (issue 10, beyond the paper; every engine): "
                              "the word length follows the block, not the map")
+    parser.add_argument("--node-exponents", action="store_true",
+                        help="one exponent per node (issue 22, the model only): mazes whose blocks hold "
+                             "corridors far apart")
+    parser.add_argument("--p", type=integer(NODE_P_MIN, NODE_P_MAX, "the node-exponent model's int64 words"),
+                        default=None, metavar="P",
+                        help="with --node-exponents: the mantissa's precision (default 16)")
     parser.add_argument("--e-max", type=e_max_arg, default="map", metavar="N|map",
-                        help="with --block-exponents: the largest block exponent (default map: 2 x the "
-                             "longest BFS distance to a goal, at least 255)")
+                        help="with --block-exponents or --node-exponents: the largest exponent (default map: "
+                             "2 x the longest BFS distance to a goal; block exponents: at least 255)")
     add_outputs(parser, csv=True, plot_help="plot map, potential (log scale) and trajectories")
 
 
@@ -342,10 +368,15 @@ def plot(path, grid, result, title):
     from matplotlib.colors import ListedColormap
     from matplotlib.patches import Patch
 
-    pot = np.array(result["potential"], dtype=float)
-    novalue = ~grid & (pot <= 0)
-    with np.errstate(divide="ignore"):
-        field = np.where(grid | novalue, np.nan, np.log10(np.where(pot > 0, pot, 1.0)))
+    if "log2_potential" in result:      # node exponents: values far below float64's range
+        lg = np.array([[np.nan if x is None else x for x in row] for row in result["log2_potential"]], dtype=float)
+        novalue = ~grid & np.isnan(lg)
+        field = np.where(grid | novalue, np.nan, lg * np.log10(2.0))
+    else:
+        pot = np.array(result["potential"], dtype=float)
+        novalue = ~grid & (pot <= 0)
+        with np.errstate(divide="ignore"):
+            field = np.where(grid | novalue, np.nan, np.log10(np.where(pot > 0, pot, 1.0)))
     fig, axes = plt.subplots(1, 2, figsize=(12, 5.6))
     axes[0].imshow(grid, cmap="gray_r", interpolation="nearest")
     axes[0].set_title("map (black: obstacle)")
@@ -372,6 +403,10 @@ def plot(path, grid, result, title):
 
 
 def run(args):
+    if args.node_exponents:
+        return run_nodes(args)
+    if args.p is not None:
+        raise CliError("--p: only with --node-exponents (the block planner takes --schedule)")
     paper = bool(args.paper_schedule)
     if paper and serial_engine.is_serial(args.engine):
         raise CliError(f"--paper-schedule: the board's planner (--engine {args.engine}) runs the default "
@@ -462,3 +497,108 @@ def run(args):
     print("\n".join(lines))
     ok = result["converged"] and all(tr["reached_goal"] for tr in result["trajectories"])
     return 0 if ok and result.get("rtl_matches_model", True) else 1
+
+
+def plan_nodes(grid, goals, starts, p, e_max, frame=None, progress=None):
+    """--node-exponents without I/O: the JSON-ready dict
+    (models.harmonic.plan_node_exponents, Decision trajectories on blocks of one node)."""
+    from navcores.models.harmonic import ascent_next, decision_paths, plan_node_exponents, reachable, trajectory
+    try:
+        res = plan_node_exponents(grid, goals, p=p, e_max=e_max, progress=progress)
+    except ValueError as e:
+        raise CliError(str(e)) from None
+    reach = reachable(grid, goals)
+    value = res.mantissa > 0
+    goal_mask = np.zeros(grid.shape, dtype=bool)
+    for g in goals:
+        goal_mask[g] = True
+    nxt = ascent_next(res.key)
+    decided = decision_paths(res.mantissa, res.exponents, (1, 1), res.p, goal_mask, starts)
+    trajectories = []
+    for s, (path, reached) in zip(starts, decided):
+        ascent = trajectory(res.key, goal_mask, s, nxt=nxt).as_dict()["path"]
+        path = [list(c) for c in path]
+        parted = next((i for i, (a, b) in enumerate(zip(path, ascent)) if a != b),
+                      None if len(path) == len(ascent) else min(len(path), len(ascent)))
+        tr = {"start": list(s), "path": path, "reached_goal": bool(reached), "ascent": ascent, "differs_at": parted,
+              "reachable": bool(reach[s])}
+        if frame is not None:
+            tr["path_xy"] = path_xy(frame, path)
+        trajectories.append(tr)
+    with np.errstate(divide="ignore"):
+        log2 = np.log2(res.mantissa.astype(float)) - (res.p + res.exponents)
+    out = {
+        "height": grid.shape[0], "width": grid.shape[1], "engine": "model", "node_exponents": True,
+        "precision": res.p, "headroom": res.headroom, "converged": bool(res.converged),
+        "iterations": int(res.iterations), "maxima": int(max(res.maxima, 0)), "zeros": int(res.zeros),
+        "e_max": res.e_max, "exponents": res.exponents.tolist(),
+        "potential": np.where(value, np.exp2(log2), 0.0).tolist(),
+        "log2_potential": [[float(x) if ok else None for x, ok in zip(row, vrow)] for row, vrow in zip(log2, value)],
+        "unreachable": [[int(r), int(c)] for r, c in np.argwhere(~grid & ~reach)],
+        "trajectories": trajectories,
+    }
+    if frame is not None:
+        out["frame"] = frame.as_dict()
+    return out
+
+
+def run_nodes(args):
+    """python -m sim harmonic --node-exponents."""
+    if args.engine != "model":
+        raise CliError(f"--node-exponents: the model only (no RTL of node exponents is built), not --engine {args.engine}")
+    if args.block_exponents:
+        raise CliError("--node-exponents and --block-exponents: choose one")
+    gm, frame = load_map_arg(args)
+    grid = gm.obstacle
+    goals = places(args, "goal", grid, frame)
+    if not goals:
+        raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
+    starts = places(args, "start", grid, frame)
+    from navcores.models.harmonic import distances
+    from navcores.models.harmonic.node_exponents import NODE_P
+    p = NODE_P if args.p is None else args.p
+    dist = distances(grid, goals)
+    work = float(max(int(dist.max()), 1)) * int((dist >= 0).sum())
+    announce("sim harmonic", work / NODE_RATE, f"node exponents on {grid.shape[0]}x{grid.shape[1]}",
+             f"about {work:.2g} node updates at {NODE_RATE:.0g} a second")
+    t0 = time.time()
+    with Progress("harmonic node exponents", total=max(int(dist.max()), 1), unit=" iterations") as bar:
+        result = plan_nodes(grid, goals, starts, p, args.e_max, frame,
+                            progress=lambda i, zeros, maxima: bar.update(i, note=f"{zeros} nodes not reached"))
+    seconds = time.time() - t0
+    name = Path(args.map).name
+    used = np.array(result["exponents"])[np.array([[x is not None for x in row] for row in result["log2_potential"]])]
+    lines = [
+        f"{name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), node exponents (model), p = {p}",
+        ("converged: no local maximum" if result["converged"] else
+         f"NOT converged: {result['zeros']} reachable node(s) at 0, {result['maxima']} local maxima")
+        + f"; {result['iterations']} iterations ({seconds:.1f} s); exponents "
+        f"{int(used.min()) if used.size else 0}..{int(used.max()) if used.size else 0} of e_max {result['e_max']} "
+        f"({int(result['e_max']).bit_length()}-bit exponent per node)",
+    ]
+    if result["unreachable"]:
+        lines.append(f"{len(result['unreachable'])} free cell(s) no goal can reach (no gradient there)")
+    for tr in result["trajectories"]:
+        s = tuple(tr["start"])
+        how = (" by the Decision module, the exact ascent's path" if tr["differs_at"] is None else
+               f" by the Decision module, parting from the exact ascent at step {tr['differs_at']}")
+        if tr["reached_goal"]:
+            lines.append(f"start {s}: reaches goal {tuple(tr['path'][-1])} in {len(tr['path']) - 1} steps{how}")
+        elif not tr["reachable"]:
+            lines.append(f"start {s}: no goal can reach this cell (walled off): no trajectory")
+        else:
+            lines.append(f"start {s}: STUCK at {tuple(tr['path'][-1])} after {len(tr['path']) - 1} steps{how}")
+    if args.json:
+        write_text(args.json, json.dumps(result))
+        lines.append(f"wrote {args.json}")
+    if args.csv:
+        rows = ["start,row,col,x,y"]
+        for k, tr in enumerate(result["trajectories"]):
+            rows += path_csv(frame, tr["path"], prefix=(k,))
+        write_text(args.csv, "\n".join(rows) + "\n")
+        lines.append(f"wrote {args.csv}")
+    if args.plot:
+        plot(args.plot, grid, dict(result, _goals=goals), f"{name}: harmonic potential, node exponents, p = {p}")
+        lines.append(f"wrote {args.plot}")
+    print("\n".join(lines))
+    return 0 if result["converged"] and all(tr["reached_goal"] for tr in result["trajectories"]) else 1

@@ -333,3 +333,56 @@ def test_block_exponents_decision_trajectories(tmp_path, capsys):
     assert parted == 2, "on this map the Decision's paths part from the exact ascent (both starts)"
     rc, text, _ = _run([*args[:-2], "--e-max", "20"], capsys)
     assert "e_max 20 (5-bit exponent registers)" in text and "block(s) at e_max" in text
+
+
+def _serpentine(tmp_path, rows=21, cols=60):
+    """A serpentine corridor (tb/harmonic/planner_maps.corridor) as an ASCII map: its far end is
+    about 2**-1250 below the goal, beyond float64 (2**-1074)."""
+    from planner_maps import corridor
+    ob, goals = corridor(rows, cols)
+    path = tmp_path / "serp.txt"
+    path.write_text("\n".join("".join("#" if v else "." for v in row) for row in ob) + "\n")
+    return path, ob, goals[0]
+
+
+def test_node_exponents(tmp_path, capsys):
+    """Issue 22: --node-exponents runs models.harmonic.plan_node_exponents,
+    the trajectories are the Decision module's on blocks of one node, the
+    JSON carries the exponents and log2 potentials (float64 holds 0 there)."""
+    from navcores.models.harmonic import decision_paths, plan_node_exponents, reachable
+    path, ob, goal = _serpentine(tmp_path)
+    out = tmp_path / "n.json"
+    rc, text, _ = _run([str(path), "--goal", f"{goal[0]},{goal[1]}", "--start", "0,0", "--node-exponents",
+                        "--p", "12", "--json", str(out), "--plot", str(tmp_path / "n.png")], capsys)
+    assert rc == 0, text
+    r = json.loads(out.read_text())
+    res = plan_node_exponents(ob, [goal], p=12)
+    assert r["node_exponents"] and r["precision"] == 12 and r["converged"] and r["iterations"] == res.iterations
+    assert r["exponents"] == res.exponents.tolist() and r["e_max"] == res.e_max
+    lg = np.array([[np.nan if x is None else x for x in row] for row in r["log2_potential"]])
+    reach = reachable(ob, [goal])
+    assert np.isfinite(lg[reach]).all() and np.isnan(lg[~reach]).all() and lg[reach].min() < -1074
+    assert (np.array(r["potential"])[reach] == 0).any()          # float64 underflows where the exponents do not
+    gm = np.zeros(ob.shape, dtype=bool)
+    gm[goal] = True
+    (want, ok), = decision_paths(res.mantissa, res.exponents, (1, 1), 12, gm, [(0, 0)])
+    tr, = r["trajectories"]
+    assert ok and tr["reached_goal"] and tr["path"] == [list(c) for c in want] and tr["differs_at"] is None
+    assert f"reaches goal ({goal[0]}, {goal[1]}) in {len(want) - 1} steps" in text
+    assert (tmp_path / "n.png").stat().st_size > 0
+    rc, text, _ = _run([str(path), "--goal", f"{goal[0]},{goal[1]}", "--start", "0,0", "--node-exponents",
+                        "--e-max", "40"], capsys)       # too small a range: the far end stays 0
+    assert rc == 1 and "NOT converged" in text and "STUCK" in text
+
+
+@pytest.mark.parametrize("extra,message", [
+    (["--node-exponents", "--engine", "icarus"], "the model only"),
+    (["--node-exponents", "--block-exponents"], "choose one"),
+    (["--p", "16"], "only with --node-exponents"),
+    (["--node-exponents", "--p", "3"], r"--p: 3: must be in 4\.\.48"),
+    (["--node-exponents", "--p", "49"], r"must be in 4\.\.48"),
+    (["--node-exponents", "--e-max", "0"], "e_max = 0"),
+])
+def test_node_exponents_refusals(capsys, extra, message):
+    rc, text, err = _run([ROOM, "--goal", "3,3", *extra], capsys)
+    assert rc == 2 and text == "" and len(err.strip().splitlines()) == 1 and re.search(message, err), err
