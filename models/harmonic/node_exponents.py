@@ -127,7 +127,7 @@ def _check(p, headroom, e_max):
 
 
 def plan_node_exponents(obstacle, goals, p=NODE_P, headroom=NODE_HEADROOM, e_max="map", max_iter=None,
-                        progress=None, until_fixed=False):
+                        progress=None, until_fixed=False, order="jacobi"):
     """The harmonic field with one exponent per node (module docstring).
 
     ``e_max``: an int, or ``"map"``: :func:`~models.harmonic.exponent_bound`
@@ -135,8 +135,14 @@ def plan_node_exponents(obstacle, goals, p=NODE_P, headroom=NODE_HEADROOM, e_max
     ``max_iter``: default 4 x (longest distance + 64 p).  ``progress(i,
     zeros, maxima)`` is called every 256 iterations.  ``until_fixed``: go
     on after convergence until an iteration changes nothing (the fixed point
-    of the rounded update, for error measurements).  Returns
+    of the rounded update, for error measurements).  ``order``:
+    ``"jacobi"`` (every node at once, the paper's node array) or
+    ``"red-black"`` (the nodes with even row + column first, then the
+    others from their new values: in place, the order a streaming engine
+    over one state RAM would run; an iteration is both halves).  Returns
     :class:`NodeExponentResult`."""
+    if order not in ("jacobi", "red-black"):
+        raise ValueError(f"order {order!r}: 'jacobi' or 'red-black'")
     t0 = time.perf_counter()
     obstacle = np.asarray(obstacle, dtype=bool)
     dist = distances(obstacle, goals)
@@ -173,13 +179,15 @@ def plan_node_exponents(obstacle, goals, p=NODE_P, headroom=NODE_HEADROOM, e_max
 
     it, fixed = 0, False
     zeros, maxima = tally()
+    halves = [free] if order == "jacobi" else [free & (cells.sum(axis=1) % 2 == k) for k in (0, 1)]
+    halves = [(np.flatnonzero(h), nbr[h]) for h in halves]
     while it < max_iter and (until_fixed or zeros or maxima):
-        nv, ne = node_update(v[nbr], e[nbr], p, e_max, headroom)
-        nv = np.where(free, nv, v[:R])
-        ne = np.where(free, ne, e[:R])
+        fixed = True
+        for idx, nb in halves:
+            nv, ne = node_update(v[nb], e[nb], p, e_max, headroom)
+            fixed = fixed and np.array_equal(nv, v[idx]) and np.array_equal(ne, e[idx])
+            v[idx], e[idx] = nv, ne
         it += 1
-        fixed = np.array_equal(nv, v[:R]) and np.array_equal(ne, e[:R])
-        v[:R], e[:R] = nv, ne
         zeros, maxima = tally()
         if progress and it % 256 == 0:
             progress(it, zeros, maxima)
