@@ -317,9 +317,7 @@ def plan_map(grid, goals, starts, block, iters, schedule, engine="model", block_
         if block_exponents:
             path, reached = decided[k]
             path, ascent = [list(c) for c in path], tr["path"]
-            parted = next((i for i, (a, b) in enumerate(zip(path, ascent)) if a != b),
-                          None if len(path) == len(ascent) else min(len(path), len(ascent)))
-            tr.update(path=path, reached_goal=reached, ascent=ascent, differs_at=parted)
+            tr.update(path=path, reached_goal=reached, ascent=ascent, differs_at=_parted(path, ascent))
         tr["reachable"] = bool(reach[s])
         if frame is not None:
             tr["path_xy"] = path_xy(frame, tr["path"])
@@ -467,6 +465,14 @@ def run(args):
                                                                "NO (" + "; ".join(result["model_differences"]) + ")"))
     if result["unreachable"]:
         lines.append(f"{len(result['unreachable'])} free cell(s) no goal can reach (no gradient there)")
+    title = f"{name}: harmonic potential, p = {result['precision']}, engine {args.engine}"
+    ok = _report(args, result, grid, goals, frame, lines, title)
+    return 0 if ok and result.get("rtl_matches_model", True) else 1
+
+
+def _report(args, result, grid, goals, frame, lines, title):
+    """The trajectories' lines, the --json / --csv / --plot files, the summary
+    printed; returns True when the plan converged and every start reached a goal."""
     for tr in result["trajectories"]:
         s = tuple(tr["start"])
         how = ""
@@ -491,12 +497,16 @@ def run(args):
         write_text(args.csv, "\n".join(rows) + "\n")
         lines.append(f"wrote {args.csv}")
     if args.plot:
-        title = f"{name}: harmonic potential, p = {result['precision']}, engine {args.engine}"
         plot(args.plot, grid, dict(result, _goals=goals), title)
         lines.append(f"wrote {args.plot}")
     print("\n".join(lines))
-    ok = result["converged"] and all(tr["reached_goal"] for tr in result["trajectories"])
-    return 0 if ok and result.get("rtl_matches_model", True) else 1
+    return result["converged"] and all(tr["reached_goal"] for tr in result["trajectories"])
+
+
+def _parted(path, ascent):
+    """The first step where the Decision's path and the exact ascent part, None if they are the same."""
+    return next((i for i, (a, b) in enumerate(zip(path, ascent)) if a != b),
+                None if len(path) == len(ascent) else min(len(path), len(ascent)))
 
 
 def plan_nodes(grid, goals, starts, p, e_max, frame=None, progress=None):
@@ -518,9 +528,8 @@ def plan_nodes(grid, goals, starts, p, e_max, frame=None, progress=None):
     for s, (path, reached) in zip(starts, decided):
         ascent = trajectory(res.key, goal_mask, s, nxt=nxt).as_dict()["path"]
         path = [list(c) for c in path]
-        parted = next((i for i, (a, b) in enumerate(zip(path, ascent)) if a != b),
-                      None if len(path) == len(ascent) else min(len(path), len(ascent)))
-        tr = {"start": list(s), "path": path, "reached_goal": bool(reached), "ascent": ascent, "differs_at": parted,
+        tr = {"start": list(s), "path": path, "reached_goal": bool(reached), "ascent": ascent,
+              "differs_at": _parted(path, ascent),
               "reachable": bool(reach[s])}
         if frame is not None:
             tr["path_xy"] = path_xy(frame, path)
@@ -578,27 +587,5 @@ def run_nodes(args):
     ]
     if result["unreachable"]:
         lines.append(f"{len(result['unreachable'])} free cell(s) no goal can reach (no gradient there)")
-    for tr in result["trajectories"]:
-        s = tuple(tr["start"])
-        how = (" by the Decision module, the exact ascent's path" if tr["differs_at"] is None else
-               f" by the Decision module, parting from the exact ascent at step {tr['differs_at']}")
-        if tr["reached_goal"]:
-            lines.append(f"start {s}: reaches goal {tuple(tr['path'][-1])} in {len(tr['path']) - 1} steps{how}")
-        elif not tr["reachable"]:
-            lines.append(f"start {s}: no goal can reach this cell (walled off): no trajectory")
-        else:
-            lines.append(f"start {s}: STUCK at {tuple(tr['path'][-1])} after {len(tr['path']) - 1} steps{how}")
-    if args.json:
-        write_text(args.json, json.dumps(result))
-        lines.append(f"wrote {args.json}")
-    if args.csv:
-        rows = ["start,row,col,x,y"]
-        for k, tr in enumerate(result["trajectories"]):
-            rows += path_csv(frame, tr["path"], prefix=(k,))
-        write_text(args.csv, "\n".join(rows) + "\n")
-        lines.append(f"wrote {args.csv}")
-    if args.plot:
-        plot(args.plot, grid, dict(result, _goals=goals), f"{name}: harmonic potential, node exponents, p = {p}")
-        lines.append(f"wrote {args.plot}")
-    print("\n".join(lines))
-    return 0 if result["converged"] and all(tr["reached_goal"] for tr in result["trajectories"]) else 1
+    title = f"{name}: harmonic potential, node exponents, p = {p}"
+    return 0 if _report(args, result, grid, goals, frame, lines, title) else 1
