@@ -54,6 +54,7 @@ sys.path.insert(0, str(ROOT))       # tb/ (not installed): the references
 
 from navcores.models.harmonic import (ascent_reaches, decision_paths, distances, exponent_bound,  # noqa: E402
                                       plan, plan_node_exponents, precision_estimate, trajectory, ascent_next)
+from navcores.models.harmonic.node_exponents import engine_cycles  # noqa: E402
 from navcores.models.maps import load_map, load_scenarios, longest_scenario  # noqa: E402
 from tb.harmonic.dirichlet import dirichlet  # noqa: E402
 from tb.harmonic.logspace import log_harmonic, order_field  # noqa: E402
@@ -69,12 +70,18 @@ SAMPLE = 1000
 FIT = ROOT / "build" / "fit" / "harmonic_planner_bc2_block_exponents1_br2_depth1024_m12_n6_pmax254--LFE5U-85F.json"
 
 
-def fit_clock():
-    """(MHz, part) of the exponent planner's fit, or None when it was not run or did not fit."""
+# The node-exponent engine sized for the 256x256 crop, exponents wide enough for the whole maze
+# (scripts/fit.py harmonic_node_exponent_engine max_h=256 max_w=256 p=16 e_max=10288 --part LFE5U-85F).
+ENGINE = {"max_h": 256, "max_w": 256, "p": 16, "e_max": 10288}
+ENGINE_FIT = ROOT / "build" / "fit" / "harmonic_node_exponent_engine_e_max10288_max_h256_max_w256_p16--LFE5U-85F.json"
+
+
+def fit_clock(path=FIT):
+    """(MHz, part) of a fit (default: the exponent planner's), or None when it was not run or did not fit."""
     import json
-    if not FIT.exists():
+    if not path.exists():
         return None
-    fit = json.loads(FIT.read_text())
+    fit = json.loads(path.read_text())
     return (fit["fmax_mhz"], fit["part"]) if fit.get("fits") and fit.get("fmax_mhz") else None
 
 
@@ -123,6 +130,8 @@ def measure_nodes(obstacle, goal, starts, log=print):
     # The in-place order a streaming engine would run (red-black), to convergence and to a fixed point.
     rb = plan_node_exponents(obstacle, [goal], order="red-black")
     rbf = plan_node_exponents(obstacle, [goal], order="red-black", until_fixed=True)
+    fits = all(n <= ENGINE[k] for n, k in zip(obstacle.shape, ("max_h", "max_w")))
+    row.update(engine_cycles=engine_cycles(*obstacle.shape, rbf.iterations) if fits else None)
     row.update(rb_iterations=rb.iterations, rb_converged=bool(rb.converged), rb_fixed=rbf.iterations,
                rb_same=bool(rbf.fixed_point and (rbf.key == res.key).all()) if res.fixed_point else None)
     row["n_reached"] = _reached(res.key, goal, starts)
@@ -210,9 +219,11 @@ def section(planner=("64", "128"), log=print):
         "(e_max, register bits) | planner cycles | node RAM | hardware time | model time | planner ascent / Decision "
         "reach goal (Decision paths differing) | node exponents: converged, iterations, e range (e_max, bits) | "
         "node exponents: state, model time | node exponents: ascent / Decision reach goal (differing) | "
-        "node exponents, red-black: iterations to converge / to a fixed point |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "node exponents, red-black: iterations to converge / to a fixed point | node-exponent engine: cycles, "
+        "hardware time |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
+    eclock = fit_clock(ENGINE_FIT)
     for r in rows:
         share = 100 * r["f64_zero"] / r["reachable"]
         log_col = (f"{r['log_seconds']:.2f} s, {r['log_sweeps']:,} sweeps"
@@ -237,7 +248,12 @@ def section(planner=("64", "128"), log=print):
                  f"{r['n_e_lo']}..{r['n_e_hi']:,} ({r['n_e_max']:,}, {r['n_e_max'].bit_length()} bits) | "
                  f"{r['n_state_mbit']:.2f} Mbit, {r['n_seconds']:.1f} s | {r['n_reached']:,} / "
                  f"{r['n_decision_reached']:,} of {r['starts']:,} ({r['n_decision_differs']}) | "
-                 f"{r['rb_iterations']:,}{'' if r['rb_converged'] else ' (NOT converged)'} / {r['rb_fixed']:,}")
+                 f"{r['rb_iterations']:,}{'' if r['rb_converged'] else ' (NOT converged)'} / {r['rb_fixed']:,} | ")
+        if r["engine_cycles"] is None:
+            nodes += f"beyond the engine's {ENGINE['max_h']}x{ENGINE['max_w']} RAM (state {r['n_state_mbit']:.1f} Mbit)"
+        else:
+            nodes += f"{r['engine_cycles']:,}, " + (f"{r['engine_cycles'] / (eclock[0] * 1e6):.3g} s" if eclock
+                                                    else "clock not measured")
         lines.append(f"| {labels[r['key']]} | {r['reachable']:,} | {r['longest']:,} | {r['f64_zero']:,} ({share:.0f} %; "
                      f"smallest {r['f64_min']:.1e}) | {log_col} | {est} | {plan_col} | {rest} | {nodes} |")
     lines += ["", "One exponent serves a whole block, so a block's word must span the distances inside the block and "
@@ -254,7 +270,12 @@ def section(planner=("64", "128"), log=print):
               "exponent per cell of the map, in Mbit (the LFE5U-85F has 3.7 Mbit of block RAM). Red-black: "
               "the even cells (row + column) first, then the odd ones from their new values, in place: the order a "
               "streaming engine over one state RAM would run (half the iterations; its fixed point is Jacobi's, "
-              "tested on the 64x64 crop). No RTL of node exponents is built: no hardware time.",
+              "tested on the 64x64 crop). Engine: hdl/harmonic/node_exponent_engine.py, the red-black order in place "
+              "to a fixed point, cycles = engine_cycles(H, W, iterations) (asserted against the RTL by the "
+              "regression), its clock "
+              + (f"{eclock[0]} MHz on the {eclock[1]} (scripts/fit.py harmonic_node_exponent_engine max_h=256 "
+                 "max_w=256 p=16 e_max=10288: build/fit)" if eclock else "not measured (build/fit has no fit of it)")
+              + "; the same iterations as the model with the map's own e_max (no exponent reaches either bound).",
               "", f"({time.time() - t0:.0f} s of runs)"]
     return "\n".join(lines) + "\n", rows
 

@@ -55,7 +55,7 @@ import numpy as np
 from .grid import distances, goal_mask
 
 __all__ = ["NODE_P", "NODE_HEADROOM", "GUARD", "P_LIMIT", "NodeExponentResult", "node_update", "order_key",
-           "plan_node_exponents"]
+           "plan_node_exponents", "ENGINE_SLOTS", "UPDATE_LATENCY", "ENGINE_HALF_EXTRA", "engine_cycles"]
 
 NODE_P = 16             # default word precision: a 17-bit mantissa, the fixed-point node's p of the paper's tables
 NODE_HEADROOM = 2       # empty top mantissa bits of a normalized node (see the module docstring)
@@ -204,3 +204,21 @@ def plan_node_exponents(obstacle, goals, p=NODE_P, headroom=NODE_HEADROOM, e_max
         maxima=maxima, zeros=zeros, fixed_point=bool(fixed),
         e_lo=int(e[:R][used].min()) if used.any() else 0, e_hi=int(e[:R][used].max()) if used.any() else 0,
         reachable=R, seconds=time.perf_counter() - t0)
+
+
+# --- the engine's cycles (hdl/harmonic/node_exponent_engine.py) -----------------------------------
+
+ENGINE_SLOTS = 5        # RAM reads a cell: its own word, then N, W, E, S (one read port)
+UPDATE_LATENCY = 9      # the node update's pipeline (hdl/harmonic/node_exponents.py, NodeExponentUpdate.LATENCY)
+ENGINE_HALF_EXTRA = UPDATE_LATENCY + 2   # a half-sweep's tail: the last cell's capture, push and write
+
+
+def engine_cycles(height, width, iterations):
+    """Cycles of the node-exponent engine's run (red-black, in place, to a
+    fixed point): every iteration is two half-sweeps, the even cells (row +
+    column) then the odd ones, each cell ENGINE_SLOTS reads; a half-sweep
+    ends when its last cell is written (ENGINE_HALF_EXTRA more), so the next
+    half reads the words just written; one cycle decides the next iteration.
+    ``iterations`` as :func:`plan_node_exponents` (order="red-black",
+    until_fixed=True) counts them."""
+    return int(iterations) * (ENGINE_SLOTS * int(height) * int(width) + 2 * ENGINE_HALF_EXTRA + 1)
