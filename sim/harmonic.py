@@ -110,6 +110,7 @@ or whose planner cannot take the map).
 """
 
 import json
+import tempfile
 import time
 from pathlib import Path
 
@@ -140,6 +141,15 @@ RTL_RATE = {"icarus": 4.0e3, "verilator": 2.4e4}
 # reachable node each (measured on maze512-1-0: 4e6 node updates a second).
 NODE_RATE = 4.0e6
 NODE_P_MIN, NODE_P_MAX = 4, 48      # models.harmonic.node_exponents: P_LIMIT
+NODE_MAX_ITER = (1 << 16) - 1       # the node-exponent engine's command carries max_iter in 16 bits
+NODE_RTL_RATE = {"icarus": 7.0e3, "verilator": 1.0e5}   # the engine's simulated cycles a second (measured)
+
+
+def engine_cycles_estimate(shape, longest):
+    """The engine's cycles on a map whose longest distance to a goal is ``longest`` (about 0.6 red-black
+    iterations a step to the fixed point on the maze crops)."""
+    from navcores.models.harmonic.node_exponents import engine_cycles
+    return engine_cycles(shape[0], shape[1], max(1, int(0.6 * longest) + 16))
 
 
 def add_arguments(parser):
@@ -509,14 +519,32 @@ def _parted(path, ascent):
                 None if len(path) == len(ascent) else min(len(path), len(ascent)))
 
 
-def plan_nodes(grid, goals, starts, p, e_max, frame=None, progress=None):
+def plan_nodes(grid, goals, starts, p, e_max, frame=None, progress=None, engine="model", work=None):
     """--node-exponents without I/O: the JSON-ready dict
-    (models.harmonic.plan_node_exponents, Decision trajectories on blocks of one node)."""
+    (models.harmonic.plan_node_exponents, Decision trajectories on blocks of one node).
+    ``engine`` icarus / verilator: the node-exponent engine's RTL in that
+    simulator (red-black, in place, to a fixed point; ``work``: its folder),
+    checked against the model run the same way."""
     from navcores.models.harmonic import ascent_next, decision_paths, plan_node_exponents, reachable, trajectory
+    from navcores.models.harmonic.node_exponents import engine_cycles
+    rtl = engine != "model"
     try:
-        res = plan_node_exponents(grid, goals, p=p, e_max=e_max, progress=progress)
+        if e_max == "map":
+            from navcores.models.harmonic import exponent_bound
+            e_max = exponent_bound(grid, goals)
+        opts = {"order": "red-black", "until_fixed": True, "max_iter": NODE_MAX_ITER} if rtl else {}
+        res = plan_node_exponents(grid, goals, p=p, e_max=e_max, progress=progress, **opts)
     except ValueError as e:
         raise CliError(str(e)) from None
+    extra = {"order": "red-black" if rtl else "jacobi"}
+    if rtl:
+        got = run_node_engine(grid, goals, p, e_max, engine, work)
+        diffs = [k for k, same in (
+            ("field", np.array_equal(got["mantissa"], res.mantissa) and np.array_equal(got["exponents"], res.exponents)),
+            ("iterations", got["iterations"] == res.iterations), ("fixed point", got["fixed"] == res.fixed_point),
+            ("cycles", got["cycles"] == engine_cycles(*grid.shape, res.iterations))) if not same]
+        extra.update(cycles=got["cycles"], fixed_point=got["fixed"], rtl_matches_model=not diffs,
+                     model_differences=diffs)
     reach = reachable(grid, goals)
     value = res.mantissa > 0
     goal_mask = np.zeros(grid.shape, dtype=bool)
@@ -537,10 +565,10 @@ def plan_nodes(grid, goals, starts, p, e_max, frame=None, progress=None):
     with np.errstate(divide="ignore"):
         log2 = np.log2(res.mantissa.astype(float)) - (res.p + res.exponents)
     out = {
-        "height": grid.shape[0], "width": grid.shape[1], "engine": "model", "node_exponents": True,
+        "height": grid.shape[0], "width": grid.shape[1], "engine": engine, "node_exponents": True,
         "precision": res.p, "headroom": res.headroom, "converged": bool(res.converged),
         "iterations": int(res.iterations), "maxima": int(max(res.maxima, 0)), "zeros": int(res.zeros),
-        "e_max": res.e_max, "exponents": res.exponents.tolist(),
+        "e_max": res.e_max, "exponents": res.exponents.tolist(), **extra,
         "potential": np.where(value, np.exp2(log2), 0.0).tolist(),
         "log2_potential": [[float(x) if ok else None for x, ok in zip(row, vrow)] for row, vrow in zip(log2, value)],
         "unreachable": [[int(r), int(c)] for r, c in np.argwhere(~grid & ~reach)],
@@ -551,10 +579,34 @@ def plan_nodes(grid, goals, starts, p, e_max, frame=None, progress=None):
     return out
 
 
+def node_engine_params(shape, p, e_max):
+    """The node-exponent engine sized for a map (its checks: one line on a refusal)."""
+    from navcores.hdl.harmonic.node_exponent_engine import NodeExponentEngine
+    from navcores.hdl.params import check
+    params = {"max_h": shape[0], "max_w": max(shape[1], 2), "p": p, "e_max": e_max, "headroom": 2}
+    check(NodeExponentEngine.PARAMS, NodeExponentEngine.CONSTRAINTS, **params)
+    if shape[1] < 2:
+        raise ValueError("the engine takes maps 2 or more cells wide")
+    return params
+
+
+def run_node_engine(grid, goals, p, e_max, sim, work):
+    """Run sim/rtl/node_engine_job.py on the engine sized for the map; returns its result."""
+    from .rtl.runner import run
+    job, result = work / "job.json", work / "result.json"
+    params = node_engine_params(grid.shape, p, e_max)
+    job.write_text(json.dumps({"obstacle": grid.tolist(), "goals": [list(g) for g in goals],
+                               "max_iter": NODE_MAX_ITER, "params": params}))
+    with Ticker(f"node-exponent engine RTL on {sim}"):
+        run("harmonic_node_exponent_engine", params, sim, "navcores.sim.rtl.node_engine_job",
+            env={"NODE_JOB": job, "NODE_RESULT": result}, log_file=work / "sim.log")
+    return json.loads(result.read_text())
+
+
 def run_nodes(args):
     """python -m sim harmonic --node-exponents."""
-    if args.engine != "model":
-        raise CliError(f"--node-exponents: the model only (no RTL of node exponents is built), not --engine {args.engine}")
+    if serial_engine.is_serial(args.engine):
+        raise CliError(f"--node-exponents: the model, icarus or verilator (no board runs it), not --engine {args.engine}")
     if args.block_exponents:
         raise CliError("--node-exponents and --block-exponents: choose one")
     gm, frame = load_map_arg(args)
@@ -567,25 +619,44 @@ def run_nodes(args):
     from navcores.models.harmonic.node_exponents import NODE_P
     p = NODE_P if args.p is None else args.p
     dist = distances(grid, goals)
-    work = float(max(int(dist.max()), 1)) * int((dist >= 0).sum())
-    announce("sim harmonic", work / NODE_RATE, f"node exponents on {grid.shape[0]}x{grid.shape[1]}",
-             f"about {work:.2g} node updates at {NODE_RATE:.0g} a second")
+    e_max = max(1, 2 * int(dist.max())) if args.e_max == "map" else args.e_max
+    rtl = args.engine != "model"
+    if rtl:
+        try:
+            node_engine_params(grid.shape, p, e_max)
+        except ValueError as e:
+            raise CliError(f"--engine {args.engine}: {e}") from None
+        # red-black to a fixed point: about 0.6 iterations a step of the longest distance
+        cycles = engine_cycles_estimate(grid.shape, int(dist.max()))
+        announce("sim harmonic", cycles / NODE_RTL_RATE[args.engine], f"the node-exponent engine on {args.engine}",
+                 f"about {cycles:.2g} clock cycles at {NODE_RTL_RATE[args.engine]:.0f} simulated a second")
+    else:
+        work = float(max(int(dist.max()), 1)) * int((dist >= 0).sum())
+        announce("sim harmonic", work / NODE_RATE, f"node exponents on {grid.shape[0]}x{grid.shape[1]}",
+                 f"about {work:.2g} node updates at {NODE_RATE:.0g} a second")
     t0 = time.time()
-    with Progress("harmonic node exponents", total=max(int(dist.max()), 1), unit=" iterations") as bar:
-        result = plan_nodes(grid, goals, starts, p, args.e_max, frame,
+    with Progress("harmonic node exponents", total=max(int(dist.max()), 1), unit=" iterations") as bar, \
+            tempfile.TemporaryDirectory(prefix="sim_nodes_") as tmp:
+        result = plan_nodes(grid, goals, starts, p, e_max, frame, engine=args.engine, work=Path(tmp),
                             progress=lambda i, zeros, maxima: bar.update(i, note=f"{zeros} nodes not reached"))
     seconds = time.time() - t0
     name = Path(args.map).name
     used = np.array(result["exponents"])[np.array([[x is not None for x in row] for row in result["log2_potential"]])]
     lines = [
-        f"{name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), node exponents (model), p = {p}",
+        f"{name}: {grid.shape[0]}x{grid.shape[1]}, {len(goals)} goal(s), node exponents, p = {p}, "
+        + (f"the engine's RTL on {args.engine} (red-black, in place, to a fixed point: {result['cycles']} cycles)"
+           if rtl else "the model (every node at once)"),
         ("converged: no local maximum" if result["converged"] else
          f"NOT converged: {result['zeros']} reachable node(s) at 0, {result['maxima']} local maxima")
         + f"; {result['iterations']} iterations ({seconds:.1f} s); exponents "
         f"{int(used.min()) if used.size else 0}..{int(used.max()) if used.size else 0} of e_max {result['e_max']} "
         f"({int(result['e_max']).bit_length()}-bit exponent per node)",
     ]
+    if rtl:
+        lines.append("RTL bit-exact and cycle-exact against the model: " + (
+            "yes" if result["rtl_matches_model"] else "NO (" + ", ".join(result["model_differences"]) + ")"))
     if result["unreachable"]:
         lines.append(f"{len(result['unreachable'])} free cell(s) no goal can reach (no gradient there)")
-    title = f"{name}: harmonic potential, node exponents, p = {p}"
-    return 0 if _report(args, result, grid, goals, frame, lines, title) else 1
+    title = f"{name}: harmonic potential, node exponents, p = {p}, engine {args.engine}"
+    ok = _report(args, result, grid, goals, frame, lines, title)
+    return 0 if ok and result.get("rtl_matches_model", True) else 1

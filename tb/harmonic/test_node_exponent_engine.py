@@ -1,7 +1,8 @@
 # amaranth: UnusedElaboratable=no
 """The node-exponent engine (issue 22) against models.harmonic, bit-exact and cycle-exact.
 
-``NodeExponentEngine(max_h=9, max_w=16, p=12, e_max=255)`` on both simulators:
+``NodeExponentEngine(max_h=9, max_w=16, p=12, e_max=255)`` on both simulators,
+through the command's driver (sim/rtl/node_engine_driver.py):
 
 * a serpentine corridor of 9x16 whose far end is about 2**-150 below the goal
   (a 64-bit fixed point holds 0 there; the node exponents do not);
@@ -17,26 +18,23 @@ model's, and ``cycles`` equals engine_cycles(H, W, iterations).  The cells
 and commands come with random idle cycles, the read-out with random
 back-pressure; the seed is printed (replay with SEED=).  The test counts
 what it exercised (a fixed point, a cut-short run, zeros left, exponents
-beyond 64 bits, back-pressure stalls) and asserts each.
+beyond 64 bits, a refusal, a reset, back-pressure stalls) and asserts each.
 """
 
 import os
 import random
 
 import cocotb
-from cocotb.clock import Clock
 import numpy as np
 import pytest
-from cocotb.triggers import ClockCycles, RisingEdge, SimTimeoutError, with_timeout
+from cocotb.triggers import ClockCycles, RisingEdge
 
 from planner_maps import corridor, random_map
 from navcores.models.harmonic.node_exponents import engine_cycles, plan_node_exponents
-from navcores.sim.rtl.clock import PERIOD_NS
+from navcores.sim.rtl.node_engine_driver import NodeEngineDriver
 from navcores.sim.rtl.runner import SIMULATORS, run, seed_from_env
-from navcores.sim.rtl.stream import Streams, pauses
 
-PARAMS = {"max_h": 9, "max_w": 16, "p": 12, "e_max": 255}
-FREE, OBSTACLE, GOAL = 0, 1, 2
+PARAMS = {"max_h": 9, "max_w": 16, "p": 12, "e_max": 255, "headroom": 2}   # as sim harmonic sizes it: one build
 
 
 def _maps(rng):
@@ -47,45 +45,24 @@ def _maps(rng):
     free = np.argwhere(~ob2)
     g2.append(tuple(int(x) for x in free[rng.integers(len(free))]))
     out.append(("random 7x10, two goals", ob2, g2, 1000))
-    ob3 = np.zeros((5, 2), dtype=bool)
-    out.append(("5x2, no obstacle", ob3, [(4, 1)], 1000))
+    out.append(("5x2, no obstacle", np.zeros((5, 2), dtype=bool), [(4, 1)], 1000))
     out.append(("corridor cut short", ob, goals, 5))
     ob4, g4 = random_map(9, 13, int(rng.integers(1 << 30)), density=0.45)    # pockets no goal reaches
     out.append(("random 9x13, dense", ob4, g4, 1000))
     return out
 
 
-def _cells(ob, goals):
-    codes = np.where(ob, OBSTACLE, FREE)
-    for g in goals:
-        codes[g] = GOAL
-    return [int(x) for x in codes.ravel()]
-
-
-async def _job(dut, streams, cmd, cells, field, ob, goals, max_iter, seen):
+async def _job(drv, ob, goals, max_iter, seen):
     H, W = ob.shape
     model = plan_node_exponents(ob, goals, p=PARAMS["p"], e_max=PARAMS["e_max"], order="red-black",
                                 until_fixed=True, max_iter=max_iter)
-    cmd.put({"height": H, "width": W, "max_iter": max_iter})
-    cells.extend(_cells(ob, goals))
-    bound = 2 * engine_cycles(H, W, model.iterations) + 40 * H * W + 1000      # a hang fails, with the status
-    words = []
-    for k in range(H * W):
-        try:
-            words.append(await with_timeout(field.recv(), bound * PERIOD_NS, "ns"))
-        except SimTimeoutError:
-            raise AssertionError(f"{k} of {H * W} words after {bound} cycles: busy {dut.busy.value}, iterations "
-                                 f"{dut.iterations.value} (model {model.iterations}), cycles {dut.cycles.value}")
-    got_v = np.array([w["v"] for w in words]).reshape(H, W)
-    got_e = np.array([w["e"] for w in words]).reshape(H, W)
-    assert (got_v == model.mantissa).all() and (got_e == model.exponents).all(), \
-        f"field differs at {np.argwhere((got_v != model.mantissa) | (got_e != model.exponents))[:5].tolist()}"
-    assert int(dut.iterations.value) == model.iterations
-    assert int(dut.fixed.value) == model.fixed_point
-    assert int(dut.cycles.value) == engine_cycles(H, W, model.iterations), \
-        (int(dut.cycles.value), engine_cycles(H, W, model.iterations))
-    await RisingEdge(dut.clk)                     # the last beat's edge has ended the job
-    assert not int(dut.busy.value) and not int(dut.error.value)
+    got = await drv.job(ob, goals, max_iter, expect_iterations=model.iterations)
+    v, e = np.array(got["mantissa"]), np.array(got["exponents"])
+    assert (v == model.mantissa).all() and (e == model.exponents).all(), \
+        f"field differs at {np.argwhere((v != model.mantissa) | (e != model.exponents))[:5].tolist()}"
+    assert (got["iterations"], got["fixed"]) == (model.iterations, model.fixed_point)
+    assert got["cycles"] == engine_cycles(H, W, model.iterations), (got["cycles"], engine_cycles(H, W, model.iterations))
+    assert not got["busy"] and not got["error"]
     seen["fixed"] += model.fixed_point
     seen["cut short"] += not model.fixed_point
     seen["zeros"] += int(((~ob) & (model.mantissa == 0)).sum()) > 0
@@ -96,23 +73,16 @@ async def _job(dut, streams, cmd, cells, field, ob, goals, max_iter, seen):
 async def engine_jobs(dut):
     seed = int(os.environ["ENGINE_SEED"])
     rng = np.random.default_rng(seed)
-    prng = random.Random(seed)
-    dut.cmd__valid.value = 0
-    dut.cells__valid.value = 0
-    dut.field__ready.value = 0
-    cocotb.start_soon(Clock(dut.clk, PERIOD_NS, unit="ns").start())
-    streams = Streams(dut)
-    cmd = streams.source("cmd", dut_layout("cmd"), pause=pauses(prng, 0.3))
-    cells = streams.source("cells", 2, pause=pauses(prng, 0.2))
-    field = streams.sink("field", dut_layout("field"), pause=pauses(prng, 0.4))
-    await streams.apply_reset()
+    drv = NodeEngineDriver(dut, PARAMS)
+    drv.set_stalls(random.Random(seed), idle=0.25, back_pressure=0.4)
+    await drv.start()
     seen = {"fixed": 0, "cut short": 0, "zeros": 0, "beyond 64 bits": 0, "refused": 0, "reset": 0}
     for name, ob, goals, max_iter in _maps(rng):
         dut._log.info(f"{name}: {ob.shape}, goals {goals}, max_iter {max_iter}")
-        await _job(dut, streams, cmd, cells, field, ob, goals, max_iter, seen)
+        await _job(drv, ob, goals, max_iter, seen)
 
     # A bad command: refused, nothing taken from the cells, the engine idle.
-    cmd.put({"height": 0, "width": 4, "max_iter": 3})
+    drv.cmd.put({"height": 0, "width": 4, "max_iter": 3})
     for _ in range(40):
         await RisingEdge(dut.clk)
         if int(dut.error.value):
@@ -120,27 +90,20 @@ async def engine_jobs(dut):
     assert int(dut.error.value) and not int(dut.busy.value)
     seen["refused"] += 1
     ob, goals = random_map(6, 9, 7, density=0.25)
-    await _job(dut, streams, cmd, cells, field, ob, goals, 1000, seen)
+    await _job(drv, ob, goals, 1000, seen)
 
     # A reset in the middle of a sweep, then a job from scratch.
     ob, goals = corridor(9, 16)
-    cmd.put({"height": 9, "width": 16, "max_iter": 1000})
-    cells.extend(_cells(ob, goals))
+    drv.submit(ob, goals, 1000)
     await ClockCycles(dut.clk, 9 * 16 * 3 + 2000)
     assert int(dut.busy.value) and int(dut.cycles.value) > 0, "the job should be sweeping"
-    await streams.apply_reset()
+    await drv.streams.apply_reset()
     assert not int(dut.busy.value) and int(dut.cycles.value) == 0
     seen["reset"] += 1
-    await _job(dut, streams, cmd, cells, field, ob, goals, 1000, seen)
-    seen["stalls"] = field.stalls
+    await _job(drv, ob, goals, 1000, seen)
+    seen["stalls"] = drv.field.stalls
     dut._log.info(f"exercised: {seen}")
     assert all(seen.values()), f"not exercised: {[k for k, v in seen.items() if not v]}"
-
-
-def dut_layout(stream):
-    from navcores.hdl.harmonic.node_exponent_engine import NodeExponentEngine
-    eng = NodeExponentEngine(**PARAMS)
-    return {"cmd": eng.cmd, "field": eng.field}[stream].payload.shape()
 
 
 @pytest.mark.parametrize("sim", SIMULATORS)

@@ -376,7 +376,8 @@ def test_node_exponents(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("extra,message", [
-    (["--node-exponents", "--engine", "icarus"], "the model only"),
+    (["--node-exponents", "--engine", "serial:/dev/ttyUSB9"], "no board runs it"),
+    (["--node-exponents", "--engine", "icarus", "--e-max", "70000"], r"--engine icarus: e_max"),
     (["--node-exponents", "--block-exponents"], "choose one"),
     (["--p", "16"], "only with --node-exponents"),
     (["--node-exponents", "--p", "3"], r"--p: 3: must be in 4\.\.48"),

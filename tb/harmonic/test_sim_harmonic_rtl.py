@@ -104,3 +104,29 @@ def test_rtl_engine_block_exponents_matches_model(sim, tmp_path, capsys):
         assert rtl[key] == model[key], key
         compared += 1
     assert compared == 12 and model["converged"] and model["trajectories"][0]["reached_goal"]
+
+
+@pytest.mark.parametrize("sim", SIMULATORS)
+def test_node_exponent_engine_command(sim, tmp_path, capsys):
+    """--node-exponents --engine icarus|verilator: the node-exponent engine
+    sized for the map (the engine regression's build: 9x16, p 12, e_max 255)
+    runs it, the command checks it against the model (red-black to a fixed
+    point) and reports the Decision's path on the RTL's field."""
+    from planner_maps import corridor
+    from navcores.models.harmonic import plan_node_exponents
+    from navcores.models.harmonic.node_exponents import engine_cycles
+    ob, goals = corridor(9, 16)
+    path = tmp_path / "serp.txt"
+    path.write_text("\n".join("".join("#" if v else "." for v in row) for row in ob) + "\n")
+    out = tmp_path / "n.json"
+    rc = main(["harmonic", str(path), "--goal", "8,15", "--start", "0,0", "--node-exponents", "--p", "12",
+               "--e-max", "255", "--engine", sim, "--json", str(out)])
+    text = capsys.readouterr().out
+    assert rc == 0, text
+    r = json.loads(out.read_text())
+    model = plan_node_exponents(ob, goals, p=12, e_max=255, order="red-black", until_fixed=True)
+    assert r["engine"] == sim and r["order"] == "red-black" and r["rtl_matches_model"] and r["fixed_point"]
+    assert r["exponents"] == model.exponents.tolist() and r["iterations"] == model.iterations
+    assert r["cycles"] == engine_cycles(9, 16, model.iterations)
+    assert "RTL bit-exact and cycle-exact against the model: yes" in text
+    assert r["trajectories"][0]["reached_goal"]
