@@ -68,20 +68,26 @@ engines refuse a map that needs more than 65535); the summary names the
 bound, its register width and the blocks that end at it.  The model runs
 its fast visit (bit for bit the reference's, tested).
 
---node-exponents (issue 22, the model only: no RTL of it is built): one
-exponent per node, block exponents with blocks of one node
-(models.harmonic.plan_node_exponents: a (P+1)-bit mantissa, default P = 16,
-its top 2 bits empty, and an exponent 0..e_max per node, every node updated
-at once, eq. 2 floored).  Where a maze puts corridors thousands of steps
-apart into one block, no block exponent helps (its word needs about 2 bits
-a step of that spread); a node's own exponent does, and the field converges
-once its front has reached every reachable node (about one iteration a
-step of the longest distance).  --block, --iters and --schedule do not
-apply.  The JSON's "precision" is P, "iterations" the iterations run,
-"exponents" the final e per cell (HxW, e_max where the field is 0), "e_max";
-"potential" holds float64 values, which are 0 below about 1e-308: use
-"log2_potential" (log2 of the value, null where it is 0).  Trajectories are
-the Decision module's (as with --block-exponents, on blocks of one node).
+--node-exponents (issue 22): one exponent per node, block exponents with
+blocks of one node (models.harmonic.plan_node_exponents: a (P+1)-bit
+mantissa, default P = 16, its top 2 bits empty, and an exponent 0..e_max per
+node, eq. 2 floored).  Where a maze puts corridors thousands of steps apart
+into one block, no block exponent helps (its word needs about 2 bits a step
+of that spread); a node's own exponent does.  The model updates every node
+at once and stops when no local maximum is left and every reachable node
+holds a value (about one iteration a step of the longest distance);
+--engine icarus|verilator runs the node-exponent engine's RTL
+(hdl/harmonic/node_exponent_engine.py, sized for the map: at most 1024 x
+1024, e_max <= 65535) in that simulator, red-black in place to a fixed
+point, and checks it against the model run the same way (field,
+iterations, cycles: "rtl_matches_model"; a difference exits 1).  --block,
+--iters and --schedule do not apply.  The JSON's "precision" is P,
+"iterations" the iterations run, "order" (jacobi or red-black), "cycles"
+(RTL engines), "exponents" the final e per cell (HxW, e_max where the field
+is 0), "e_max"; "potential" holds float64 values, which are 0 below about
+1e-308: use "log2_potential" (log2 of the value, null where it is 0).
+Trajectories are the Decision module's (as with --block-exponents, on
+blocks of one node).
 
 Trajectories: steepest 4-neighbour ascent from each start (ties to the
 first of N, E, W, S) until a goal, on the final field.  With
@@ -170,8 +176,8 @@ def add_arguments(parser):
                         help="one exponent per block (issue 10, beyond the paper; every engine): "
                              "the word length follows the block, not the map")
     parser.add_argument("--node-exponents", action="store_true",
-                        help="one exponent per node (issue 22, the model only): mazes whose blocks hold "
-                             "corridors far apart")
+                        help="one exponent per node (issue 22; model, icarus or verilator): mazes whose "
+                             "blocks hold corridors far apart")
     parser.add_argument("--p", type=integer(NODE_P_MIN, NODE_P_MAX, "the node-exponent model's int64 words"),
                         default=None, metavar="P",
                         help="with --node-exponents: the mantissa's precision (default 16)")
