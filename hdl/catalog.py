@@ -127,6 +127,9 @@ SETS = (
         beyond="Table 3's 48x96 block"),
     Set("planner_exp", "harmonic_planner", {**PLANNER, "block_exponents": 1}, family="xc2v",
         beyond="the block-exponent option, issue 10"),
+    # Issue 22: the node update of node exponents at the whole 512x512 maze's e_max (14-bit exponents).
+    Set("node_exponents", "harmonic_node_exponents", {"p": 16, "e_max": 10288}, emit=True,
+        beyond="issue 22: one floating-point node update a clock, one exponent per node"),
     Set("dflc_stream", "dflc_stream", {"fll": "table1"}, emit=True),
     Set("dflc", "dflc_core", {"fll": "table1"}, emit=True, family="xc3s", paper=PAPER["dflc_core"]),
     Set("dflc_par", "dflc_core", {"fll": "table1", "par": 1}, emit=True, family="xc3s",

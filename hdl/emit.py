@@ -56,6 +56,7 @@ from .harmonic.cluster import Cluster  # noqa: E402
 from .harmonic.counters import Counters  # noqa: E402
 from .harmonic.decision import Decision  # noqa: E402
 from .harmonic.node import Node  # noqa: E402
+from .harmonic.node_exponents import NodeExponentUpdate  # noqa: E402
 from .harmonic.planner import Planner  # noqa: E402
 from .harmonic.block import Block  # noqa: E402
 from .ram_init import strip_undefined_init  # noqa: E402
@@ -69,6 +70,8 @@ TOPS = {
     "harmonic_counters": Counters,
     "harmonic_cluster": Cluster,
     "harmonic_decision": Decision,
+    # issue 22: the node update of node exponents, a pipeline between two streams
+    "harmonic_node_exponents": NodeExponentUpdate,
     # the border storage of an n x m block, for its unit test and synthesis
     "harmonic_border": lambda n, m, br=1, bc=1, p_max=30, exponents=0, e_max=255: Border(
         n, m, (br, bc), p_max, bool(exponents), e_max),

@@ -27,6 +27,7 @@ BASE = {
     "harmonic_counters": {"p_max": 6},
     "harmonic_cluster": {"depth": 64},
     "harmonic_decision": {"p_max": 6},
+    "harmonic_node_exponents": {"p": 8, "e_max": 20},
     "harmonic_border": {"n": 3, "m": 6, "br": 2, "bc": 2, "p_max": 6},
     "harmonic_block": {"n": 3, "m": 6, "p_max": 14, "depth": 64},
     "harmonic_planner": {"n": 3, "m": 6, "br": 1, "bc": 2, "p_max": 14, "depth": 64},
