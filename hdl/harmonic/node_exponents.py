@@ -40,15 +40,6 @@ def _leading_one(x):
     return nodes[0]
 
 
-def _clip(m, value, lo, hi, name):
-    """A signal of ``value`` clamped to [lo, hi] (combinational; no compare
-    below lo for an unsigned value and lo = 0: it could not be true)."""
-    out = Signal(range(lo, hi + 1), name=name)
-    above = Mux(value > hi, hi, value)
-    m.d.comb += out.eq(above if lo == 0 and not value.shape().signed else Mux(value < lo, lo, above))
-    return out
-
-
 class NodeExponentUpdate(wiring.Component):
     """The node update of node exponents (issue 22), one per clock.
 
@@ -74,30 +65,34 @@ class NodeExponentUpdate(wiring.Component):
     e = clamp(rc - b) and the shift of S << (p-h) to the right is rc - 1 -
     e, i.e. b - 1 unclamped.
 
-    Pipeline (a beat moves from one stage to the next on each clock the
-    next stage can take it: a stage takes a beat when it is empty or its own
-    beat moves on; so a stalled output holds every stage's data, bubbles
-    close up behind it, and a full pipeline takes an input in the cycle it
-    delivers an output, one result per clock without stalls):
+    Pipeline: every stage moves on together, on each clock unless the
+    output beat is stalled (``o_stream.valid`` high, ``o_stream.ready``
+    low); so a stalled output holds every stage's data (bubbles included),
+    ``i_stream.ready`` is low exactly while it is stalled, and a full
+    pipeline takes an input in the cycle it delivers an output: one result
+    per clock without stalls.  ``o_stream.valid`` is a register.
 
     =======  ============================================================
     stage    registers at its end (the work before them)
     =======  ============================================================
     1        the four words; min(N, E) and min(W, S) of the keys
-             (zero flag, e): a zero word sorts after every non-zero one
+             (e, zero): a zero word sorts after every non-zero one
     2        r = min of the two (the smallest non-zero exponent)
-    3        the four alignment shifts, min(e_j - r, p+3); from r alone:
+    3        the four alignment shifts e_j - r (saturated); from r alone:
              rc - 1 and the clamps' thresholds (clipped to a few bits)
     4        the aligned mantissas, (v_j << 2) >> shift (barrel shifters)
-    5        S, the exact four-operand sum (p+5 bits)
-    6        the leading one of S (pos = b - 1, a tree), S
-    7        e (clamped, e_max for zero), the normalizing shift, S
-    8        v = ((S << (p-h)) >> shift)[p:0] (barrel shifter), e: the
+    5        N + E and W + S
+    6        S, the exact four-operand sum (p+5 bits)
+    7        the leading one of S (pos = b - 1, a tree), S
+    8        e (clamped, e_max for zero), the normalizing shift, S
+    9        v = ((S << (p-h)) >> shift)[p:0] (barrel shifter), e: the
              output payload, ``o_stream.valid``
     =======  ============================================================
 
-    ``LATENCY`` = 8: without back-pressure, an output handshake exactly 8
-    cycles after its input's; initiation interval 1.
+    ``LATENCY`` = 9: without back-pressure, an output handshake exactly 9
+    cycles after its input's; initiation interval 1.  (Every stage holds
+    at most one carry chain or shifter: 8 stages, with the sum in one and
+    the thresholds as adders in a row, closed at 81 MHz on the LFE5U-85F.)
 
     Parameters
     ----------
@@ -121,7 +116,7 @@ class NodeExponentUpdate(wiring.Component):
     data register to 0.
     """
 
-    LATENCY = 8
+    LATENCY = 9
 
     PARAMS = (
         Param("p", int, lo=4, hi=P_LIMIT, doc="word precision: p+1 mantissa bits (the model's P_LIMIT)",
@@ -162,21 +157,24 @@ class NodeExponentUpdate(wiring.Component):
         smax = sw + sig - 1             # width of S << (p-h): a shift this far leaves nothing
         n_stages = self.LATENCY
 
-        # Handshake: stage k takes a beat when it is empty or its beat moves
-        # on (take[k]); the last one's moves on at the output handshake.
+        # Handshake: one enable for every stage, ``go``: the pipeline moves
+        # on unless its output beat is stalled (valid and not ready).  Not a
+        # per-stage "take when empty or moving" chain, which would close up
+        # bubbles behind a stall but puts one LUT a stage between
+        # o_stream.ready and the first stage's clock enables (that chain was
+        # the critical path, 7.1 ns, on the LFE5U-85F).  i_stream.ready is
+        # ``go``: ready may follow ready, valid never does.
         valid = [Signal(name=f"valid{k}") for k in range(1, n_stages + 1)]
-        take = [Signal(name=f"take{k}") for k in range(1, n_stages + 1)]
-        for k in range(n_stages):
-            nxt = take[k + 1] if k + 1 < n_stages else self.o_stream.ready
-            m.d.comb += take[k].eq(~valid[k] | nxt)
-            with m.If(take[k]):
-                m.d.sync += valid[k].eq(valid[k - 1] if k else self.i_stream.valid)
-        m.d.comb += [self.i_stream.ready.eq(take[0]), self.o_stream.valid.eq(valid[-1])]
+        go = Signal(name="go")
+        m.d.comb += go.eq(~valid[-1] | self.o_stream.ready)
+        with m.If(go):
+            m.d.sync += [valid[k].eq(valid[k - 1] if k else self.i_stream.valid) for k in range(n_stages)]
+        m.d.comb += [self.i_stream.ready.eq(go), self.o_stream.valid.eq(valid[-1])]
 
         def stage(k, name, value, shape=None):
-            """A register of stage k (1-based) loaded with ``value`` when the stage takes a beat."""
+            """A register of stage k (1-based, for its name) loaded with ``value`` when the pipeline moves."""
             reg = Signal(shape if shape is not None else value.shape(), name=f"s{k}_{name}")
-            with m.If(take[k - 1]):
+            with m.If(go):
                 m.d.sync += reg.eq(value)
             return reg
 
@@ -185,78 +183,100 @@ class NodeExponentUpdate(wiring.Component):
 
         nb = self.i_stream.payload
 
-        # Stage 1: the min of pairs.  A key is (zero, e): a zero word's key
-        # is above every non-zero one's, so the min of the keys is the
-        # smallest non-zero exponent whenever there is one (and S = 0, the
-        # result zero, whatever r is when there is none).
-        key = {k: Cat(nb[k].e, nb[k].v == 0) for k in NEIGHBOURS}
-        pair = {a + b: stage(1, f"min{a}{b}", Mux(key[b] < key[a], key[b], key[a]))
-                for a, b in (("N", "E"), ("W", "S"))}
+        def smaller(a, b, name):
+            """(e, zero) of the smaller of two (e, zero) keys: a zero word's
+            key is above every non-zero one's, so the smallest key is the
+            smallest non-zero exponent whenever there is one (and S = 0, the
+            result zero, whatever r is when there is none).  The exponents'
+            comparator runs beside the zero flags, not after them."""
+            (ea, za), (eb, zb) = a, b
+            lt = Signal(name=f"lt_{name}")
+            m.d.comb += lt.eq(eb < ea)
+            pick_b = za | (~zb & lt)
+            return Mux(pick_b, eb, ea), Mux(pick_b, zb, za)
+
+        # Stage 1: the min of pairs (N, E) and (W, S).
+        pair = {}
+        for a, b in (("N", "E"), ("W", "S")):
+            e, z = smaller((nb[a].e, nb[a].v == 0), (nb[b].e, nb[b].v == 0), a + b)
+            pair[a + b] = (stage(1, f"min{a}{b}_e", e), stage(1, f"min{a}{b}_z", z))
         v1 = {k: stage(1, f"v{k}", nb[k].v) for k in NEIGHBOURS}
         e1 = {k: stage(1, f"e{k}", nb[k].e) for k in NEIGHBOURS}
 
         # Stage 2: r.
-        a, b = pair["NE"], pair["WS"]
-        r2 = stage(2, "r", Mux(b < a, b, a)[:ew])
+        r2 = stage(2, "r", smaller(pair["NE"], pair["WS"], "r")[0])
         v2, e2 = carry(2, {f"v{k}": v1[k] for k in NEIGHBOURS}), carry(2, {f"e{k}": e1[k] for k in NEIGHBOURS})
 
-        # Stage 3: the alignment shifts, saturated at p+3 (everything
-        # shifted out; a zero word's shift does not matter, its v is 0),
-        # and what stage 7 needs from r, computed here, off its path:
-        #   rc = r + G + 2 + (p+1-h)   (e unclamped = rc - b)
-        #   udf: e < 0        <=> b > rc            <=> pos >= rc
-        #   ovf: e > e_max    <=> b < rc - e_max    <=> pos < rc - e_max - 1
-        #   zero at e_max:    S >> (r + G + 2 - e_max) = 0 <=> pos < r + G + 2 - e_max
-        #   shift of S << (p-h): rc - 1 - e = pos, rc - 1 (udf), rc - 1 - e_max (ovf)
-        # pos < sw always, so each threshold is clipped to [0, sw] (a few
-        # bits: stage 7 compares pos with small numbers only).
+        # Stage 3: the alignment shifts: e_j - r, saturated where it has
+        # bits above the shift amount's kb = bit_length(p+3) (a zero word's
+        # shift does not matter, its v is 0).  No compare with p+3 after
+        # the subtractor (a second carry chain, the critical path at 149
+        # MHz): a shift of p+3 .. 2**kb - 1 leaves nothing of the p+3-bit
+        # (v << 2) either.
         sh3 = {}
+        kb = aw.bit_length()
         for k in NEIGHBOURS:
             d = Signal(signed(ew + 1), name=f"gap{k}")
             m.d.comb += d.eq(e2[f"e{k}"] - r2)
-            sh3[k] = stage(3, f"sh{k}", Mux((d < 0) | (d > aw), aw, d[:ew]), range(aw + 1))
+            sat = d[-1] | (d[kb:ew].any() if ew > kb else Const(0, 1))
+            sh3[k] = stage(3, f"sh{k}", Mux(sat, (1 << kb) - 1, d[:kb]), kb)
         v3 = carry(3, v2)
-        rc = Signal(range((1 << ew) + GUARD + 2 + sig), name="rc")
-        t_ovf = Signal(signed(ew + 8), name="t_ovf")         # rc - e_max
-        z = Signal(signed(ew + 8), name="z")                  # r + G + 2 - e_max
-        m.d.comb += [rc.eq(r2 + GUARD + 2 + sig), t_ovf.eq(rc - e_max), z.eq(r2 + GUARD + 2 - e_max)]
-        rcm1 = stage(3, "rcm1", rc - 1, range((1 << ew) + GUARD + 2 + sig))
-        udf_at = stage(3, "udf_at", _clip(m, rc, 0, sw, "udf_at_c"))
-        ovf_at = stage(3, "ovf_at", _clip(m, t_ovf - 1, 0, sw, "ovf_at_c"))
-        zero_at = stage(3, "zero_at", _clip(m, z, 0, sw, "zero_at_c"))
-        s_udf = stage(3, "s_udf", _clip(m, rc - 1, 0, smax, "s_udf_c"))
-        s_ovf = stage(3, "s_ovf", _clip(m, t_ovf - 1, 0, smax, "s_ovf_c"))
-        ex3 = {"rcm1": rcm1, "udf_at": udf_at, "ovf_at": ovf_at, "zero_at": zero_at, "s_udf": s_udf,
-               "s_ovf": s_ovf}
+        # ... and what stage 8 needs from r, off its path.  With
+        # rc = r + G + 2 + (p+1-h) (e unclamped = rc - b, b = pos + 1):
+        #   udf: e < 0       <=> b > rc           <=> pos >= rc
+        #   ovf: e > e_max   <=> b < rc - e_max   <=> pos < rc - e_max - 1
+        #   shift of S << (p-h) to the right: rc - 1 - e: pos, rc - 1 (udf), rc - 1 - e_max (ovf)
+        # pos < sw always, so each threshold is clipped to [0, sw] (stage 8
+        # compares pos with a few bits only).  Each is r + c clipped: r
+        # compared with two constants beside a short adder of r's low bits
+        # (the clipped value's bits), never adders in a row.
+        c_rc = GUARD + 2 + sig
+
+        def affine(c, hi, name):
+            """clamp(r + c, 0, hi) for a constant c."""
+            k = hi.bit_length()
+            out = Signal(range(hi + 1), name=name)
+            low = Signal(k, name=f"{name}_low")
+            m.d.comb += low.eq(r2[:k] + (c % (1 << k)))     # r + c mod 2**k: exact when 0 <= r + c <= hi
+            m.d.comb += out.eq(Mux(r2 < -c, 0, Mux(r2 > hi - c, hi, low)) if -c > 0 else
+                               Mux(r2 > hi - c, hi, low))
+            return stage(3, name, out)
+
+        ex3 = {"rcm1": stage(3, "rcm1", r2 + (c_rc - 1), range((1 << ew) + c_rc)),
+               "udf_at": affine(c_rc, sw, "udf_at"), "ovf_at": affine(c_rc - e_max - 1, sw, "ovf_at"),
+               "s_udf": affine(c_rc - 1, smax, "s_udf"),
+               "s_ovf": affine(c_rc - e_max - 1, smax, "s_ovf")}
 
         # Stage 4: the aligned mantissas (floor: the bits shifted out are dropped).
         a4 = {k: stage(4, f"a{k}", (Cat(Const(0, GUARD), v3[f"v{k}"]) >> sh3[k])[:aw], aw) for k in NEIGHBOURS}
         ex4 = carry(4, ex3)
 
-        # Stage 5: the exact sum.
-        s5 = stage(5, "S", a4["N"] + a4["E"] + a4["W"] + a4["S"], sw)
+        # Stages 5 and 6: the exact sum, two adders then one (a carry chain a stage).
+        s5 = {"NE": stage(5, "NE", a4["N"] + a4["E"], aw + 1), "WS": stage(5, "WS", a4["W"] + a4["S"], aw + 1)}
         ex5 = carry(5, ex4)
-
-        # Stage 6: the leading one.
-        nz, pos = _leading_one(s5)
-        nz6 = stage(6, "nz", nz)
-        pos6 = stage(6, "pos", pos)
-        s6 = stage(6, "S", s5)
+        s6 = stage(6, "S", s5["NE"] + s5["WS"], sw)
         ex6 = carry(6, ex5)
 
-        # Stage 7: the clamps, the exponent and the shift.
-        udf, ovf = Signal(name="udf"), Signal(name="ovf")
-        m.d.comb += [udf.eq(pos6 >= ex6["udf_at"]), ovf.eq(pos6 < ex6["ovf_at"])]
-        zero = Signal(name="zero")
-        m.d.comb += zero.eq(~nz6 | (ovf & (pos6 < ex6["zero_at"])))
-        e_norm = Signal(ew, name="e_norm")
-        m.d.comb += e_norm.eq(ex6["rcm1"] - pos6)
-        e7 = stage(7, "e", Mux(zero | ovf, e_max, Mux(udf, 0, e_norm)), ew)
-        sh7 = stage(7, "shift", Mux(udf, ex6["s_udf"], Mux(ovf, ex6["s_ovf"], pos6)), range(smax + 1))
+        # Stage 7: the leading one.
+        nz, pos = _leading_one(s6)
+        nz7 = stage(7, "nz", nz)
+        pos7 = stage(7, "pos", pos)
         s7 = stage(7, "S", s6)
+        ex7 = carry(7, ex6)
 
-        # Stage 8: the normalizing shift (one floor), into the output registers.
-        v8 = stage(8, "v", (Cat(Const(0, p - h), s7) >> sh7)[:p + 1], p + 1)
-        e8 = stage(8, "e", e7)
-        m.d.comb += [self.o_stream.payload.v.eq(v8), self.o_stream.payload.e.eq(e8)]
+        # Stage 8: the clamps, the exponent and the shift.
+        udf, ovf = Signal(name="udf"), Signal(name="ovf")
+        m.d.comb += [udf.eq(pos7 >= ex7["udf_at"]), ovf.eq(pos7 < ex7["ovf_at"])]
+        # A zero result has e = e_max: S = 0, or at e_max (ovf) a sum below
+        # the smallest denormal, which the shift below makes v = 0 by itself.
+        e_norm = Signal(ew, name="e_norm")
+        m.d.comb += e_norm.eq(ex7["rcm1"] - pos7)
+        e8 = stage(8, "e", Mux(~nz7 | ovf, e_max, Mux(udf, 0, e_norm)), ew)
+        sh8 = stage(8, "shift", Mux(udf, ex7["s_udf"], Mux(ovf, ex7["s_ovf"], pos7)), range(smax + 1))
+        s8 = stage(8, "S", s7)
+
+        # Stage 9: the normalizing shift (one floor), into the output registers.
+        v9 = stage(9, "v", (Cat(Const(0, p - h), s8) >> sh8)[:p + 1], p + 1)
+        e9 = stage(9, "e", e8)
+        m.d.comb += [self.o_stream.payload.v.eq(v9), self.o_stream.payload.e.eq(e9)]
         return m

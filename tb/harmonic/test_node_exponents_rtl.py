@@ -11,7 +11,7 @@ driven through the project's stream driver (navcores.sim.rtl.stream):
 * ``full_pipeline``: the output held not ready: the pipeline takes exactly
   ``LATENCY`` inputs (one per stage) and then refuses; released, it delivers
   one output a clock and takes a new input in each of those cycles.
-* ``random_stalls``: thousands of random neighbour words (zeros, normal
+* ``random_stalls``: thousands of random neighbour words (zeros with any exponent, normal
   values, denormals at e_max and tiny ones, e = 0 values up to 2**p, close
   exponents, exponent gaps far beyond the word, any bits) and the real
   neighbourhoods of the 64x64 crop's field (converged, and twice while the
@@ -46,6 +46,7 @@ from navcores.sim.rtl.stream import Streams, pauses
 ROOT = Path(__file__).resolve().parents[2]
 P, H = 16, 2
 CROP, GOALS = 64, [(1, 1)]
+LATENCY = 9             # the timing table of NodeExponentUpdate's docstring
 RANDOM_WORDS = int(os.environ.get("NODE_EXP_WORDS", "4000"))
 
 
@@ -67,10 +68,13 @@ def _params():
 def random_word(rng, p, h, e_max):
     """One neighbour word (v, e): the model test's generator
     (tb/harmonic/test_model_node_exponents.py), plus tiny denormals (sums
-    that flush to zero) and words of any bits."""
+    that flush to zero), zeros with any exponent (node_update ignores a zero
+    word's exponent) and words of any bits."""
     x = rng.random()
-    if x < 0.15:
+    if x < 0.1:
         return 0, e_max
+    if x < 0.15:
+        return 0, rng.randrange(0, e_max + 1)                       # a zero with any exponent: not the smallest
     if x < 0.2:
         return rng.randrange(1, 4), e_max                           # tiny denormal
     if x < 0.25:
@@ -168,6 +172,7 @@ class Bench:
         self.p, self.e_max = int(os.environ["NODE_EXP_P"]), int(os.environ["NODE_EXP_E_MAX"])
         self.h = H
         self.latency = NodeExponentUpdate.LATENCY
+        assert self.latency == LATENCY and f"``LATENCY`` = {LATENCY}:" in NodeExponentUpdate.__doc__
         self.streams = Streams(dut)
         self.src = self.streams.source("i_stream", neighbours_layout(self.p, self.e_max), pauses(rng, in_pause))
         self.snk = self.streams.sink("o_stream", word_layout(self.p, self.e_max), pauses(rng, out_pause))
