@@ -130,6 +130,10 @@ SETS = (
     # Issue 22: the node update of node exponents at the whole 512x512 maze's e_max (14-bit exponents).
     Set("node_exponents", "harmonic_node_exponents", {"p": 16, "e_max": 10288}, emit=True,
         beyond="issue 22: one floating-point node update a clock, one exponent per node"),
+    # Issue 22: the engine sized for the 256x256 crop of maze512-1-0 (2 Mbit of state: the LFE5U-85F holds it).
+    Set("node_exponent_engine", "harmonic_node_exponent_engine",
+        {"max_h": 256, "max_w": 256, "p": 16, "e_max": 10288}, emit=True,
+        beyond="issue 22: node exponents over a whole map in block RAM, red-black to a fixed point"),
     Set("dflc_stream", "dflc_stream", {"fll": "table1"}, emit=True),
     Set("dflc", "dflc_core", {"fll": "table1"}, emit=True, family="xc3s", paper=PAPER["dflc_core"]),
     Set("dflc_par", "dflc_core", {"fll": "table1", "par": 1}, emit=True, family="xc3s",

@@ -30,6 +30,7 @@ UNDEFINED_INIT = "navcores.undefined_init"
 
 # yosys' write_verilog: the attribute, the memory's declaration, then (if any) its initial block.
 _DECL = re.compile(r"^[ \t]*\(\* \\" + re.escape(UNDEFINED_INIT) + r"\s*=\s*[^*]*\*\)\n"
+                   r"(?:[ \t]*\(\*[^*]*\*\)\n)*"           # the memory's other attributes (no_rw_check ...)
                    r"[ \t]*reg (?:\[\d+:\d+\] )?(\S+) +\[\d+:\d+\];\n", re.M)
 _ZERO = re.compile(r"[ \t]*(\S+) ?\[\d+\] = \d+'[bdh]0+;")
 

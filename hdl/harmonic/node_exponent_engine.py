@@ -10,6 +10,7 @@ from amaranth.lib.wiring import In, Out
 from navcores.models.harmonic.node_exponents import (ENGINE_HALF_EXTRA, ENGINE_SLOTS, P_LIMIT, UPDATE_LATENCY)
 
 from ..params import Constraint, Param, check, checked_init
+from ..ram_init import UNDEFINED_INIT
 from .node_exponents import E_MAX_LIMIT, NEIGHBOURS, NodeExponentUpdate, word_layout
 
 __all__ = ["NodeExponentEngine", "CELL_FREE", "CELL_OBSTACLE", "CELL_GOAL", "MAX_SIDE", "MAX_ITER_BITS"]
@@ -69,8 +70,11 @@ class NodeExponentEngine(wiring.Component):
     load / read-out     one cell a beat / two cycles a word at most
     ==================  ===============================================
 
-    Synchronous reset: idle, status cleared; the RAM keeps its words (a job
-    loads every cell it reads).
+    Synchronous reset: idle, status cleared; the RAM keeps its words.  The
+    RAM has no initial value (undefined until written: X in Icarus): a job
+    loads every cell of its map before it reads any, and a neighbour outside
+    the map is read but replaced by a zero word, so no unwritten word
+    reaches the update or the read-out (the Icarus test checks it).
     """
 
     PARAMS = (
@@ -114,8 +118,10 @@ class NodeExponentEngine(wiring.Component):
         L = UPDATE_LATENCY
         cw, rw = self.col_bits, self.row_bits
         state = data.StructLayout({"v": p + 1, "e": max(1, e_max.bit_length()), "const": 1})
+        # No initial value (hdl/ram_init.py: a 64K-word init block stalls yosys' front end): every
+        # word a job reads is loaded first; a neighbour outside the map is read but replaced by zero.
         m.submodules.ram = ram = Memory(shape=state, depth=self.max_h << cw, init=[],
-                                        attrs={"no_rw_check": 1})
+                                        attrs={UNDEFINED_INIT: 1, "no_rw_check": 1})
         rd = ram.read_port()
         wr = ram.write_port()
 
