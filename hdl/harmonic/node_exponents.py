@@ -17,7 +17,7 @@ E_MAX_LIMIT = (1 << 16) - 1             # 16-bit exponents: 6x the whole 512x512
 def word_layout(p, e_max):
     """One node's word: mantissa ``v`` (p+1 bits, low) and exponent ``e``
     (``e_max.bit_length()`` bits, above it); the value is v / 2**(p+e)."""
-    return data.StructLayout({"v": p + 1, "e": max(1, e_max.bit_length())})
+    return data.StructLayout({"v": p + 1, "e": e_max.bit_length()})
 
 
 def neighbours_layout(p, e_max):
@@ -43,7 +43,7 @@ def _leading_one(x):
 class NodeExponentUpdate(wiring.Component):
     """The node update of node exponents (issue 22), one per clock.
 
-    Eq. 2 of paper 000 (the harmonic planner, section 3): a free node's new
+    Eq. 2 of paper 000 (the harmonic planner): a free node's new
     value is the mean of its four neighbours, x = (x_N + x_E + x_W + x_S) / 4,
     here on words of the node-exponent format, bit-exact with
     :func:`models.harmonic.node_exponents.node_update`.
@@ -90,9 +90,10 @@ class NodeExponentUpdate(wiring.Component):
     =======  ============================================================
 
     ``LATENCY`` = 9: without back-pressure, an output handshake exactly 9
-    cycles after its input's; initiation interval 1.  (Every stage holds
-    at most one carry chain or shifter: 8 stages, with the sum in one and
-    the thresholds as adders in a row, closed at 81 MHz on the LFE5U-85F.)
+    cycles after its input's; initiation interval 1.  No stage has two
+    carry chains in a row (a first version, 8 stages with the sum in one,
+    the thresholds as adders in a row and a per-stage ready chain, closed
+    at 81 MHz on the LFE5U-85F; this one at 156.5, hdl/harmonic/README.md).
 
     Parameters
     ----------

@@ -2,8 +2,10 @@
 
 ``NodeExponentUpdate(p=16, e_max=472)`` (the ``harmonic_node_exponents``
 top; 472 = the ``e_max`` :func:`models.harmonic.plan_node_exponents` takes
-on the 64x64 crop of maze512-1-0, goal (1, 1)), one build per simulator,
-driven through the project's stream driver (navcores.sim.rtl.stream):
+on the 64x64 crop of maze512-1-0, goal (1, 1)) and a small word,
+``p=6, e_max=31, headroom=3`` (5-bit exponents up to all ones; random
+words only), two builds per simulator, driven through the project's
+stream driver (navcores.sim.rtl.stream):
 
 * ``latency_and_throughput``: no idle input, no back-pressure: every
   output handshake exactly ``LATENCY`` cycles after its input's, one
@@ -59,8 +61,11 @@ def field_e_max():
     return max(1, 2 * int(distances(_crop(), GOALS).max()))
 
 
-def _params():
-    return {"p": P, "e_max": int(os.environ.get("NODE_EXP_E_MAX", "0")) or field_e_max()}
+# The builds: the crop's (its field's neighbourhoods too), and a small word
+# with a 5-bit exponent at its all-ones e_max and 3 headroom bits (clamps at
+# both ends and gaps beyond the word are frequent; random words only).
+SETS = {"crop": lambda: {"p": P, "e_max": field_e_max()},
+        "small": lambda: {"p": 6, "e_max": 31, "headroom": 3}}
 
 
 # --- stimuli ------------------------------------------------------------------
@@ -170,7 +175,8 @@ class Bench:
     def __init__(self, dut, rng, in_pause=0.0, out_pause=0.0):
         from navcores.hdl.harmonic.node_exponents import NodeExponentUpdate, neighbours_layout, word_layout
         self.p, self.e_max = int(os.environ["NODE_EXP_P"]), int(os.environ["NODE_EXP_E_MAX"])
-        self.h = H
+        self.h = int(os.environ["NODE_EXP_H"])
+        self.field = (self.p, self.h) == (P, H)         # the crop's build: its field's neighbourhoods too
         self.latency = NodeExponentUpdate.LATENCY
         assert self.latency == LATENCY and f"``LATENCY`` = {LATENCY}:" in NodeExponentUpdate.__doc__
         self.streams = Streams(dut)
@@ -233,7 +239,9 @@ async def random_stalls(dut):
     rng = _rng(dut)
     await start(dut)
     b = Bench(dut, rng, in_pause=0.3, out_pause=0.3)
-    hoods = random_neighbourhoods(rng, RANDOM_WORDS, b.p, b.h, b.e_max) + field_neighbourhoods(b.e_max)
+    hoods = random_neighbourhoods(rng, RANDOM_WORDS, b.p, b.h, b.e_max)
+    if b.field:
+        hoods += field_neighbourhoods(b.e_max)
     want = expected(hoods, b.p, b.h, b.e_max)
     got = await b.run(hoods)
     bad = [(i, hoods[i], got[i], want[i]) for i in range(len(hoods)) if got[i] != want[i]]
@@ -244,7 +252,8 @@ async def random_stalls(dut):
     for w, out in zip(hoods, want):
         for k in kinds(w, out, b.p, b.h, b.e_max):
             seen[k] += 1
-    dut._log.info(f"{len(hoods)} updates bit-exact ({len(hoods) - RANDOM_WORDS} of the crop's field); "
+    field = f" ({len(hoods) - RANDOM_WORDS} of the crop's field)" if b.field else ""
+    dut._log.info(f"{len(hoods)} updates bit-exact{field}; "
                   f"kinds {seen}; input idle {b.src.idle}, input stalled {b.src.stalls}, "
                   f"output stalled {b.snk.stalls}")
     assert all(seen.values()), f"not exercised: {[k for k, n in seen.items() if not n]}"
@@ -274,10 +283,11 @@ async def reset_mid_stream(dut):
 # --- pytest ---------------------------------------------------------------------
 
 @pytest.mark.parametrize("sim", SIMULATORS)
-def test_node_exponents_rtl(sim):
-    params = _params()
+@pytest.mark.parametrize("build", SETS)
+def test_node_exponents_rtl(sim, build):
+    params = SETS[build]()
     run("harmonic_node_exponents", params, sim, "test_node_exponents_rtl",
-        env={"NODE_EXP_P": params["p"], "NODE_EXP_E_MAX": params["e_max"]})
+        env={"NODE_EXP_P": params["p"], "NODE_EXP_E_MAX": params["e_max"], "NODE_EXP_H": params.get("headroom", 2)})
 
 
 def test_field_e_max():
