@@ -7,7 +7,8 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
-from navcores.models.harmonic.node_exponents import (ENGINE_HALF_EXTRA, ENGINE_SLOTS, P_LIMIT, UPDATE_LATENCY)
+from navcores.models.harmonic.node_exponents import (ENGINE_HALF_EXTRA, ENGINE_SLOTS, P_LIMIT, RAM_LATENCY,
+                                                     UPDATE_LATENCY)
 
 from ..params import Constraint, Param, check, checked_init
 from ..ram_init import UNDEFINED_INIT
@@ -62,12 +63,13 @@ class NodeExponentEngine(wiring.Component):
     ==================  ===============================================
     step                cycles
     ==================  ===============================================
-    a cell              ENGINE_SLOTS (5) reads: own, N, W, E, S; the
-                        update's input one cycle after the last read's
-                        data, its word written UPDATE_LATENCY (9) later
-    a half-sweep        5 x its cells + ENGINE_HALF_EXTRA (11)
-    an iteration        5 x height x width + 2 x 11 + 1 (the decision)
-    load / read-out     one cell a beat / two cycles a word at most
+    a cell              ENGINE_SLOTS (5) reads: own, N, W, E, S, each
+                        RAM_LATENCY (2) cycles to its data; the update's
+                        input a cycle after the last read's data, its word
+                        written UPDATE_LATENCY (9) later
+    a half-sweep        5 x its cells + ENGINE_HALF_EXTRA (12)
+    an iteration        5 x height x width + 2 x 12 + 1 (the decision)
+    load / read-out     one cell a beat / four cycles a word at most
     ==================  ===============================================
 
     Synchronous reset: idle, status cleared; the RAM keeps its words.  The
@@ -153,9 +155,15 @@ class NodeExponentEngine(wiring.Component):
                                           & ((c != 0) if dc < 0 else (c + 1 < W) if dc > 0 else 1))
         sweep_addr = Cat(cc[:cw], rr[:rw])
         # A read's data arrives a cycle later: its slot and whether it was inside ride along.
+        # The read has latency RAM_LATENCY = 2: the block RAM, then a register behind the multiplexer
+        # that joins its blocks (128 of them at 256 x 256: that multiplexer was the critical path).
+        issued_slot, issued_in, issued = (Signal.like(slot, name="issued_slot"), Signal(name="issued_in"),
+                                          Signal(name="issued"))
         got_slot, got_in, got_valid = Signal.like(slot, name="got_slot"), Signal(name="got_in"), Signal(name="got_valid")
+        rd_q = Signal(state, name="rd_q")
+        m.d.sync += [rd_q.eq(rd.data), got_slot.eq(issued_slot), got_in.eq(issued_in), got_valid.eq(issued)]
         data_in = Signal(state)
-        m.d.comb += data_in.eq(Mux(got_in, rd.data, zero))
+        m.d.comb += data_in.eq(Mux(got_in, rd_q, zero))
         nb = {k: Signal(state, name=f"nb_{k}") for k in ("own", "N", "W", "E")}
         push, push_own = Signal(name="push"), Signal(state, name="push_own")
         push_addr = Signal(rw + cw, name="push_addr")
@@ -201,7 +209,7 @@ class NodeExponentEngine(wiring.Component):
         load_write = Signal()
 
         # --- the read-out ---------------------------------------------------
-        out_pending = Signal()              # a read issued, its word to the output register next
+        out_pending = Signal(range(RAM_LATENCY + 1))    # cycles since the read-out's read was issued
         field_valid = Signal()
         m.d.comb += [self.field.valid.eq(field_valid)]
 
@@ -230,7 +238,7 @@ class NodeExponentEngine(wiring.Component):
             with m.State("SWEEP"):
                 m.d.sync += self.cycles.eq(self.cycles + 1)
                 m.d.comb += [rd.addr.eq(sweep_addr)]
-                m.d.sync += [got_valid.eq(1), got_slot.eq(slot), got_in.eq(inside)]
+                m.d.sync += [issued.eq(1), issued_slot.eq(slot), issued_in.eq(inside)]
                 with m.If(slot == 0):
                     m.d.sync += addr_of["cur"].eq(Cat(c, r))
                 m.d.sync += slot.eq(Mux(slot == ENGINE_SLOTS - 1, 0, slot + 1))
@@ -244,7 +252,7 @@ class NodeExponentEngine(wiring.Component):
                             m.d.sync += [r.eq(0), wait.eq(0)]
                             m.next = "DRAIN"
             with m.State("DRAIN"):              # the half-sweep's last words are written
-                m.d.sync += [self.cycles.eq(self.cycles + 1), got_valid.eq(0), wait.eq(wait + 1)]
+                m.d.sync += [self.cycles.eq(self.cycles + 1), issued.eq(0), wait.eq(wait + 1)]
                 with m.If(wait == ENGINE_HALF_EXTRA - 1):
                     with m.If(colour == 0):
                         m.d.sync += [colour.eq(1), r.eq(0), c.eq(1)]
@@ -261,11 +269,11 @@ class NodeExponentEngine(wiring.Component):
                     m.next = "SWEEP"
             with m.State("READ"):               # one word: its read, then the output register
                 m.d.comb += rd.addr.eq(Cat(c, r))
-                with m.If(~field_valid & ~out_pending):
-                    m.d.sync += out_pending.eq(1)
-                with m.If(out_pending):
+                with m.If(~field_valid & (out_pending < RAM_LATENCY)):
+                    m.d.sync += out_pending.eq(out_pending + 1)
+                with m.If(out_pending == RAM_LATENCY):
                     m.d.sync += [out_pending.eq(0), field_valid.eq(1),
-                                 self.field.payload.v.eq(rd.data.v), self.field.payload.e.eq(rd.data.e)]
+                                 self.field.payload.v.eq(rd_q.v), self.field.payload.e.eq(rd_q.e)]
                 with m.If(field_valid & self.field.ready):
                     m.d.sync += [field_valid.eq(0), c.eq(Mux(last_col, 0, c + 1))]
                     with m.If(last_col):
