@@ -64,12 +64,12 @@ class NodeExponentEngine(wiring.Component):
     step                cycles
     ==================  ===============================================
     a cell              ENGINE_SLOTS (5) reads: own, N, W, E, S, each
-                        RAM_LATENCY (2) cycles to its data; the update's
+                        RAM_LATENCY (3) cycles to its data; the update's
                         input a cycle after the last read's data, its word
                         written UPDATE_LATENCY (9) later
-    a half-sweep        5 x its cells + ENGINE_HALF_EXTRA (12)
-    an iteration        5 x height x width + 2 x 12 + 1 (the decision)
-    load / read-out     one cell a beat / four cycles a word at most
+    a half-sweep        5 x its cells + ENGINE_HALF_EXTRA (13)
+    an iteration        5 x height x width + 2 x 13 + 1 (the decision)
+    load / read-out     one cell a beat / five cycles a word at most
     ==================  ===============================================
 
     Synchronous reset: idle, status cleared; the RAM keeps its words.  The
@@ -155,10 +155,15 @@ class NodeExponentEngine(wiring.Component):
                                           & ((c != 0) if dc < 0 else (c + 1 < W) if dc > 0 else 1))
         sweep_addr = Cat(cc[:cw], rr[:rw])
         # A read's data arrives a cycle later: its slot and whether it was inside ride along.
-        # The read has latency RAM_LATENCY = 2: the block RAM, then a register behind the multiplexer
-        # that joins its blocks (128 of them at 256 x 256: that multiplexer was the critical path).
+        # The read has latency RAM_LATENCY = 3: the address registered (it fans out to every block of
+        # the RAM: 128 at 256 x 256), the block RAM, then a register behind the multiplexer that joins
+        # the blocks (each was the critical path in turn).
+        addr_q = Signal(len(rd.addr), name="addr_q")
+        a_slot, a_in, a_valid = Signal.like(slot, name="a_slot"), Signal(name="a_in"), Signal(name="a_valid")
         issued_slot, issued_in, issued = (Signal.like(slot, name="issued_slot"), Signal(name="issued_in"),
                                           Signal(name="issued"))
+        m.d.comb += rd.addr.eq(addr_q)
+        m.d.sync += [issued_slot.eq(a_slot), issued_in.eq(a_in), issued.eq(a_valid)]
         got_slot, got_in, got_valid = Signal.like(slot, name="got_slot"), Signal(name="got_in"), Signal(name="got_valid")
         rd_q = Signal(state, name="rd_q")
         m.d.sync += [rd_q.eq(rd.data), got_slot.eq(issued_slot), got_in.eq(issued_in), got_valid.eq(issued)]
@@ -237,8 +242,7 @@ class NodeExponentEngine(wiring.Component):
                             m.next = "SWEEP"
             with m.State("SWEEP"):
                 m.d.sync += self.cycles.eq(self.cycles + 1)
-                m.d.comb += [rd.addr.eq(sweep_addr)]
-                m.d.sync += [issued.eq(1), issued_slot.eq(slot), issued_in.eq(inside)]
+                m.d.sync += [addr_q.eq(sweep_addr), a_valid.eq(1), a_slot.eq(slot), a_in.eq(inside)]
                 with m.If(slot == 0):
                     m.d.sync += addr_of["cur"].eq(Cat(c, r))
                 m.d.sync += slot.eq(Mux(slot == ENGINE_SLOTS - 1, 0, slot + 1))
@@ -252,7 +256,7 @@ class NodeExponentEngine(wiring.Component):
                             m.d.sync += [r.eq(0), wait.eq(0)]
                             m.next = "DRAIN"
             with m.State("DRAIN"):              # the half-sweep's last words are written
-                m.d.sync += [self.cycles.eq(self.cycles + 1), issued.eq(0), wait.eq(wait + 1)]
+                m.d.sync += [self.cycles.eq(self.cycles + 1), a_valid.eq(0), wait.eq(wait + 1)]
                 with m.If(wait == ENGINE_HALF_EXTRA - 1):
                     with m.If(colour == 0):
                         m.d.sync += [colour.eq(1), r.eq(0), c.eq(1)]
@@ -268,7 +272,7 @@ class NodeExponentEngine(wiring.Component):
                     m.d.sync += [it.eq(it + 1), changed.eq(0), colour.eq(0), r.eq(0), c.eq(0)]
                     m.next = "SWEEP"
             with m.State("READ"):               # one word: its read, then the output register
-                m.d.comb += rd.addr.eq(Cat(c, r))
+                m.d.sync += addr_q.eq(Cat(c, r))
                 with m.If(~field_valid & (out_pending < RAM_LATENCY)):
                     m.d.sync += out_pending.eq(out_pending + 1)
                 with m.If(out_pending == RAM_LATENCY):

@@ -211,7 +211,7 @@ def plan_node_exponents(obstacle, goals, p=NODE_P, headroom=NODE_HEADROOM, e_max
 
 ENGINE_SLOTS = 5        # RAM reads a cell: its own word, then N, W, E, S (one read port)
 UPDATE_LATENCY = 9      # the node update's pipeline (hdl/harmonic/node_exponents.py, NodeExponentUpdate.LATENCY)
-RAM_LATENCY = 2         # the engine's state RAM read: the block RAM, then a register behind its multiplexer
+RAM_LATENCY = 3         # the engine's state RAM read: address register, block RAM, register behind its multiplexer
 ENGINE_HALF_EXTRA = UPDATE_LATENCY + RAM_LATENCY + 1   # a half-sweep's tail: the last read's data, push, write
 
 
