@@ -66,9 +66,10 @@ class NodeExponentEngine(wiring.Component):
     a cell              ENGINE_SLOTS (5) reads: own, N, W, E, S, each
                         RAM_LATENCY (3) cycles to its data; the update's
                         input a cycle after the last read's data, its word
-                        written UPDATE_LATENCY (9) later
-    a half-sweep        5 x its cells + ENGINE_HALF_EXTRA (13)
-    an iteration        5 x height x width + 2 x 13 + 1 (the decision)
+                        chosen UPDATE_LATENCY (9) later, written the next
+                        cycle (WRITE_LATENCY 1)
+    a half-sweep        5 x its cells + ENGINE_HALF_EXTRA (14)
+    an iteration        5 x height x width + 2 x 14 + 1 (the decision)
     load / read-out     one cell a beat / five cycles a word at most
     ==================  ===============================================
 
@@ -290,10 +291,13 @@ class NodeExponentEngine(wiring.Component):
         # statement on a signal only once it changes: IDLE from time 0 would leave X).
         m.d.comb += [self.cmd.ready.eq(fsm.ongoing("IDLE")), self.cells.ready.eq(fsm.ongoing("LOAD"))]
 
-        # The one write port: the load's cells, else the sweep's new words.
+        # The one write port, registered (its address, data and enable fan out to every block of the
+        # RAM; a word lands a cycle after it is chosen, WRITE_LATENCY): the load's cells, else the
+        # sweep's new words.
+        wa, wd, we = Signal(len(wr.addr), name="wr_addr_q"), Signal(state, name="wr_data_q"), Signal(name="wr_en_q")
+        m.d.comb += [wr.addr.eq(wa), wr.data.eq(wd), wr.en.eq(we)]
         with m.If(load_write):
-            m.d.comb += [wr.addr.eq(Cat(c, r)), wr.data.eq(load_word), wr.en.eq(1)]
+            m.d.sync += [wa.eq(Cat(c, r)), wd.eq(load_word), we.eq(1)]
         with m.Else():
-            m.d.comb += [wr.addr.eq(out_addr), wr.data.eq(Cat(new.v, new.e, Const(0, 1))),
-                         wr.en.eq(sweep_write)]
+            m.d.sync += [wa.eq(out_addr), wd.eq(Cat(new.v, new.e, Const(0, 1))), we.eq(sweep_write)]
         return m

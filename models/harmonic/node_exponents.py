@@ -55,7 +55,8 @@ import numpy as np
 from .grid import distances, goal_mask
 
 __all__ = ["NODE_P", "NODE_HEADROOM", "GUARD", "P_LIMIT", "NodeExponentResult", "node_update", "order_key",
-           "plan_node_exponents", "ENGINE_SLOTS", "UPDATE_LATENCY", "RAM_LATENCY", "ENGINE_HALF_EXTRA",
+           "plan_node_exponents", "ENGINE_SLOTS", "UPDATE_LATENCY", "RAM_LATENCY", "WRITE_LATENCY",
+           "ENGINE_HALF_EXTRA",
            "engine_cycles"]
 
 NODE_P = 16             # default word precision: a 17-bit mantissa, the fixed-point node's p of the paper's tables
@@ -212,7 +213,8 @@ def plan_node_exponents(obstacle, goals, p=NODE_P, headroom=NODE_HEADROOM, e_max
 ENGINE_SLOTS = 5        # RAM reads a cell: its own word, then N, W, E, S (one read port)
 UPDATE_LATENCY = 9      # the node update's pipeline (hdl/harmonic/node_exponents.py, NodeExponentUpdate.LATENCY)
 RAM_LATENCY = 3         # the engine's state RAM read: address register, block RAM, register behind its multiplexer
-ENGINE_HALF_EXTRA = UPDATE_LATENCY + RAM_LATENCY + 1   # a half-sweep's tail: the last read's data, push, write
+WRITE_LATENCY = 1       # the engine's write port is registered
+ENGINE_HALF_EXTRA = UPDATE_LATENCY + RAM_LATENCY + WRITE_LATENCY + 1   # a half-sweep's tail: data, push, write
 
 
 def engine_cycles(height, width, iterations):
