@@ -111,7 +111,8 @@ class NodeExponentEngine(wiring.Component):
     def timing(self):
         return {"iteration_cycles": f"{ENGINE_SLOTS} * height * width + 2 * {ENGINE_HALF_EXTRA} + 1",
                 "run_cycles": "iterations * iteration_cycles", "update_latency": UPDATE_LATENCY,
-                "note": "load one cell a beat, read-out two cycles a word at most; back-pressure adds cycles"}
+                "note": f"load one cell a beat; read-out a word every {RAM_LATENCY + 2} cycles without "
+                        "back-pressure; idle input and back-pressure add cycles outside run_cycles"}
 
     def elaborate(self, platform):
         m = Module()
@@ -155,8 +156,8 @@ class NodeExponentEngine(wiring.Component):
                     m.d.comb += inside.eq(((r != 0) if dr < 0 else (r + 1 < H) if dr > 0 else 1)
                                           & ((c != 0) if dc < 0 else (c + 1 < W) if dc > 0 else 1))
         sweep_addr = Cat(cc[:cw], rr[:rw])
-        # A read's data arrives a cycle later: its slot and whether it was inside ride along.
-        # The read has latency RAM_LATENCY = 3: the address registered (it fans out to every block of
+        # A read's slot and whether it was inside the map ride along with it.  The read has latency
+        # RAM_LATENCY = 3: the address registered (it fans out to every block of
         # the RAM: 128 at 256 x 256), the block RAM, then a register behind the multiplexer that joins
         # the blocks (each was the critical path in turn).
         addr_q = Signal(len(rd.addr), name="addr_q")
