@@ -427,12 +427,7 @@ def run(args):
                        "schedule (still blocks) only")
     if serial_engine.is_serial(args.engine):
         serial_engine.check(args.engine)        # the port exists, before any work
-    gm, frame = load_map_arg(args)
-    grid = gm.obstacle
-    goals = places(args, "goal", grid, frame)
-    if not goals:
-        raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
-    starts = places(args, "start", grid, frame)
+    grid, frame, goals, starts = _places(args)
     block = parse_block(args.block)
     schedule = parse_schedule(args.schedule)
     bexp = bool(args.block_exponents)
@@ -484,6 +479,16 @@ def run(args):
     title = f"{name}: harmonic potential, p = {result['precision']}, engine {args.engine}"
     ok = _report(args, result, grid, goals, frame, lines, title)
     return 0 if ok and result.get("rtl_matches_model", True) else 1
+
+
+def _places(args):
+    """The map (obstacle grid), its frame, the goals (at least one) and the starts of the command line."""
+    gm, frame = load_map_arg(args)
+    grid = gm.obstacle
+    goals = places(args, "goal", grid, frame)
+    if not goals:
+        raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
+    return grid, frame, goals, places(args, "start", grid, frame)
 
 
 def _report(args, result, grid, goals, frame, lines, title):
@@ -615,12 +620,7 @@ def run_nodes(args):
         raise CliError(f"--node-exponents: the model, icarus or verilator (no board runs it), not --engine {args.engine}")
     if args.block_exponents:
         raise CliError("--node-exponents and --block-exponents: choose one")
-    gm, frame = load_map_arg(args)
-    grid = gm.obstacle
-    goals = places(args, "goal", grid, frame)
-    if not goals:
-        raise CliError("no goal: give at least one --goal R,C or --goal-xy X,Y")
-    starts = places(args, "start", grid, frame)
+    grid, frame, goals, starts = _places(args)
     from navcores.models.harmonic import distances
     from navcores.models.harmonic.node_exponents import NODE_P
     p = NODE_P if args.p is None else args.p

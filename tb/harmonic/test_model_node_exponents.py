@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 from dirichlet import dirichlet
+from node_words import format_word
 from planner_maps import straight
 from navcores.models.harmonic import ascent_reaches, decision_paths, distances, reachable
 from navcores.models.harmonic.node_exponents import (GUARD, node_update, order_key, plan_node_exponents)
@@ -50,24 +51,12 @@ def _exact(v, e, p):
     return Fraction(int(v), 1 << (p + int(e)))
 
 
-def _random_word(rng, p, h, e_max):
-    if rng.random() < 0.15:
-        return 0, e_max
-    e = rng.choice([0, rng.randrange(0, e_max + 1), e_max])
-    if e == e_max and rng.random() < 0.5:
-        return rng.randrange(1, 1 << (p - h)), e          # denormal
-    if e == 0 and rng.random() < 0.3:
-        return rng.randrange(1 << (p - h), (1 << p) + 1), e   # a goal's neighbourhood: the headroom in use
-    top = (1 << p) + 1 if e == 0 else 1 << (p + 1 - h)     # no value above the goal's 1
-    return rng.randrange(1 << (p - h), top), e
-
-
 @pytest.mark.parametrize("p,h", [(8, 2), (16, 2), (16, 0), (40, 3)])
 def test_update_against_exact_fractions(p, h, rng):
     e_max = 300
     vn, en = [], []
     for _ in range(4000):
-        words = [_random_word(rng, p, h, e_max) for _ in range(4)]
+        words = [format_word(rng, p, h, e_max) for _ in range(4)]
         if rng.random() < 0.3:                          # close exponents: the guard bits matter
             base = rng.randrange(0, e_max - 4)
             words = [(rng.randrange(1 << (p - h), 1 << (p + 1 - h)), base + rng.randrange(1, 5)) for _ in range(4)]
@@ -97,7 +86,7 @@ def test_update_against_exact_fractions(p, h, rng):
 
 def test_order_key_is_the_value_order(rng):
     p, h, e_max = 12, 2, 50
-    words = [_random_word(rng, p, h, e_max) for _ in range(400)]
+    words = [format_word(rng, p, h, e_max) for _ in range(400)]
     v, e = np.array(words).T
     key = order_key(v, e, p, e_max)
     exact = [_exact(a, b, p) for a, b in words]

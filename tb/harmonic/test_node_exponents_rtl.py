@@ -38,6 +38,7 @@ import numpy as np
 import pytest
 from cocotb.triggers import ClockCycles, RisingEdge
 
+from node_words import format_word
 from navcores.models.harmonic import distances
 from navcores.models.harmonic.node_exponents import GUARD, node_update, plan_node_exponents
 from navcores.models.maps import load_map
@@ -71,8 +72,8 @@ SETS = {"crop": lambda: {"p": P, "e_max": field_e_max()},
 # --- stimuli ------------------------------------------------------------------
 
 def random_word(rng, p, h, e_max):
-    """One neighbour word (v, e): the model test's generator
-    (tb/harmonic/test_model_node_exponents.py), plus tiny denormals (sums
+    """One neighbour word (v, e): :func:`node_words.format_word` (the model
+    test's words too), plus tiny denormals (sums
     that flush to zero), zeros with any exponent (node_update ignores a zero
     word's exponent) and words of any bits."""
     x = rng.random()
@@ -84,13 +85,7 @@ def random_word(rng, p, h, e_max):
         return rng.randrange(1, 4), e_max                           # tiny denormal
     if x < 0.25:
         return rng.randrange(0, 1 << (p + 1)), rng.randrange(0, e_max + 1)     # any bits
-    e = rng.choice([0, rng.randrange(0, e_max + 1), e_max])
-    if e == e_max and rng.random() < 0.5:
-        return rng.randrange(1, 1 << (p - h)), e                    # denormal
-    if e == 0 and rng.random() < 0.3:
-        return rng.randrange(1 << (p - h), (1 << p) + 1), e         # a goal's neighbourhood: the headroom in use
-    top = (1 << p) + 1 if e == 0 else 1 << (p + 1 - h)             # no value above the goal's 1
-    return rng.randrange(1 << (p - h), top), e
+    return format_word(rng, p, h, e_max)
 
 
 def random_neighbourhoods(rng, n, p, h, e_max):
