@@ -180,10 +180,9 @@ def job_clock(name, params, larger_than=None):
         except fmax_mod.FlowError as e:
             r = {**base, "why": f"no clock: {str(e).splitlines()[0]}"}
         else:
-            over = ", ".join(f"{o['resource']} {o['used']}/{o['available']}" for o in f["overflow"])
             r = {**base, **{k: f[k] for k in ("fits", "fmax_mhz", "lut4", "ff", "bram", "dsp", "critical_path")},
                  "seeds": f["seeds"], "tools": f["tools"], "utilisation": f["utilisation"],
-                 "why": "" if f["fits"] else f"does not fit the {JOB_PART.name}: {over}"}
+                 "why": "" if f["fits"] else f"does not fit the {JOB_PART.name}: {fmax_mod.shortfall(f)}"}
     _CLOCKS[module] = r
     return r
 

@@ -60,6 +60,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
+import fmax  # noqa: E402
 import software  # noqa: E402
 from navcores.models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, largest_map, plan_path_tiled,  # noqa: E402
                                   ram_blocks, state_bits)
@@ -267,8 +268,7 @@ def _no_clock(fit, array=None):
             verdict = "does not fit" if est[0] > est[1] else "may fit"
             return f"not placed; estimate {est[0]:,} LUT4 of {est[1]:,}: {verdict}"
         return "not placed"
-    over = ", ".join(f"{o['resource']} {o['used']:,}/{o['available']:,}" for o in fit.get("overflow", []))
-    return f"does not fit ({over})" if over else "does not fit"
+    return f"does not fit ({fmax.shortfall(fit)})"
 
 
 def section(maps=MAPS, arrays=ARRAYS):

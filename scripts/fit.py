@@ -9,7 +9,9 @@ and routes it with nextpnr once per seed (both from PyPI, scripts/toolchain.py;
 results cached under build/cache), and writes ``build/fit/<module>--<part>.json``:
 
   module, top, params, part, family, package, speed_grade, board
-  fits            bool; when false, overflow lists what the part lacks
+  fits            bool; when false, overflow lists what the part lacks, or
+                  is empty and unplaceable holds nextpnr's error (every
+                  resource within the part, but the cells do not place)
   lut4, ff, bram, dsp   the core's own cells (harness excluded)
   fmax_mhz        median over the seeds (null when it does not fit)
   seeds           [{seed, fmax_mhz}] of every place-and-route run
@@ -108,8 +110,7 @@ def summary(r, out):
     res = f"{r['lut4']} LUT4, {r['ff']} FF, {r['bram']} BRAM, {r['dsp']} DSP"
     where = f"{r['module']} on {r['part']}" + (f" (speed {r['speed_grade']})" if r["speed_grade"] else "")
     if not r["fits"]:
-        over = ", ".join(f"{o['resource']} {o['used']}/{o['available']}" for o in r["overflow"])
-        return f"{where}: does not fit ({over}); {res}; {out}"
+        return f"{where}: does not fit ({fmax.shortfall(r)}); {res}; {out}"
     cp = r["critical_path"]
     path = f"; critical path {cp['from']['cell']} -> {cp['to']['cell']}" if cp else ""
     figures = ", ".join(f"{s['fmax_mhz']:.1f}" for s in r["seeds"])

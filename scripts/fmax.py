@@ -243,9 +243,27 @@ def critical_path(report):
 ROUTERS = ("router1", "router2")
 
 
+# nextpnr's error when the resources are within the part but the packed cells do not place
+UNPLACEABLE = "Unable to find legal placement"
+
+
+def shortfall(r):
+    """Why a fit (or one place() run) does not fit, in a few words: what
+    overflowed, or that the cells did not place with the fullest resource's
+    share; '' when it fits."""
+    if "overflow" not in r or r.get("fits"):
+        return ""
+    if r["overflow"]:
+        return ", ".join(f"{o['resource']} {o['used']:,}/{o['available']:,}" for o in r["overflow"])
+    name, (used, available) = max(r["utilisation"].items(), key=lambda kv: kv[1][0] / kv[1][1])
+    return f"no legal placement, {name} {used:,}/{available:,} ({100 * used / available:.0f} %)"
+
+
 def place(netlist, prt, seed, progress=None, router="router1"):
     """One nextpnr run of ``netlist`` on ``prt`` with ``seed``: a dict with
-    seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow.
+    seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow
+    (what the part lacks; empty with ``unplaceable``, nextpnr's error, when
+    every resource is within the part but the cells do not place).
 
     ``router`` is nextpnr's router: router1 (its default, used for every
     figure unless a JSON says otherwise) or router2 (faster on large
@@ -264,10 +282,15 @@ def place(netlist, prt, seed, progress=None, router="router1"):
            "utilisation": {k: list(v) for k, v in util.items() if v[0]}}
     if run.returncode:
         over = {k: v for k, v in util.items() if v[0] > v[1]}
-        if not over:
-            raise FlowError(f"{prt.nextpnr} failed: {_error_line(log + run.text('stderr.txt'), prt.nextpnr)}"
-                            f" (see {run.dir})")
+        error = _error_line(log + run.text("stderr.txt"), prt.nextpnr)
         out["overflow"] = [{"resource": k, "used": u, "available": a} for k, (u, a) in over.items()]
+        if not over and UNPLACEABLE in error:
+            # Every resource is within the part, yet nextpnr finds no legal
+            # placement (the 7x7 EDT/BFS tile engine at 92 % of TRELLIS_COMB):
+            # at the part's limit, so it does not fit; no resource overflowed.
+            out["unplaceable"] = error
+        elif not over:
+            raise FlowError(f"{prt.nextpnr} failed: {error} (see {run.dir})")
         return out
     report = json.loads(run.text("report.json"))
     out["fmax_mhz"] = round(min(c["achieved"] for c in report["fmax"].values()), 2)
@@ -323,9 +346,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
             progress(f"{module} on {prt.name}, seed {seed}: placing and routing")
         r = place(netlist, prt, seed, progress, router)
         if progress:
-            what = (f"{r['fmax_mhz']:.1f} MHz" if "fmax_mhz" in r else
-                    "does not fit: " + ", ".join(f"{o['resource']} {o['used']}/{o['available']}"
-                                                 for o in r["overflow"]))
+            what = f"{r['fmax_mhz']:.1f} MHz" if "fmax_mhz" in r else "does not fit: " + shortfall(r)
             progress(f"{module} on {prt.name}, seed {seed}: {what}{_took(r)}")
         return r
 
@@ -343,6 +364,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
         "board": prt.board,
         "fits": fits,
         "overflow": first.get("overflow", []),
+        **({"unplaceable": first["unplaceable"]} if "unplaceable" in first else {}),
         **res,
         "fmax_mhz": fmax,
         "target_mhz": prt.target_mhz,

@@ -117,3 +117,43 @@ def test_output_checked_first(tmp_path):
     blocker.write_text("")
     r = fit("harmonic_node", "--part", "LFE5U-85F", out=blocker / "x.json")     # parent is a file
     assert r.returncode == 2 and len(r.stderr.splitlines()) == 1, r.stderr
+
+
+# nextpnr's log when every resource is within the part but the cells do not
+# place (the 7x7 EDT/BFS tile engine on the LFE5U-85F, 2026-12-03; trimmed)
+UNPLACEABLE_LOG = """Info: Device utilisation:
+Info: \t          TRELLIS_IO:       3/    365     0%
+Info: \t              DP16KD:      55/    208    26%
+Info: \t          MULT18X18D:      19/    156    12%
+Info: \t          TRELLIS_FF:    3902/  83640     4%
+Info: \t        TRELLIS_COMB:   76611/  83640    91%
+
+Info: Running main analytical placer, max placement attempts per cell = 280280039.
+ERROR: Unable to find legal placement for all cells, design is probably at utilisation limit.
+0 warnings, 1 error
+"""
+
+
+@pytest.mark.parametrize("log,fits_reason", [
+    (UNPLACEABLE_LOG, "no legal placement, TRELLIS_COMB 76,611/83,640 (92 %)"),
+    (UNPLACEABLE_LOG.replace("Unable to find legal placement for all cells", "Something else broke"), None),
+], ids=["unplaceable", "other-error"])
+def test_unplaceable_does_not_fit(tmp_path, monkeypatch, log, fits_reason):
+    """A placement failure with every resource within the part is "does not
+    fit" (no overflow, nextpnr's error kept, the fullest resource named); any
+    other nextpnr failure is still the flow's error (exit 1)."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import fmax
+    import toolchain
+    (tmp_path / "nextpnr.log").write_text(log)
+    ran = toolchain.Run(dir=tmp_path, returncode=255, seconds=1.0, cached=False, version="nextpnr-ecp5 test")
+    monkeypatch.setattr(toolchain, "run", lambda *a, **k: ran)
+    if fits_reason is None:
+        with pytest.raises(fmax.FlowError, match="Something else broke"):
+            fmax.place("netlist.json", fmax.part("LFE5U-85F"), 1)
+        return
+    r = fmax.place("netlist.json", fmax.part("LFE5U-85F"), 1)
+    assert r["overflow"] == [] and "fmax_mhz" not in r and r["unplaceable"].startswith("ERROR: Unable to find legal")
+    assert r["utilisation"]["TRELLIS_COMB"] == [76611, 83640]
+    assert fmax.shortfall(r) == fits_reason
+    assert fmax.shortfall({**r, "overflow": [{"resource": "DP16KD", "used": 210, "available": 208}]}) == "DP16KD 210/208"
