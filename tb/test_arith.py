@@ -27,15 +27,27 @@ def _check(width, build, want):
     assert len(seen) == 1 << width
 
 
-# (width, divisor): a table (<= TABLE_BITS bits), slices (powers of two), the operators (wider)
-@pytest.mark.parametrize("width,d", [(4, 3), (5, 6), (TABLE_BITS, 3), (TABLE_BITS + 1, 6), (5, 4), (3, 1), (2, 3)])
+# (width, divisor): a table (<= TABLE_BITS bits), slices (powers of two), the reciprocal (wider)
+@pytest.mark.parametrize("width,d", [(4, 3), (5, 6), (TABLE_BITS, 3), (TABLE_BITS + 1, 6), (5, 4), (3, 1), (2, 3),
+                                     (10, 6), (11, 7), (9, 3), (10, 5), (8, 12), (10, 31)])
 def test_divmod_const(width, d):
     _check(width, lambda x: divmod_const(x, d), lambda v: divmod(v, d))
 
 
-@pytest.mark.parametrize("c", [0, 1, 3, 6, 11, 12])
+@pytest.mark.parametrize("c", [0, 1, 3, 6, 11, 12, 1366])
 def test_times(c):
     _check(6, lambda x: (times(x, c),), lambda v: (v * c,))
+
+
+def test_reciprocal_has_no_divider():
+    """Wider unsigned values take the reciprocal's adders: no ``//`` / ``%`` in the netlist."""
+    from amaranth.back import rtlil
+    m = Module()
+    x, q, r = Signal(10), Signal(10), Signal(3)
+    m.d.comb += [q.eq(divmod_const(x, 6)[0]), r.eq(divmod_const(x, 6)[1])]
+    text = rtlil.convert(m, ports=[x, q, r])
+    assert "$add" in text
+    assert "$div" not in text and "$mod" not in text
 
 
 def test_signed_uses_the_operators():

@@ -240,6 +240,10 @@ class TileEngine(wiring.Component):
 
         # -- after a phase: the next one (and its first registers)
         cur = Signal(goal_layout(w))              # path: the pixel read / shown
+        cur_w = Signal(range(w["words"]))         # its word column and pixel in the word (kept beside
+        cur_j = Signal(range(t_c))                # cur.col, stepped with it: no division on the path)
+        start_w = Signal(range(w["words"]))
+        start_j = Signal(range(t_c))
         p_need = Signal()                         # path: a read is owed
         p_first = Signal()
         ro_row = Signal(w["row"])
@@ -251,7 +255,7 @@ class TileEngine(wiring.Component):
 
         def after_bfs():
             with m.If(want_path & ~self.start_err):
-                m.d.sync += [cur.eq(start), p_need.eq(1), p_first.eq(1)]
+                m.d.sync += [cur.eq(start), cur_w.eq(start_w), cur_j.eq(start_j), p_need.eq(1), p_first.eq(1)]
                 goto("PATH")
             with m.Else():
                 after_path()
@@ -274,7 +278,8 @@ class TileEngine(wiring.Component):
         cmd = self.c_stream.payload
         ncw_new, _ = divmod_const(cmd.width + (t_c - 1), t_c)
         nr_new, _ = divmod_const(cmd.height + (t_r - 1), t_r)
-        _, lp_new = divmod_const(cmd.width - 1, t_c)
+        _, lp_new = divmod_const((cmd.width - 1)[:len(cmd.width)], t_c)   # width 0 is refused
+        sw_new, sj_new = divmod_const(cmd.start_col, t_c)
         bad = Signal()
         m.d.comb += bad.eq((cmd.height == 0) | (cmd.width == 0)
                            | _above(cmd.height, self.max_h) | _above(cmd.width, self.max_w))
@@ -288,7 +293,8 @@ class TileEngine(wiring.Component):
                 m.d.sync += [
                     H.eq(cmd.height), W.eq(cmd.width), ncw.eq(ncw_new), nr.eq(nr_new), last_px.eq(lp_new),
                     dfar.eq(cmd.dfar), goals_left.eq(cmd.goals), start.row.eq(cmd.start_row),
-                    start.col.eq(cmd.start_col), want_path.eq(cmd.path), want_readout.eq(cmd.readout),
+                    start.col.eq(cmd.start_col), start_w.eq(sw_new), start_j.eq(sj_new),
+                    want_path.eq(cmd.path), want_readout.eq(cmd.readout),
                     self.start_err.eq(cmd.path & ((cmd.start_row >= cmd.height) | (cmd.start_col >= cmd.width))),
                     self.goal_err.eq(0), self.path_found.eq(0), self.levels.eq(0), self.tile_visits.eq(0),
                     bfs.eq(0), k.eq(0), kk.eq(0), lr.eq(0), lw.eq(0), ltr.eq(0), lj.eq(0),
@@ -495,16 +501,21 @@ class TileEngine(wiring.Component):
                 goto("GOAL0")
 
         # -- PATH: from the start along the parents, one pixel per beat (Step 5)
-        cur_j = named(m, "cur_j", divmod_const(cur.col, t_c)[1], range(t_c))
         path_px = named(m, "path_px", mem.rd_data.payload.word[cur_j], pixel_layout(w))
         no_path = named(m, "no_path", p_first & (path_px.hop == nonehop))
         beat_path = named(m, "beat_path", at["PATH"] & mem.rd_data.valid & ~no_path)
         advance = named(m, "advance", beat_path & self.o_stream.ready & (path_px.parent != 0))
         nxt = Signal(goal_layout(w))
-        m.d.comb += nxt.eq(cur)
+        nxt_w = Signal.like(cur_w)
+        nxt_j = Signal.like(cur_j)
+        m.d.comb += [nxt.eq(cur), nxt_w.eq(cur_w), nxt_j.eq(cur_j)]
+        wrap = {1: (cur_j == t_c - 1, 1, 0), -1: (cur_j == 0, -1, t_c - 1)}   # crossing into the next word
         for i, (dr, dc) in OFFSETS.items():
             with m.If(path_px.parent == i):
                 m.d.comb += [nxt.row.eq(cur.row + dr), nxt.col.eq(cur.col + dc)]
+                if dc:
+                    edge, dw, j_in = wrap[dc]
+                    m.d.comb += [nxt_w.eq(Mux(edge, cur_w + dw, cur_w)), nxt_j.eq(Mux(edge, j_in, cur_j + dc))]
         with m.If(at["PATH"]):
             with m.If(mem.rd.valid):
                 m.d.sync += p_need.eq(~mem.rd.ready)
@@ -516,7 +527,7 @@ class TileEngine(wiring.Component):
                     with m.If(path_px.parent == 0):
                         after_path()
                     with m.Else():
-                        m.d.sync += cur.eq(nxt)
+                        m.d.sync += [cur.eq(nxt), cur_w.eq(nxt_w), cur_j.eq(nxt_j)]
 
         # -- READOUT: every pixel, row-major, one per beat; the reads (rr_*) run ahead of the
         # beats (ro_*) as far as the RAM's pipeline takes them, so a word costs no latency
@@ -558,7 +569,7 @@ class TileEngine(wiring.Component):
         with m.Elif(at["PATH"]):
             pos = named(m, "path_pos", Mux(advance, nxt.as_value(), cur.as_value()), goal_layout(w))
             m.d.comb += [mem.rd.valid.eq(p_need | advance), rd.row.eq(pos.row),
-                         rd.wcol.eq(divmod_const(pos.col, t_c)[0]),
+                         rd.wcol.eq(Mux(advance, nxt_w, cur_w)),
                          mem.rd_data.ready.eq(no_path | self.o_stream.ready)]
         with m.Elif(at["READOUT"]):
             m.d.comb += [mem.rd.valid.eq(rr_more), rd.row.eq(rr_row), rd.wcol.eq(rr_w),

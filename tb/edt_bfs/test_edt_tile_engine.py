@@ -252,14 +252,14 @@ def _params(p):
 # shared machine, against about 2 ms for Verilator's -O0 build, mostly
 # cocotb), so there it runs the sized cases on small maps; the controller
 # and stream cases run on Verilator at 8x8 and on Icarus with a non-square,
-# non-power-of-two 3x5 array on a 23x31 RAM (constant divisions, partial
+# non-power-of-two 3x5 array on a 23x67 RAM (constant divisions by reciprocal, partial
 # tiles everywhere).
 # (sim, (t_r, t_c, max_h, max_w), random jobs, mid size, bundled maps, large, cocotb test filter or None)
 SIZED = "bundled_and_random|edge_cases"
 CASES = [
     ("verilator", (8, 8, 64, 64), 4, "13x21", "room-64-64-8", 1, None),
     ("icarus", (8, 8, 64, 64), 4, "13x21", "", 0, SIZED),
-    ("icarus", (3, 5, 23, 31), 4, "11x17", "", 1, None),
+    ("icarus", (3, 5, 23, 67), 4, "11x17", "", 1, None),
 ]
 
 
