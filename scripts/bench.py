@@ -863,7 +863,12 @@ def previous_report(path):
     hw_lines = [line for line in hw.splitlines() if line.startswith("|")]
     jobs = text.split("## Jobs", 1)[1].split("\n## ", 1)[0] if "## Jobs" in text else ""
     rows = []
-    table = [line for line in jobs.splitlines() if line.startswith("| ")]
+    table = []              # the jobs table: its first run of table lines (the sub-sections' tables follow)
+    for line in jobs.splitlines():
+        if line.startswith("|"):
+            table.append(line)
+        elif table:
+            break
     if table:
         head = [c.strip() for c in table[0].strip("|").split("|")]
         for line in table[1:]:
