@@ -166,19 +166,22 @@ ready, counted from the command (exclusive) to the last beat:
                                         each pixel's read needs the previous one's parent
     readout    = latency + H * W        optional: every pixel, one per beat (reads run ahead)
 
-    visit(t)   = sched + latency + read_beats(t) + iterations + max(write_beats(t), marks)
+    visit(t)   = sched + latency + read_beats(t) + iterations [+ stop, BFS] + max(write_beats(t), marks)
 
 ``read_beats(t)``: the window's rows inside the map times the beats of the
 words covering its columns inside the map; ``write_beats(t)``: the tile's
 rows times the beats of its own words; ``iterations``: 1 per EDT visit, the
-relaxation's count per BFS visit; ``marks``: the tiles the visit enqueues
+relaxation's count per BFS visit (the last one changes nothing), and in
+a BFS visit ``stop`` cycles to see that (the engine registers the OR of
+its cells' changes: that OR over the whole array is not on the clock's
+path); ``marks``: the tiles the visit enqueues
 (self, then each marked direction in Fig. 1 order, when not already queued:
 the engine reads the queued bits of the tile's 3 x 3 tile neighbourhood
 while it schedules the visit), one per beat during the store.  The
 constants are :class:`Timing`'s; the RTL's (``Timing()``): sched 2 (pop,
 window set-up), latency 2 (the block RAM's read register and its output
 register, which keeps the RAM's slow data output off the clock's paths),
-level 1, goal 3 (= 1 + latency: issue the read, wait for the word).
+level 1, goal 3 (= 1 + latency: issue the read, wait for the word), stop 1.
 Words moved counts every word read or written; the floor is each visit
 reading and writing each pixel of its tile once, ``2 ceil(T_r T_c / p)``
 words per visit.
@@ -207,9 +210,10 @@ class Timing:
     latency: int = 2      # RAM read latency before the first word of a burst (read + output register)
     level: int = 1        # EDT: swap the worklists of levels k and k+1
     goal: int = 3         # per goal: read its word (cfr?; 1 + latency), write hop 0 and push its tile
+    stop: int = 1         # per BFS visit: the cycle that reads the registered "no cell changed" and leaves
 
     def __post_init__(self):
-        for name in ("sched", "latency", "level", "goal"):
+        for name in ("sched", "latency", "level", "goal", "stop"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < 0:
                 raise ValueError(f"Timing.{name} {v!r}: must be an integer >= 0")
@@ -458,7 +462,7 @@ class TileEngine:
         self.counts["words_written"] += int(g.write_words[t])
         self.counts["marks"] += marks
         self.cycles[phase] += (tm.sched + tm.latency + int(g.read_beats[t]) + iterations
-                               + max(int(g.write_beats[t]), marks))
+                               + (tm.stop if phase == "bfs" else 0) + max(int(g.write_beats[t]), marks))
 
     # -- EDT -----------------------------------------------------------------------------------
     def first_worklist(self):

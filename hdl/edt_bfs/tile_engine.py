@@ -135,7 +135,7 @@ class TileEngine(wiring.Component):
         ``trace``).
 
     Timing (:mod:`models.edt_bfs_tiled`'s cycle model, ``Timing()``: sched
-    2, latency 2, level 1, goal 3; source always valid, sink always ready;
+    2, latency 2, level 1, goal 3, stop 1; source always valid, sink always ready;
     cycles from the command's handshake, exclusive, to the last busy cycle;
     the RAM's read latency 2 is its read register and its output register,
     which keeps the block RAM's slow data output off the clock's paths)::
@@ -149,7 +149,8 @@ class TileEngine(wiring.Component):
                                              read needs the previous pixel's parent
         readout = 2 + H * W                  (0 without; the reads run ahead of the beats)
         visit   = 2 (pop; address, queued bits) + 2 (RAM latency) + window rows in the map
-                  + iterations (EDT 1) + max(tile rows in the map, tiles enqueued)
+                  + iterations (EDT 1; BFS: until one changes nothing, + 1 to see that from the
+                  registered OR of the cells' changes) + max(tile rows in the map, tiles enqueued)
 
     A synchronous reset at any point returns to idle; the next job rewrites
     every RAM word it reads (the load), the flag RAM and the queued bits
@@ -198,7 +199,8 @@ class TileEngine(wiring.Component):
         t = TIMING
         return {"load_cycles": "H * ceil(W / T_c)", "scan_cycles": "tiles",
                 "edt_cycles": f"sum over levels ({t.level} + visits)", "goal_cycles": t.goal,
-                "visit_cycles": f"{t.sched} + {t.latency} + window rows + iterations + max(tile rows, marks)",
+                "visit_cycles": f"{t.sched} + {t.latency} + window rows + iterations (+ {t.stop} in the BFS) "
+                                "+ max(tile rows, marks)",
                 "path_cycles": f"1 + {t.latency} * len(path)", "readout_cycles": f"{t.latency} + H * W",
                 "note": "source always valid, sink always ready; back-pressure adds cycles"}
 
@@ -369,6 +371,9 @@ class TileEngine(wiring.Component):
         own = Signal(range(t_r + 1))              # tile rows inside the map
         col_present = Signal(t_c + 2)
         iters = Signal(w["iters"])
+        stepped = Signal()                        # BFS: ITER has stepped the array in this visit
+        upd_r = Signal()                          # ... and its last step changed a cell (the array's OR,
+                                                  # registered: off the FSM's next-state path)
         sj = Signal(range(t_r + 1))               # store: rows written
         pushed = Signal(9)
         with m.If(at["SCHED0"]):
@@ -392,7 +397,7 @@ class TileEngine(wiring.Component):
                 ld_row.eq(Mux(head.r == 0, 1, 0)),
                 own.eq(Mux(h_r0 + t_r > H, H - h_r0, t_r)),
                 col_present.eq(Cat(head.c != 0, *[h_c0 + (b - 1) < W for b in range(1, t_c + 2)])),
-                iters.eq(0), sj.eq(0), pushed.eq(0),
+                iters.eq(0), stepped.eq(0), sj.eq(0), pushed.eq(0),
             ]
             goto("READ")
 
@@ -412,12 +417,16 @@ class TileEngine(wiring.Component):
                      arr.ld_px.eq(Cat(mem.rd_data.payload.left, mem.rd_data.payload.word,
                                       mem.rd_data.payload.right))]
 
-        # ITER: EDT one iteration; BFS until one changes nothing (counted)
+        # ITER: EDT one iteration; BFS until one changes nothing (counted), then one cycle (no step)
+        # that sees it in upd_r (Timing.stop)
         with m.If(at["ITER"]):
-            m.d.comb += arr.step.eq(1)
-            m.d.sync += iters.eq(iters + 1)
-            with m.If(~bfs | ~arr.upd):
+            with m.If(bfs & stepped & ~upd_r):
                 goto("STORE")
+            with m.Else():
+                m.d.comb += arr.step.eq(1)
+                m.d.sync += [iters.eq(iters + 1), stepped.eq(1), upd_r.eq(arr.upd)]
+                with m.If(~bfs):
+                    goto("STORE")
 
         # STORE: tile rows back to RAM, one per beat; the marks, one enqueued tile per beat
         near = Signal(9)

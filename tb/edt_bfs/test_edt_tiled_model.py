@@ -286,7 +286,7 @@ def test_cycle_model_brute_force():
     rng = np.random.default_rng(seed_from_env() + 50)
     for n in range(25):
         name, img, (tr, tc), p, banks, cells = _random_case(rng, n)
-        tm = Timing(*(int(v) for v in rng.integers(0, 4, 4)))
+        tm = Timing(*(int(v) for v in rng.integers(0, 4, 5)))
         start = cells[0] if cells else None
         res = plan_path_tiled(img, cells[1:3], start, 0, array=(tr, tc), word_pixels=p, banks=banks,
                               timing=tm, readout=bool(n % 2))
@@ -299,7 +299,7 @@ def test_cycle_model_brute_force():
             rw, rb = _brute_beats(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w, p, banks)
             ww, wb = _brute_beats(range(r0, r0 + tr), range(c0, c0 + tc), h, w, p, banks)
             read, written = read + rw, written + ww
-            cyc[phase] += tm.sched + tm.latency + rb + iterations + max(wb, marks)
+            cyc[phase] += tm.sched + tm.latency + rb + iterations + (tm.stop if phase == "bfs" else 0) + max(wb, marks)
         cyc["edt"] += tm.level * res.stats["levels"]
         goals = tm.goal * len(cells[1:3])
         total = (h * -(-w // p) + res.stats["tiles"] + cyc["edt"] + goals + cyc["bfs"]
@@ -320,11 +320,12 @@ def test_cycles_by_hand():
     # + max(2 stores, marks) = 9; plus 1 per level.
     assert [e[:2] + e[3:] for e in res.trace] == [("edt", 1, 1, 1), ("edt", 2, 1, 0), ("bfs", 0, 3, 0)]
     assert res.stats["cycles"] == {"load": 2, "scan": 1, "edt": 2 * 9 + 2, "goals": 3,
-                                   # BFS: hop 1 at iteration 1, (1, 0) hop 2 at 2, nothing at 3
-                                   "bfs": 2 + 2 + 2 + 3 + 2,
+                                   # BFS: hop 1 at iteration 1, (1, 0) hop 2 at 2, nothing at 3,
+                                   # then the stop cycle that sees it
+                                   "bfs": 2 + 2 + 2 + 3 + 1 + 2,
                                    # path: the issue, then latency 2 per pixel (each needs its parent)
                                    "path": 1 + 2 * 2, "readout": 2 + 6}
-    assert res.cycles == 2 + 1 + 20 + 3 + 11 + 5 + 8
+    assert res.cycles == 2 + 1 + 20 + 3 + 12 + 5 + 8
     assert res.path == [(0, 1), (1, 2)] and res.parent[0, 1] == 8 and res.parent[1, 0] == 1
 
 
