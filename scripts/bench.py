@@ -427,7 +427,8 @@ def edt_jobs(speeds, problems):
         model = plan_path(grid, [goal], start, EDT_DFAR)
         for sim in ("icarus", "verilator"):
             out, speed = sim_cli(["edt", str(path), "--dfar", str(EDT_DFAR), "--goal", f"{goal[0]},{goal[1]}",
-                                  "--start", f"{start[0]},{start[1]}", "--array", f"{size}x{size}"], sim, f"edt_bfs_height{size}_width{size}")
+                                  "--start", f"{start[0]},{start[1]}", "--array", f"{size}x{size}"],   # untiled
+                                 sim, f"edt_bfs_height{size}_width{size}")
             cyc = out.get("cycles")
             if cyc is None:
                 note = f"not simulated: {out.get('error')}"
