@@ -248,8 +248,11 @@ class Planner(wiring.Component):
             # row // 3, col // 6 as lookup tables (divmod_const): a divider's
             # carry chains here were the 12x24 planner's critical path (issue 17)
             (r_q, r_r), (c_q, c_r) = divmod_const(row, ROWS), divmod_const(col, COLS)
+            # and block // BC by the reciprocal: yosys' divider by a BC that is
+            # no power of two was the 6x3-block planner's critical path
+            b_q, b_r = divmod_const(block, BC)
             m.d.comb += [
-                tbr.eq(block // BC), tbc.eq(block % BC),
+                tbr.eq(b_q), tbc.eq(b_r),
                 ci.eq(times(r_q, CC) + c_q),
                 bit.eq(times(r_r, COLS) + c_r),
             ]
