@@ -111,12 +111,14 @@ class Decision(wiring.Component):
         # selected a cycle ahead (by nxt) into a flip-flop: the (p_max+2)-to-1
         # selection and the serial arithmetic after it are two paths, not one
         # (issue 17: i -> selection -> borrows -> g_col was the planner's
-        # critical path on the ECP5).
+        # critical path on the ECP5).  ``start`` (the planner's state) picks
+        # bit 0 after the selection, not its index before it: the select
+        # hangs off the register nxt only (at p_max 256 the state -> index ->
+        # 258:1 select path was the 6x3-block planner's critical path).
         bit = {}
         for k in ("c", "N", "E", "S", "W"):
             bit[k] = Signal(name=f"bit_{k}")
-            at = Mux(self.start, 0, nxt)
-            m.d.sync += bit[k].eq(Cat(self.h[k], 0).bit_select(at, 1))
+            m.d.sync += bit[k].eq(Mux(self.start, self.h[k][0], Cat(self.h[k], 0).bit_select(nxt, 1)))
         c_prev = Signal()                   # bit i-1 of h: bit i of 2h
         m.d.sync += c_prev.eq(Mux(pass1 & ~last, bit["c"], 0))
 
