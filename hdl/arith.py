@@ -3,12 +3,13 @@
 yosys' ``synth_ecp5`` maps every ``$mul`` wider than a bit, constant operand
 or not, onto a MULT18X18D, and a ``$div`` / ``$mod`` by a constant onto a
 divider's carry chains: both sat on the planner's and the tile engine's
-address paths (issue 17).  Shared by every core's RTL.
+address paths (issue 17); so did ``x & -x`` (a subtraction) as a priority
+choice.  Shared by every core's RTL.
 """
 
 from amaranth.hdl import Const, Value
 
-__all__ = ["times", "divmod_const"]
+__all__ = ["times", "divmod_const", "prefix_or", "lowest_one"]
 
 TABLE_BITS = 6      # up to 64 entries: each result bit is one LUT6 (a LUT4 tree on the ECP5 / iCE40)
 
@@ -70,3 +71,23 @@ def divmod_const(value, d):
         q = (times(value, mul) >> s)[:qw]
         return q, (value[:rw] - times(q[:rw], d)[:rw])[:rw]
     return value // d, value % d
+
+
+def prefix_or(value):
+    """Bit i is ``value[0] | ... | value[i]``: ceil(log2(width)) levels of
+    two-input ORs (a Kogge-Stone prefix; yosys packs them into LUT4s), no
+    carry chain."""
+    value = Value.cast(value)
+    w, p, s = len(value), value, 1
+    while s < w:
+        p = (p | (p << s))[:w]
+        s *= 2
+    return p
+
+
+def lowest_one(value):
+    """The lowest set bit of ``value`` alone (0 when none): ``x & -x``
+    without the subtraction's carry chain (the still blocks' next-block
+    choice was the 6x3-block planner's critical path, issue 17)."""
+    value = Value.cast(value)
+    return value & ~(prefix_or(value) << 1)[:len(value)]

@@ -4,7 +4,7 @@ import pytest
 from amaranth.hdl import Module, Signal
 from amaranth.sim import Simulator
 
-from navcores.hdl.arith import TABLE_BITS, divmod_const, times
+from navcores.hdl.arith import TABLE_BITS, divmod_const, lowest_one, prefix_or, times
 
 
 def _check(width, build, want):
@@ -60,3 +60,14 @@ def test_refusals():
         divmod_const(Signal(4), 0)
     with pytest.raises(ValueError, match="constant -1"):
         times(Signal(4), -1)
+
+
+@pytest.mark.parametrize("width", [1, 2, 3, 5, 8, 9])
+def test_lowest_one_and_prefix_or(width):
+    def want(v):
+        low = v & -v
+        pre = 0
+        for i in range(width):
+            pre |= (1 << i) if v & ((2 << i) - 1) else 0
+        return low, pre
+    _check(width, lambda x: (lowest_one(x), prefix_or(x)), want)

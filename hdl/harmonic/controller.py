@@ -6,6 +6,7 @@ from amaranth.hdl import Array, Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
+from ..arith import lowest_one, prefix_or
 from ...models.harmonic.ram import SHIFT_STEP
 from .block import BlockControlSignature
 
@@ -356,7 +357,7 @@ class Controller(wiring.Component):
 
     def _vend_still(self, m, v):
         """The end of a visit with still blocks: the dirty bits, the next
-        dirty block after this one (the priority of a one-hot: x & -x), the
+        dirty block after this one (the lowest set bit, :func:`~hdl.arith.lowest_one`), the
         end of a sweep (an order waits: a clear pass; a block dirty: the
         next sweep from the first one), the end of a level (the folded
         check: the OR of the blocks' Maximum flags)."""
@@ -367,13 +368,15 @@ class Controller(wiring.Component):
         cur = x["cur"]
         dirty_n, mx_n = self._still_next(m, v, ~seen)
         above = Signal(B, name="above")             # blocks after the current one
-        m.d.comb += above.eq(~(cur | (cur - 1)))
+        m.d.comb += above.eq(prefix_or(cur) & ~cur)
         cand, first = Signal(B, name="cand"), Signal(B, name="first_dirty")
         pool = Signal(B, name="pool")
+        # The lowest set bits as OR prefixes, not x & -x: the subtraction's
+        # carry chain was the 6x3-block planner's critical path (issue 17).
         m.d.comb += [
             pool.eq(Mux(mode == Mode.UPDATE, dirty_n, x["all"]) & above),
-            cand.eq(pool & (~pool + 1)),
-            first.eq(dirty_n & (~dirty_n + 1)),
+            cand.eq(lowest_one(pool)),
+            first.eq(lowest_one(dirty_n)),
         ]
         with m.If(mode == Mode.UPDATE):
             m.d.sync += [x["dirty"].eq(dirty_n), x["mx"].eq(mx_n)]
