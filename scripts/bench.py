@@ -157,6 +157,18 @@ JOB_PART = fmax_mod.part("LFE5U-85F")
 _CLOCKS = {}
 
 
+def _no_clock(name, params):
+    """A job_clock() result of top ``name`` at ``params`` with no figures yet."""
+    return {"top": top_name(name, params), "name": name, "params": params, "part": JOB_PART.name, "fits": None,
+            "fmax_mhz": None, "lut4": None, "ff": None, "bram": None, "dsp": None, "critical_path": None}
+
+
+def not_placed(name, params, why):
+    """Record top ``name`` at ``params`` as not fitting JOB_PART without placing it (``why``)."""
+    r = _CLOCKS[top_name(name, params)] = {**_no_clock(name, params), "fits": False, "seeds": [], "why": why}
+    return r
+
+
 def job_clock(name, params, larger_than=None):
     """The clock of top ``name`` at ``params`` on :data:`JOB_PART`: the fit
     flow's figures (cached under build/cache), as a dict with top, part,
@@ -167,8 +179,7 @@ def job_clock(name, params, larger_than=None):
     module = top_name(name, params)
     if module in _CLOCKS:
         return _CLOCKS[module]
-    base = {"top": module, "name": name, "params": params, "part": JOB_PART.name, "fits": None,
-            "fmax_mhz": None, "lut4": None, "ff": None, "bram": None, "dsp": None, "critical_path": None}
+    base = _no_clock(name, params)
     if larger_than is not None and larger_than.get("fits") is False:
         r = {**base, "fits": False,
              "why": f"does not fit the {JOB_PART.name}: larger than {larger_than['top']}, which does not "
@@ -277,17 +288,13 @@ def harmonic_block_clock(n, m):
     """job_clock of a harmonic block n x m alone (br = bc = 1), or its
     refusal when it holds at least :data:`HARMONIC_UNROUTED`'s nodes."""
     params = {**catalog.BLOCK, "n": n, "m": m, "br": 1, "bc": 1}
-    module = top_name("harmonic_block", params)
     un = HARMONIC_UNROUTED
-    if n * m < un[0] * un[1] or module in _CLOCKS:
+    if n * m < un[0] * un[1] or top_name("harmonic_block", params) in _CLOCKS:
         return job_clock("harmonic_block", params)
-    _CLOCKS[module] = {"top": module, "name": "harmonic_block", "params": params, "part": JOB_PART.name,
-                       "fits": False, "fmax_mhz": None, "lut4": None, "ff": None, "bram": None, "dsp": None,
-                       "critical_path": None, "seeds": [],
-                       "why": f"does not fit the {JOB_PART.name}: {n * m:,} nodes, at least the "
-                              f"{un[0]}x{un[1]} block's, which places but does not route there "
-                              f"(hdl/harmonic/README.md, 'The largest block on the LFE5U-85F'; not placed)"}
-    return _CLOCKS[module]
+    return not_placed("harmonic_block", params,
+                      f"does not fit the {JOB_PART.name}: {n * m:,} nodes, at least the {un[0]}x{un[1]} block's, "
+                      f"which places but does not route there (hdl/harmonic/README.md, 'The largest block on the "
+                      f"LFE5U-85F'; not placed)")
 
 
 def harmonic_jobs(speeds, problems):
@@ -421,14 +428,10 @@ def edt_clock(h, w):
     cap = (base.get("utilisation") or {}).get("TRELLIS_COMB")
     est = base["lut4"] * h * w / EDT_PLACED ** 2 if base.get("lut4") else None
     if base["fits"] and est and cap and est > EDT_MARGIN * cap[1]:
-        module = top_name("edt_bfs", {"height": h, "width": w})
-        _CLOCKS[module] = {**base, "top": module, "params": {"height": h, "width": w}, "fits": False,
-                           "fmax_mhz": None, "lut4": None, "ff": None, "bram": None, "dsp": None,
-                           "critical_path": None, "seeds": [],
-                           "why": f"does not fit the {JOB_PART.name}: about {est:,.0f} LUT4 ({h * w} cells at the "
-                                  f"{EDT_PLACED}x{EDT_PLACED} array's {base['lut4']:,} LUT4 per "
-                                  f"{EDT_PLACED ** 2}), over {EDT_MARGIN}x its {cap[1]:,} (not placed)"}
-        return _CLOCKS[module]
+        return not_placed("edt_bfs", {"height": h, "width": w},
+                          f"does not fit the {JOB_PART.name}: about {est:,.0f} LUT4 ({h * w} cells at the "
+                          f"{EDT_PLACED}x{EDT_PLACED} array's {base['lut4']:,} LUT4 per "
+                          f"{EDT_PLACED ** 2}), over {EDT_MARGIN}x its {cap[1]:,} (not placed)")
     return job_clock("edt_bfs", {"height": h, "width": w})
 
 
