@@ -138,6 +138,14 @@ class Controller(wiring.Component):
         act_br, act_bc = Signal(range(max(BR, 2))), Signal(range(max(BC, 2)))
         act_row, act_col, act_sat = Signal(range(self.n)), Signal(range(self.m)), Signal()
 
+        # p + step and the level's range check, registered (issue 17: the
+        # adder's and the comparison's carry chains sat between p and the
+        # FSM's next state).  p, step and p_last change only at a start or a
+        # rise, each followed by VSTART and a visit of at least 7 cycles
+        # before the next VEND reads these.
+        p_up, rise_ok = Signal.like(self.p, name="p_up"), Signal(name="rise_ok")
+        m.d.sync += [p_up.eq(self.p + step), rise_ok.eq((step != 0) & (self.p + step <= p_last))]
+
         blk = self.block
         m.d.comb += [
             blk.p.eq(self.p), blk.br.eq(br), blk.bc.eq(bc), blk.base.eq(base),
@@ -266,7 +274,7 @@ class Controller(wiring.Component):
         exponent option's update/check visits)."""
         mode, first_ok, changed, br, bc, base, anymax, pend = (v[x] for x in (
             "mode", "first_ok", "changed", "br", "bc", "base", "anymax", "pend"))
-        idle_clear, step, p_last, latch_order = v["idle_clear"], v["step"], v["p_last"], v["latch_order"]
+        idle_clear, p_up, rise_ok, latch_order = v["idle_clear"], v["p_up"], v["rise_ok"], v["latch_order"]
         BR, BC, X = self.BR, self.BC, self.exponents
         with m.If((mode == Mode.UPDATE) & ~first_ok):
             m.d.sync += changed.eq(1)
@@ -293,8 +301,8 @@ class Controller(wiring.Component):
                 with m.If(~anymax):
                     m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
                     m.next = "IDLE"
-                with m.Elif((step != 0) & (self.p + step <= p_last)):
-                    m.d.sync += self.p.eq(self.p + step)
+                with m.Elif(rise_ok):
+                    m.d.sync += self.p.eq(p_up)
                     if X:
                         self._rise(m, v)
                 with m.Else():
@@ -363,7 +371,7 @@ class Controller(wiring.Component):
         check: the OR of the blocks' Maximum flags)."""
         x = v["still"]
         mode, seen, pend, idle_clear = v["mode"], v["seen"], v["pend"], v["idle_clear"]
-        step, p_last, latch_order = v["step"], v["p_last"], v["latch_order"]
+        p_up, rise_ok, latch_order = v["p_up"], v["rise_ok"], v["latch_order"]
         B = self.BR * self.BC
         cur = x["cur"]
         dirty_n, mx_n = self._still_next(m, v, ~seen)
@@ -399,8 +407,8 @@ class Controller(wiring.Component):
             with m.Elif(mx_n == 0):                     # no local maximum: converged
                 m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
                 m.next = "IDLE"
-            with m.Elif((step != 0) & (self.p + step <= p_last)):
-                m.d.sync += [self.p.eq(self.p + step), x["dirty"].eq(x["all"])]
+            with m.Elif(rise_ok):
+                m.d.sync += [self.p.eq(p_up), x["dirty"].eq(x["all"])]
                 self._goto(m, v, 1)
                 if self.exponents:
                     self._rise(m, v)
@@ -562,4 +570,4 @@ class Controller(wiring.Component):
         mask = Signal(len(sat), name="crs_mask")
         m.d.comb += mask.eq(sat & Cat(*[e != 0 for e in E]))
         m.d.sync += sat.eq(0)
-        self._next_coarsen(m, v, mask, self.p + v["step"])
+        self._next_coarsen(m, v, mask, v["p_up"])

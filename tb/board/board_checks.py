@@ -264,13 +264,14 @@ HOST_TESTS = ("host_engine",)
 def run_board(core, params, sim, tmp_path, tests):
     """Build the board top ``board_<core>`` (SerialTop at ``params``) for
     ``sim`` and run its cocotb ``tests`` (tb/board/test_board_<core>.py);
-    on Verilator all but :data:`HOST_TESTS`: the host engine is the same
-    Python over the same bridge, and its runs (a pseudo-terminal, the
-    ``python -m sim`` subprocesses) cost the same on either simulator, so
-    Icarus runs them once.  Asserts that exactly those tests ran."""
+    on Icarus all but :data:`HOST_TESTS`: the host engine is the same
+    Python over the same bridge the other tests drive on both simulators,
+    and its jobs (a pseudo-terminal, the ``python -m sim`` subprocesses)
+    run once, on Verilator, which simulates them several times faster.
+    Asserts that exactly those tests ran."""
     from navcores.hdl.board.serial_top import SerialTop
     from navcores.sim.rtl.runner import run
 
-    want = [t for t in tests if sim == "icarus" or t not in HOST_TESTS]
+    want = [t for t in tests if sim == "verilator" or t not in HOST_TESTS]
     env = {**host_env(tmp_path), "COCOTB_TEST_FILTER": rf"\.({'|'.join(want)})$"}
     assert run(f"board_{core}", params, sim, f"test_board_{core}", factory=SerialTop, env=env) == len(want)
