@@ -324,12 +324,19 @@ class Planner(wiring.Component):
             4: (c.col != 0, [t_col.eq(c.col - 1)],                             # W
                 c_bc != 0, [t_blk.eq(c.block - 1), t_col.eq(mm - 1)]),
         }
+        # The tests are registered every cycle (c changes only when a command
+        # is taken, and DECODE comes between that and FETCH): c.block ->
+        # its block row / column -> the tests -> the enables of the value
+        # registers was the 6x3-block planner's critical path (issue 17).
+        t_inside, t_beyond = Signal(5), Signal(5)
+        m.d.sync += [x.eq(t) for i, (inside, _, beyond, _) in moves.items()
+                     for x, t in ((t_inside[i], inside), (t_beyond[i], beyond))]
         with m.Switch(q):
-            for i, (inside, step, beyond, jump) in moves.items():
+            for i, (_, step, _, jump) in moves.items():
                 with m.Case(i):
-                    with m.If(inside):
+                    with m.If(t_inside[i]):
                         m.d.comb += step
-                    with m.Elif(beyond):
+                    with m.Elif(t_beyond[i]):
                         m.d.comb += jump
                     with m.Else():
                         m.d.comb += t_in.eq(0)
