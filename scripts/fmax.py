@@ -44,6 +44,7 @@ os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 # The project's code, imported here only (fit.py, synth.py and bench.py use these names).
 from navcores.hdl.emit import TOPS, emit, manifest, params_of, top_name, verilog_ports  # noqa: E402,F401
+from navcores.hdl.ram_init import strip_zero_init  # noqa: E402
 from navcores.hdl.params import parse  # noqa: E402,F401
 
 ROOT = toolchain.ROOT
@@ -194,7 +195,15 @@ def synthesize(name, params, family_synth, work, progress=None, source=None):
     work.mkdir(parents=True, exist_ok=True)
     source = source or emit(name, params, work, with_manifest=False)
     wrap = work / f"fmax_{module}.v"
-    text = harness(source.read_text(), module)
+    core = source.read_text()
+    text = harness(core, module)
+    # The block RAMs' all-zero init lines, dropped: the same hardware on these
+    # parts, and yosys' read_verilog stalls on them (hdl/ram_init.strip_zero_init).
+    synth_core = strip_zero_init(core)
+    if synth_core != core:
+        source = work / f"synth_{module}.v"
+        if not source.exists() or source.read_text() != synth_core:
+            source.write_text(synth_core)
     if not wrap.exists() or wrap.read_text() != text:
         wrap.write_text(text)
     script = (f"read_verilog {{core}} {{harness}}; setattr -mod -set keep_hierarchy 1 {module}; "

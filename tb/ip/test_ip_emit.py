@@ -331,3 +331,31 @@ def test_undefined_memory_has_no_initial_block():
     bad = verilog(lambda: Memory(shape=8, depth=4, init=[0, 5], attrs={UNDEFINED_INIT: 1}))
     with pytest.raises(ValueError, match="initial value"):
         strip_undefined_init(bad)
+
+
+def test_zero_init_dropped_for_synthesis_only():
+    """hdl.ram_init.strip_zero_init (the fit flow's synthesis input): the all-zero
+    init of a memory of at least min_words words goes, a smaller one's and a
+    non-zero one's stay, and everything else is kept as it was."""
+    from amaranth.hdl import Module, Signal
+    from amaranth.lib.memory import Memory
+    from navcores.hdl.ram_init import strip_zero_init
+
+    m = Module()
+    mems = {"big": Memory(shape=8, depth=16, init=[]), "few": Memory(shape=8, depth=8, init=[]),
+            "rom": Memory(shape=8, depth=16, init=[0, 0, 7])}
+    a, d = Signal(4), Signal(8)
+    outs = []
+    for name, mem in mems.items():
+        m.submodules[name] = mem
+        rp, wp = mem.read_port(), mem.write_port()
+        q = Signal(8, name=f"q_{name}")
+        m.d.comb += [rp.addr.eq(a), wp.addr.eq(a), wp.data.eq(d), wp.en.eq(1), q.eq(rp.data)]
+        outs.append(q)
+    raw = emit.verilog.convert(m, ports=[a, d, *outs], emit_src=False)
+    text = strip_zero_init(raw, min_words=16)
+    assert raw.count("initial begin") == 3 and text.count("initial begin") == 2
+    assert "big[0] =" in raw and "big[0] =" not in text and re.search(r"reg \[7:0\] big \[15:0\];\n", text)
+    assert "few[0] =" in text and "rom[2] = 8'h07;" in text
+    assert len(raw) - len(text) == len("  initial begin\n") + sum(len(f"    big[{i}] = 8'h00;\n") for i in range(16)) \
+        + len("  end\n")
