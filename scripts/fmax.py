@@ -185,6 +185,13 @@ def _error_line(text, tool):
     return tail[-1].strip() if tail else f"{tool} failed without a message"
 
 
+def _write_changed(path, text):
+    """Write ``text`` to ``path`` unless it already holds it (its time stamp stays); returns path."""
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+    return path
+
+
 def synthesize(name, params, family_synth, work, progress=None, source=None):
     """Emit ``name`` at ``params`` into ``work`` (unless ``source``, its
     Verilog, is given), wrap it in the harness and synthesize it with
@@ -201,11 +208,8 @@ def synthesize(name, params, family_synth, work, progress=None, source=None):
     # parts, and yosys' read_verilog stalls on them (hdl/ram_init.strip_zero_init).
     synth_core = strip_zero_init(core)
     if synth_core != core:
-        source = work / f"synth_{module}.v"
-        if not source.exists() or source.read_text() != synth_core:
-            source.write_text(synth_core)
-    if not wrap.exists() or wrap.read_text() != text:
-        wrap.write_text(text)
+        source = _write_changed(work / f"synth_{module}.v", synth_core)
+    _write_changed(wrap, text)
     script = (f"read_verilog {{core}} {{harness}}; setattr -mod -set keep_hierarchy 1 {module}; "
               f"{family_synth} -top fmax_{module}; tee -q -o stat.json stat -json; "
               f"setattr -mod -unset keep_hierarchy {module}; flatten; write_json netlist.json")
