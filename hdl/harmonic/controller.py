@@ -164,6 +164,8 @@ class Controller(wiring.Component):
         upd_visit = Signal()            # this visit is an update visit (not a shift visit)
         m.d.comb += upd_visit.eq(((mode == Mode.UPDATE) & ~rep) if X else (mode == Mode.UPDATE))
         still = None if self.paper else self._still_signals(m)
+        if not self.paper:
+            self._still_prep(m, locals())
 
         def latch_order():
             m.d.sync += [act_br.eq(pend_br), act_bc.eq(pend_bc), act_row.eq(pend_row),
@@ -348,47 +350,119 @@ class Controller(wiring.Component):
         ]
         return dirty_n, mx_n
 
-    def _goto(self, m, v, onehot):
-        """Visit block ``onehot`` next (br, bc and ``cur`` together)."""
-        BC, B = self.BC, self.BR * self.BC
-        S = self.stride
-        if isinstance(onehot, int):
-            i = onehot.bit_length() - 1
-            br_n, bc_n, base_n = i // BC, i % BC, i * S
-        else:
-            br_n = bc_n = base_n = 0
+    def _goto(self, m, v, target):
+        """Visit block ``target`` next: a one-hot int, or a :meth:`_targets`
+        tuple (one-hot, br, bc, base) of signals."""
+        BC = self.BC
+        if isinstance(target, int):
+            i = target.bit_length() - 1
+            target = (target, i // BC, i % BC, i * self.stride)
+        for reg, val in zip((v["still"]["cur"], v["br"], v["bc"], v["base"]), target):
+            m.d.sync += reg.eq(val)
+
+    def _still_prep(self, m, v):
+        """The next-block choice of :meth:`_vend_still`, prepared during the
+        visit (issue 17: the choice over every block's dirty bit was the path
+        of every large planner, through VEND's one cycle into the pass
+        counters).  dirty, mx, cur, br, bc and base change only in VEND (and
+        at a start or an order in IDLE), and a visit lasts at least 7 cycles
+        (VSTART, the clusters' lead-in, ...), so these two register stages,
+        recomputed every cycle, hold the current visit's values at its VEND;
+        what the visit itself decides (its edge changes ``acc``, ``seen``,
+        ``mx_cur``) enters VEND as a few gates on them.  Cycle-neutral.
+
+        Stage 1: D = dirty without the current block; c0 / f0, the first
+        block of D after / before the current one; whether c0 comes before
+        the S neighbour, f0 before the N / W neighbour; whether another
+        block has a Maximum flag; the neighbours' (one-hot, br, bc, base).
+        Stage 2: c0 and f0 as (one-hot, br, bc, base)."""
+        x = v["still"]
+        BR, BC, B, S = self.BR, self.BC, self.BR * self.BC, self.stride
+        br, bc, base, cur = v["br"], v["bc"], v["base"], x["cur"]
+        all_ = x["all"]
+
+        def reg(name, value, width):
+            r = Signal(width, name=name)
+            m.d.sync += r.eq(value)
+            return r
+
+        def target(name, onehot, br_t, bc_t, base_t):
+            return (reg(f"{name}_oh", onehot, B), reg(f"{name}_br", br_t, len(br)),
+                    reg(f"{name}_bc", bc_t, len(bc)), reg(f"{name}_base", base_t, len(base)))
+
+        def encode(name, onehot):
+            """Stage 2: a one-hot block as (one-hot, br, bc, base)."""
+            br_t = bc_t = base_t = 0
             for i in range(B):
-                br_n = br_n | Mux(onehot[i], i // BC, 0)
-                bc_n = bc_n | Mux(onehot[i], i % BC, 0)
-                base_n = base_n | Mux(onehot[i], i * S, 0)
-        m.d.sync += [v["br"].eq(br_n), v["bc"].eq(bc_n), v["base"].eq(base_n), v["still"]["cur"].eq(onehot)]
+                br_t = br_t | Mux(onehot[i], i // BC, 0)
+                bc_t = bc_t | Mux(onehot[i], i % BC, 0)
+                base_t = base_t | Mux(onehot[i], i * S, 0)
+            return target(name, onehot, br_t, bc_t, base_t), reg(f"{name}_any", onehot != 0, 1)
+
+        at_or_after = prefix_or(cur)
+        above, below = at_or_after & ~cur, ~at_or_after & all_
+        d = x["dirty"] & ~cur
+        c0 = reg("c0_pre", lowest_one(d & above), B)
+        f0 = reg("f0_pre", lowest_one(d & below), B)
+        p = x["prep"] = {
+            "c0_lt_s": reg("c0_lt_s", (d & above & ~prefix_or((cur << BC)[:B])) != 0, 1),
+            # read only at the end of a sweep, when D holds no block after b: a
+            # block of D below b-BC (b-1) is f0, and f0 comes before N (W); without
+            # that neighbour (b < BC, b = 0) the masks are too wide, but then f0 wins
+            # anyway (VEND's order: f0 before N, N before W, W before the block)
+            "f0_lt_n": reg("f0_lt_n", (d & ~prefix_or(cur >> BC)) != 0, 1),
+            "f0_lt_w": reg("f0_lt_w", (d & ~prefix_or(cur >> 1)) != 0, 1),
+            "mx_rest0": reg("mx_rest0", (x["mx"] & ~cur) == 0, 1),
+            "nx_ok": reg("nx_ok", ~cur[B - 1], 1),
+            "e_ok": reg("e_ok", bc != BC - 1, 1), "w_ok": reg("w_ok", bc != 0, 1),
+            "s_ok": reg("s_ok", br != BR - 1, 1), "n_ok": reg("n_ok", br != 0, 1),
+            # b+1 in row-major order (the E neighbour when bc < BC-1), b+BC, b-BC, b-1
+            "NX": target("nx", (cur << 1)[:B], Mux(bc == BC - 1, br + 1, br), Mux(bc == BC - 1, 0, bc + 1),
+                         base + S),
+            "S": target("s", (cur << BC)[:B], br + 1, bc, base + BC * S),
+            "N": target("n", cur >> BC, br - 1, bc, base - BC * S),
+            "W": target("w", cur >> 1, br, bc - 1, base - S),
+        }
+        (p["C0"], p["c0_any"]), (p["F0"], p["f0_any"]) = encode("c0", c0), encode("f0", f0)
+
+    @staticmethod
+    def _pick(*choices):
+        """Priority choice of targets: (condition, target) pairs, then the
+        default target."""
+        *pairs, out = choices
+        for cond, t in reversed(pairs):
+            out = tuple(Mux(cond, a, b) for a, b in zip(t, out))
+        return out
 
     def _vend_still(self, m, v):
         """The end of a visit with still blocks: the dirty bits, the next
-        dirty block after this one (the lowest set bit, :func:`~hdl.arith.lowest_one`), the
-        end of a sweep (an order waits: a clear pass; a block dirty: the
-        next sweep from the first one), the end of a level (the folded
-        check: the OR of the blocks' Maximum flags)."""
+        dirty block after this one (the lowest set bit), the end of a sweep
+        (an order waits: a clear pass; a block dirty: the next sweep from
+        the first one), the end of a level (the folded check: the OR of the
+        blocks' Maximum flags).  The choices come from :meth:`_still_prep`:
+        in a sweep the next block is the E neighbour (b+1) if its edge
+        changed, else c0 or the S neighbour (b+BC), whichever comes first;
+        the next sweep starts at f0, the N neighbour, the W neighbour or
+        the block itself (not stable), whichever comes first."""
         x = v["still"]
         mode, seen, pend, idle_clear = v["mode"], v["seen"], v["pend"], v["idle_clear"]
         p_up, rise_ok, latch_order = v["p_up"], v["rise_ok"], v["latch_order"]
-        B = self.BR * self.BC
-        cur = x["cur"]
-        dirty_n, mx_n = self._still_next(m, v, ~seen)
-        above = Signal(B, name="above")             # blocks after the current one
-        m.d.comb += above.eq(prefix_or(cur) & ~cur)
-        cand, first = Signal(B, name="cand"), Signal(B, name="first_dirty")
-        pool = Signal(B, name="pool")
-        # The lowest set bits as OR prefixes, not x & -x: the subtraction's
-        # carry chain was the 6x3-block planner's critical path (issue 17).
-        m.d.comb += [
-            pool.eq(Mux(mode == Mode.UPDATE, dirty_n, x["all"]) & above),
-            cand.eq(lowest_one(pool)),
-            first.eq(lowest_one(dirty_n)),
-        ]
-        with m.If(mode == Mode.UPDATE):
+        p, acc, own = x["prep"], x["acc"], ~seen
+        dirty_n, mx_n = self._still_next(m, v, own)
+        upd = mode == Mode.UPDATE
+        take_e, take_s = acc[3] & p["e_ok"], acc[1] & p["s_ok"]
+        take_n, take_w = acc[0] & p["n_ok"], acc[2] & p["w_ok"]
+        cand_any = Mux(upd, take_e | p["c0_any"] | take_s, p["nx_ok"])
+        cand = self._pick((~upd | take_e, p["NX"]), (p["c0_any"] & (p["c0_lt_s"] | ~take_s), p["C0"]), p["S"])
+        here = (x["cur"], v["br"], v["bc"], v["base"])
+        first = self._pick((p["f0_lt_n"], p["F0"]), (take_n, p["N"]), (p["f0_lt_w"], p["F0"]),
+                           (take_w, p["W"]), (p["f0_any"], p["F0"]), here)
+        dirty_left = p["f0_any"] | take_n | take_w | own       # dirty_n != 0 at the end of a sweep
+        # mx_n == 0, read only when no block is dirty: then this visit was stable (seen)
+        mx_none = p["mx_rest0"] & ~x["mx_cur"]
+        with m.If(upd):
             m.d.sync += [x["dirty"].eq(dirty_n), x["mx"].eq(mx_n)]
-        with m.If(cand != 0):
+        with m.If(cand_any):
             self._goto(m, v, cand)
         with m.Else():                                  # the end of a pass
             self._count_pass(m, mode)
@@ -402,9 +476,9 @@ class Controller(wiring.Component):
             with m.Elif(mode == Mode.CLEAR):            # every free node is 0 again
                 m.d.sync += [mode.eq(Mode.UPDATE), x["dirty"].eq(x["all"])]
                 self._goto(m, v, 1)
-            with m.Elif(dirty_n != 0):                  # the next sweep
+            with m.Elif(dirty_left):                    # the next sweep
                 self._goto(m, v, first)
-            with m.Elif(mx_n == 0):                     # no local maximum: converged
+            with m.Elif(mx_none):                       # no local maximum: converged
                 m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
                 m.next = "IDLE"
             with m.Elif(rise_ok):
