@@ -366,11 +366,14 @@ class Controller(wiring.Component):
         of every large planner, through VEND's one cycle into the pass
         counters).  dirty, mx, cur, br, bc and base change only in VEND (and
         at a start or an order in IDLE), and a visit lasts at least 7 cycles
-        (VSTART, the clusters' lead-in, ...), so these two register stages,
-        recomputed every cycle, hold the current visit's values at its VEND;
+        (VSTART, the clusters' lead-in, ...), so these three register
+        stages, recomputed every cycle, hold the current visit's values at
+        its VEND;
         what the visit itself decides (its edge changes ``acc``, ``seen``,
         ``mx_cur``) enters VEND as a few gates on them.  Cycle-neutral.
 
+        Stage 0: the blocks from the current one on (a prefix OR of the
+        one-hot ``cur``; each mask below is a shift of it).
         Stage 1: D = dirty without the current block; c0 / f0, the first
         block of D after / before the current one; whether c0 comes before
         the S neighbour, f0 before the N / W neighbour; whether another
@@ -399,19 +402,23 @@ class Controller(wiring.Component):
                 base_t = base_t | Mux(onehot[i], i * S, 0)
             return target(name, onehot, br_t, bc_t, base_t), reg(f"{name}_any", onehot != 0, 1)
 
-        at_or_after = prefix_or(cur)
-        above, below = at_or_after & ~cur, ~at_or_after & all_
+        # stage 0: the blocks from b on (every mask below is a shift of it)
+        ge = reg("ge_pre", prefix_or(cur), B)
+
+        def from_(shift):       # the blocks from b + shift on (shift may be negative)
+            return (ge << shift)[:B] if shift >= 0 else ge >> -shift
+
+        above, below = from_(1), ~ge & all_
         d = x["dirty"] & ~cur
         c0 = reg("c0_pre", lowest_one(d & above), B)
         f0 = reg("f0_pre", lowest_one(d & below), B)
         p = x["prep"] = {
-            "c0_lt_s": reg("c0_lt_s", (d & above & ~prefix_or((cur << BC)[:B])) != 0, 1),
+            "c0_lt_s": reg("c0_lt_s", (d & above & ~from_(BC)) != 0, 1),
             # read only at the end of a sweep, when D holds no block after b: a
             # block of D below b-BC (b-1) is f0, and f0 comes before N (W); without
-            # that neighbour (b < BC, b = 0) the masks are too wide, but then f0 wins
-            # anyway (VEND's order: f0 before N, N before W, W before the block)
-            "f0_lt_n": reg("f0_lt_n", (d & ~prefix_or(cur >> BC)) != 0, 1),
-            "f0_lt_w": reg("f0_lt_w", (d & ~prefix_or(cur >> 1)) != 0, 1),
+            # that neighbour (b < BC, b = 0) the mask is empty
+            "f0_lt_n": reg("f0_lt_n", (d & ~from_(-BC)) != 0, 1),
+            "f0_lt_w": reg("f0_lt_w", (d & ~from_(-1)) != 0, 1),
             "mx_rest0": reg("mx_rest0", (x["mx"] & ~cur) == 0, 1),
             "nx_ok": reg("nx_ok", ~cur[B - 1], 1),
             "e_ok": reg("e_ok", bc != BC - 1, 1), "w_ok": reg("w_ok", bc != 0, 1),
