@@ -276,7 +276,13 @@ class Planner(wiring.Component):
         # Serial read of one node word through the host port (p+2 addresses,
         # data READ_LATENCY cycles after its address): flag, then value MSB first.
         rd_go, rd_done = Signal(), Signal()
-        rd_base = Signal(range(self.depth))
+        # The host port's address is this register in every state: set to
+        # the block's word base when LOAD or a read is decided, then one up
+        # per cycle of LOAD / the read (no adder and no FSM state between a
+        # register and the RAMs' address pins: the 6x3-block planner's path
+        # after the still blocks' choice, issue 17).
+        h_addr = Signal(range(self.depth), name="h_addr")
+        m.d.comb += host.addr.eq(h_addr)
         rd_ci, rd_bit = Signal.like(c_ci), Signal.like(c_bit)
         rd_j = Signal(range(S + 2))
         rd_val, rd_const = Signal(p_max + 1), Signal()
@@ -295,8 +301,7 @@ class Planner(wiring.Component):
         with m.If(rd_go):
             m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0)]
         with m.Elif(rd_busy):
-            m.d.comb += host.addr.eq(rd_base + rd_j)
-            m.d.sync += rd_j.eq(rd_j + 1)
+            m.d.sync += [rd_j.eq(rd_j + 1), h_addr.eq(h_addr + 1)]
             got = host.rdata.bit_select(rd_bit, 1)
             with m.If(rd_j == READ_LATENCY):
                 m.d.sync += rd_const.eq(got)
@@ -397,7 +402,7 @@ class Planner(wiring.Component):
                             # LOAD's RAM base and cluster registered now (as
                             # LOCATE does for a read): the host port's cluster
                             # select is then a flip-flop in every state.
-                            m.d.sync += [load_a.eq(0), rd_base.eq(times(c.block, S) if B > 1 else 0),
+                            m.d.sync += [load_a.eq(0), h_addr.eq(times(c.block, S) if B > 1 else 0),
                                          rd_ci.eq(c_ci)]
                             with m.If(c.flag):
                                 m.d.sync += has_goal.eq(k_goals)
@@ -438,12 +443,11 @@ class Planner(wiring.Component):
                 respond(Code.OK, Op.START)
                 m.next = "IDLE"
             with m.State("LOAD"):
-                m.d.comb += host.addr.eq(rd_base + load_a)
                 with m.If(load_a == 0):
                     m.d.comb += host.wdata.eq(c.flags | c.goals)
                 with m.Elif(load_a == 1):
                     m.d.comb += host.wdata.eq(c.goals)
-                m.d.sync += load_a.eq(load_a + 1)
+                m.d.sync += [load_a.eq(load_a + 1), h_addr.eq(h_addr + 1)]
                 with m.If(load_a == S - 1):
                     respond(Code.OK, Op.LOAD)
                     m.next = "IDLE"
@@ -468,7 +472,7 @@ class Planner(wiring.Component):
                     with m.If(q == 4):
                         m.next = "DECIDE_GO"
             with m.State("LOCATE"):         # the read starts (rd_go)
-                m.d.sync += [rd_base.eq(times(f_blk, S) if B > 1 else 0), rd_ci.eq(f_ci), rd_bit.eq(f_bit)]
+                m.d.sync += [h_addr.eq(times(f_blk, S) if B > 1 else 0), rd_ci.eq(f_ci), rd_bit.eq(f_bit)]
                 if X:
                     with m.If(q == 0):
                         m.d.sync += [dir_e.eq(ctl.e_rd), cv_n.eq(0)]
