@@ -107,18 +107,28 @@ class Decision(wiring.Component):
         m.d.comb += last.eq(i == top)
         pass1, pass2 = Signal(), Signal()
 
-        # Bit i of every value (0 above bit p_max: i reaches p_max + 1),
-        # selected a cycle ahead (by nxt) into a flip-flop: the (p_max+2)-to-1
-        # selection and the serial arithmetic after it are two paths, not one
+        # Bit i of every value (0 above bit p_max: i reaches p_max + 1), in a
+        # flip-flop a cycle ahead: the serial arithmetic reads flip-flops
         # (issue 17: i -> selection -> borrows -> g_col was the planner's
-        # critical path on the ECP5).  ``start`` (the planner's state) picks
-        # bit 0 after the selection, not its index before it: the select
-        # hangs off the register nxt only (at p_max 256 the state -> index ->
-        # 258:1 select path was the 6x3-block planner's critical path).
+        # critical path on the ECP5).  The bits come from a shift register
+        # per value holding h >> nxt (nxt: the next cycle's bit), reloaded
+        # from h where a pass starts again at bit 0, not from a
+        # (p_max+2)-to-1 selection by nxt (at p_max 256 that 258:1 select was
+        # the 6x3-block planner's path once the still blocks' choice was
+        # prepared during the visit).  h holds from start to done.
         bit = {}
+        wrap = Signal()                     # nxt == top: the next cycle reads bit 0 again
+        m.d.comb += wrap.eq(nxt == top)
         for k in ("c", "N", "E", "S", "W"):
             bit[k] = Signal(name=f"bit_{k}")
-            m.d.sync += bit[k].eq(Mux(self.start, self.h[k][0], Cat(self.h[k], 0).bit_select(nxt, 1)))
+            sr = Signal(w, name=f"bits_{k}")        # h >> nxt: bit 0 is the next bit
+            m.d.sync += bit[k].eq(Mux(self.start, self.h[k][0], sr[0]))
+            with m.If(self.start):
+                m.d.sync += sr.eq(self.h[k] >> 1)
+            with m.Elif(wrap):
+                m.d.sync += sr.eq(self.h[k])
+            with m.Else():
+                m.d.sync += sr.eq(sr >> 1)
         c_prev = Signal()                   # bit i-1 of h: bit i of 2h
         m.d.sync += c_prev.eq(Mux(pass1 & ~last, bit["c"], 0))
 
@@ -192,7 +202,7 @@ class Decision(wiring.Component):
         with m.If(self.start):
             m.d.sync += [pass1.eq(1), pass2.eq(0), i.eq(0), nxt.eq(1), top.eq(self.p + 1)]
         with m.Elif(pass1 | pass2):
-            m.d.sync += [i.eq(i + 1), nxt.eq(Mux(nxt == top, 0, nxt + 1))]
+            m.d.sync += [i.eq(i + 1), nxt.eq(Mux(wrap, 0, nxt + 1))]
             with m.If(last):
                 m.d.sync += i.eq(0)
                 with m.If(pass1):
