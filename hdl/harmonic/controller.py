@@ -2,7 +2,7 @@
 
 import enum
 
-from amaranth.hdl import Array, Cat, Module, Mux, Signal, signed
+from amaranth.hdl import Array, C, Cat, Module, Mux, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -406,7 +406,11 @@ class Controller(wiring.Component):
         ge = reg("ge_pre", prefix_or(cur), B)
 
         def from_(shift):       # the blocks from b + shift on (shift may be negative)
-            return (ge << shift)[:B] if shift >= 0 else ge >> -shift
+            if shift >= 0:
+                return (ge << shift)[:B]
+            if -shift >= B:
+                return C((1 << B) - 1, B)
+            return Cat(ge[-shift:], C((1 << -shift) - 1, -shift))    # ones shifted in at the top
 
         above, below = from_(1), ~ge & all_
         d = x["dirty"] & ~cur

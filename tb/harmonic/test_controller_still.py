@@ -52,6 +52,7 @@ class Reference:
         at self.b), 'converged' or 'stopped'."""
         b, BC = self.b, self.BC
         br, bc = divmod(b, BC)
+        self.last = (b, stable, sorted(edges), sorted(self.dirty))
         self.dirty.discard(b)
         before = {x for x in self.dirty if x > b}      # dirty after b before this visit's marks
         if not stable:
@@ -85,6 +86,8 @@ class Reference:
                 self._case("sweep from: W neighbour")
             elif first == b - 1:
                 self._case("sweep from: the block before, dirty")
+            elif "W" in edges and bc > 0:
+                self._case("sweep from: a dirty block before the W neighbour")
             else:
                 self._case("sweep from: a dirty block")
             self.b = first
@@ -110,10 +113,12 @@ async def _take(ctx, blk):
     return go
 
 
-def _script(BR, BC):
-    """The first run's first visits, each a list of iterations (stable,
-    edges changed, Maximum): the rarest choices on purpose.  Sweep 1: the
-    first and the last block use up their I iterations, the others are
+def _scripts(BR, BC):
+    """The first visits of the first runs, each a list of iterations
+    (stable, edges changed, Maximum): the rarest choices on purpose.
+    Run 2 (BC >= 3): sweep 1 leaves B-3 dirty and B-1 changes its W edge,
+    so the next sweep starts at B-3, before the W neighbour B-2.  Run 1,
+    sweep 1: the first and the last block use up their I iterations, the others are
     stable at once.  Sweep 2 (blocks 0 and B-1 dirty): block 0 changes its S
     edge, then is stable, so the S neighbour comes before the dirty block
     B-1; B-1 stays unstable, the only dirty block: the next sweep starts at
@@ -122,7 +127,7 @@ def _script(BR, BC):
     B = BR * BC
     unstable, still = [(False, set(), False)] * ITERS, [(True, set(), False)]
     if B == 1:
-        return [unstable]
+        return [[unstable]]
     script = [unstable] + [still] * (B - 2) + [unstable]
     if BR >= 2 and B - 1 > BC:
         script += [[(False, {"S"}, False), (True, set(), False)], still, unstable]
@@ -139,13 +144,15 @@ def _script(BR, BC):
                        [(False, {"E"}, False)] + unstable[1:], still]
     else:   # ... then B-2's W edge, at the map's edge: no block to mark, the level ends
         script += [[(False, {"N"}, False), (True, set(), False)], [(False, {"W"}, False), (True, set(), False)]]
-    return script
+    if BC < 3:
+        return [script]
+    return [script, [still] * (B - 3) + [unstable, still, [(False, {"W"}, False), (True, set(), False)]]]
 
 
 def _run(BR, BC, rng, runs):
     """``runs`` runs of the Controller against the reference, the first
-    starting with :func:`_script`; returns the cases reached."""
-    script = _script(BR, BC)
+    the first ones starting with :func:`_scripts`; returns the cases reached."""
+    scripts = _scripts(BR, BC)
     ctl = Controller((BR, BC), 3, 6, 16)
     blk = ctl.block
     cases = {}
@@ -174,13 +181,15 @@ def _run(BR, BC, rng, runs):
                     raise AssertionError(f"{BR}x{BC}: no visit started after visit {visits} (reference: dirty {sorted(ref.dirty)}, Maximum {sorted(ref.mx)}, p {ref.p}, cases {ref.cases}; RTL busy {ctx.get(ctl.busy)} converged {ctx.get(ctl.converged)} p {ctx.get(ctl.p)})")
                 got = (ctx.get(blk.br), ctx.get(blk.bc))
                 assert got == divmod(ref.b, BC), (f"{BR}x{BC} visit {visits}: block {got}, "
-                                                  f"reference {divmod(ref.b, BC)} (dirty {sorted(ref.dirty)})")
+                                                  f"reference {divmod(ref.b, BC)} (dirty {sorted(ref.dirty)}; the last visit: block, stable, "
+                                                  f"edges, dirty before: {getattr(ref, 'last', None)})")
                 assert ctx.get(blk.base) == ref.b * 18, "base is not b * (p_max + 2)"
                 ctx.set(blk.busy, 1)
                 await ctx.tick()
                 assert await _take(ctx, blk), "the first take does not run"
                 stable, edges, mx = False, set(), False
-                plan = list(script[visits]) if run == 0 and visits < len(script) else []
+                script = scripts[run] if run < len(scripts) else []
+                plan = list(script[visits]) if visits < len(script) else []
                 while True:         # one iteration: its cycles, the next take, then its flags
                     for _ in range(L - 1):
                         await ctx.tick()
@@ -230,7 +239,7 @@ GRIDS = [(1, 1), (1, 4), (4, 1), (3, 3), (2, 5), (5, 2), (4, 6)]
 CASES = ["next: E neighbour", "next: S neighbour", "next: S neighbour before a dirty block",
          "next: a dirty block", "next: a dirty block, S marked after it", "sweep from: the block itself",
          "sweep from: N neighbour", "sweep from: W neighbour", "sweep from: the block before, dirty",
-         "sweep from: a dirty block",
+         "sweep from: a dirty block before the W neighbour", "sweep from: a dirty block",
          "converged", "precision rise", "not converged"]
 
 
