@@ -81,7 +81,7 @@ class Reference:
             if first == b:
                 self._case("sweep from: the block itself")
             elif "N" in edges and first == b - BC and br > 0:
-                self._case("sweep from: N neighbour")
+                self._case("sweep from: N neighbour" + (" before a dirty block" if len(self.dirty) > 1 else ""))
             elif "W" in edges and first == b - 1 and bc > 0:
                 self._case("sweep from: W neighbour")
             elif first == b - 1:
@@ -117,7 +117,9 @@ def _scripts(BR, BC):
     """The first visits of the first runs, each a list of iterations
     (stable, edges changed, Maximum): the rarest choices on purpose.
     Run 2 (BC >= 3): sweep 1 leaves B-3 dirty and B-1 changes its W edge,
-    so the next sweep starts at B-3, before the W neighbour B-2.  Run 1,
+    so the next sweep starts at B-3, before the W neighbour B-2.  Run 3
+    (BC >= 3, BR >= 2): B-1 changes its N edge instead, so the next sweep
+    starts at the N neighbour B-1-BC, before B-3 in the last row.  Run 1,
     sweep 1: the first and the last block use up their I iterations, the others are
     stable at once.  Sweep 2 (blocks 0 and B-1 dirty): block 0 changes its S
     edge, then is stable, so the S neighbour comes before the dirty block
@@ -146,7 +148,10 @@ def _scripts(BR, BC):
         script += [[(False, {"N"}, False), (True, set(), False)], [(False, {"W"}, False), (True, set(), False)]]
     if BC < 3:
         return [script]
-    return [script, [still] * (B - 3) + [unstable, still, [(False, {"W"}, False), (True, set(), False)]]]
+    scripts = [script, [still] * (B - 3) + [unstable, still, [(False, {"W"}, False), (True, set(), False)]]]
+    if BR >= 2:
+        scripts.append([still] * (B - 3) + [unstable, still, [(False, {"N"}, False), (True, set(), False)]])
+    return scripts
 
 
 def _run(BR, BC, rng, runs):
@@ -238,7 +243,7 @@ def _run(BR, BC, rng, runs):
 GRIDS = [(1, 1), (1, 4), (4, 1), (3, 3), (2, 5), (5, 2), (4, 6)]
 CASES = ["next: E neighbour", "next: S neighbour", "next: S neighbour before a dirty block",
          "next: a dirty block", "next: a dirty block, S marked after it", "sweep from: the block itself",
-         "sweep from: N neighbour", "sweep from: W neighbour", "sweep from: the block before, dirty",
+         "sweep from: N neighbour", "sweep from: N neighbour before a dirty block", "sweep from: W neighbour", "sweep from: the block before, dirty",
          "sweep from: a dirty block before the W neighbour", "sweep from: a dirty block",
          "converged", "precision rise", "not converged"]
 
