@@ -351,8 +351,8 @@ class Controller(wiring.Component):
         return dirty_n, mx_n
 
     def _goto(self, m, v, target):
-        """Visit block ``target`` next: a one-hot int, or a :meth:`_targets`
-        tuple (one-hot, br, bc, base) of signals."""
+        """Visit block ``target`` next: a one-hot int, or a (one-hot, br,
+        bc, base) tuple of signals (:meth:`_still_prep`'s targets)."""
         BC = self.BC
         if isinstance(target, int):
             i = target.bit_length() - 1
