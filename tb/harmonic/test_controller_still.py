@@ -116,47 +116,51 @@ async def _take(ctx, blk):
 def _scripts(BR, BC):
     """The first visits of the first runs, each a list of iterations
     (stable, edges changed, Maximum): the rarest choices on purpose.
+
+    Run 1, sweep 1: the first and the last block use up their I iterations,
+    the others are stable at once.  Sweep 2 (blocks 0 and B-1 dirty): block
+    0 changes its S edge, then is stable, so the S neighbour comes before
+    the dirty block B-1; B-1 stays unstable, the only dirty block: the next
+    sweep starts at itself.  Then the W and N neighbours as the next sweep's
+    first block, and the block before the last one visited.
     Run 2 (BC >= 3): sweep 1 leaves B-3 dirty and B-1 changes its W edge,
-    so the next sweep starts at B-3, before the W neighbour B-2.  Run 3
-    (BC >= 3, BR >= 2): B-1 changes its N edge instead, so the next sweep
-    starts at the N neighbour B-1-BC, before B-3 in the last row.  Run 1,
-    sweep 1: the first and the last block use up their I iterations, the others are
-    stable at once.  Sweep 2 (blocks 0 and B-1 dirty): block 0 changes its S
-    edge, then is stable, so the S neighbour comes before the dirty block
-    B-1; B-1 stays unstable, the only dirty block: the next sweep starts at
-    itself.  Then the W and N neighbours as the next sweep's first block,
-    and the block before the last one visited."""
+    so the next sweep starts at B-3, before the W neighbour B-2.
+    Run 3 (BC >= 3, BR >= 2): B-1 changes its N edge instead, so the next
+    sweep starts at the N neighbour B-1-BC, before B-3 in the last row."""
     B = BR * BC
     unstable, still = [(False, set(), False)] * ITERS, [(True, set(), False)]
+
+    def changed(side):      # one iteration that changes the edge, then a stable one
+        return [(False, {side}, False), (True, set(), False)]
+
     if B == 1:
         return [[unstable]]
     script = [unstable] + [still] * (B - 2) + [unstable]
     if BR >= 2 and B - 1 > BC:
-        script += [[(False, {"S"}, False), (True, set(), False)], still, unstable]
+        script += [changed("S"), still, unstable]
     else:
         script += [still, unstable]
     # sweep 3 from B-1: its W edge changes (the next sweep from the W
     # neighbour B-2), then B-2's N edge (from B-2-BC); one column: B-1's N edge
     if BC >= 2:
-        script += [[(False, {"W"}, False), (True, set(), False)]]
+        script += [changed("W")]
         if BR >= 2:
             # ... then from c = B-2-BC: c unstable and its E edge changed, c+1 stable: the
             # next sweep from the block before c+1 (in a row >= 1 when BR >= 3)
-            script += [[(False, {"N"}, False), (True, set(), False)],
-                       [(False, {"E"}, False)] + unstable[1:], still]
+            script += [changed("N"), [(False, {"E"}, False)] + unstable[1:], still]
     else:   # ... then B-2's W edge, at the map's edge: no block to mark, the level ends
-        script += [[(False, {"N"}, False), (True, set(), False)], [(False, {"W"}, False), (True, set(), False)]]
+        script += [changed("N"), changed("W")]
     if BC < 3:
         return [script]
-    scripts = [script, [still] * (B - 3) + [unstable, still, [(False, {"W"}, False), (True, set(), False)]]]
+    scripts = [script, [still] * (B - 3) + [unstable, still, changed("W")]]
     if BR >= 2:
-        scripts.append([still] * (B - 3) + [unstable, still, [(False, {"N"}, False), (True, set(), False)]])
+        scripts.append([still] * (B - 3) + [unstable, still, changed("N")])
     return scripts
 
 
 def _run(BR, BC, rng, runs):
     """``runs`` runs of the Controller against the reference, the first
-    the first ones starting with :func:`_scripts`; returns the cases reached."""
+    ones starting with :func:`_scripts`; returns the cases reached."""
     scripts = _scripts(BR, BC)
     ctl = Controller((BR, BC), 3, 6, 16)
     blk = ctl.block
