@@ -40,29 +40,49 @@ def undefined_memory(*, shape, depth, src_loc_at=0):
     return Memory(shape=shape, depth=depth, init=[], attrs={UNDEFINED_INIT: 1}, src_loc_at=1 + src_loc_at)
 
 
-def strip_undefined_init(text):
-    """``text`` (yosys' Verilog) without the initial blocks of the memories marked
-    :data:`UNDEFINED_INIT`.  Such a block must set every word to zero (the
-    memory was made with no init): anything else is an error, never dropped."""
-    out, pos = [], 0
-    for m in _DECL.finditer(text):
-        name = m[1]
+def _initial_blocks(text, decl):
+    """Each memory declaration ``decl`` matches that an initial block
+    follows: (the match, the block's start and end, its word lines, whether
+    every word is zero)."""
+    for m in decl.finditer(text):
         start = m.end()
         if not text.startswith("  initial begin\n", start):
             continue
         end = text.index("\n  end\n", start) + len("\n  end\n")
-        for line in text[start:end].splitlines()[1:-1]:
-            z = _ZERO.fullmatch(line)
-            if not z or z[1] != name:
-                raise ValueError(f"memory {name} is marked {UNDEFINED_INIT} but has an initial value: {line.strip()}")
+        lines = text[start:end].splitlines()[1:-1]
+        yield m, start, end, lines, all(_is_zero(line, m[1]) for line in lines)
+
+
+def _is_zero(line, name):
+    z = _ZERO.fullmatch(line)
+    return bool(z) and z[1] == name
+
+
+def _cut(text, spans):
+    """``text`` without the (start, end) spans, in order."""
+    out, pos = [], 0
+    for start, end in spans:
         out.append(text[pos:start])
         pos = end
     out.append(text[pos:])
     return "".join(out)
 
 
-# A memory's declaration followed by its initial block (yosys' write_verilog).
-_DECL_INIT = re.compile(r"^[ \t]*reg (?:\[\d+:\d+\] )?(\S+) +\[(\d+):(\d+)\];\n  initial begin\n", re.M)
+def strip_undefined_init(text):
+    """``text`` (yosys' Verilog) without the initial blocks of the memories marked
+    :data:`UNDEFINED_INIT`.  Such a block must set every word to zero (the
+    memory was made with no init): anything else is an error, never dropped."""
+    spans = []
+    for m, start, end, lines, zero in _initial_blocks(text, _DECL):
+        if not zero:
+            line = next(line for line in lines if not _is_zero(line, m[1]))
+            raise ValueError(f"memory {m[1]} is marked {UNDEFINED_INIT} but has an initial value: {line.strip()}")
+        spans.append((start, end))
+    return _cut(text, spans)
+
+
+# A memory's declaration (yosys' write_verilog): name, then its address range.
+_DECL_MEM = re.compile(r"^[ \t]*reg (?:\[\d+:\d+\] )?(\S+) +\[(\d+):(\d+)\];\n", re.M)
 
 
 def strip_zero_init(text, min_words=1024):
@@ -75,15 +95,5 @@ def strip_zero_init(text, min_words=1024):
     own: the 11x6-block harmonic planner (7 MB of Verilog, 200,000 init
     lines) did not leave read_verilog in 15 minutes, and its whole
     synth_ecp5 takes 2 minutes without them.  Simulation keeps the zeros."""
-    out, pos = [], 0
-    for m in _DECL_INIT.finditer(text):
-        name, words = m[1], abs(int(m[2]) - int(m[3])) + 1
-        start = m.end() - len("  initial begin\n")
-        end = text.index("\n  end\n", start) + len("\n  end\n")
-        lines = text[start:end].splitlines()[1:-1]
-        if words < min_words or not all((z := _ZERO.fullmatch(line)) and z[1] == name for line in lines):
-            continue
-        out.append(text[pos:start])
-        pos = end
-    out.append(text[pos:])
-    return "".join(out)
+    return _cut(text, [(start, end) for m, start, end, _, zero in _initial_blocks(text, _DECL_MEM)
+                       if zero and abs(int(m[2]) - int(m[3])) + 1 >= min_words])
