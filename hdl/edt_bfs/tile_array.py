@@ -68,7 +68,10 @@ class TileArray(wiring.Component):
     step : In(1)
         One iteration (EDT: iteration k; BFS: one relaxation).
     upd : Out(1)
-        Some cell changes in this iteration (the BFS visit's end test).
+        Some cell changed in the last cycle's iteration (the BFS visit's end
+        test): each cell's change is a flip-flop beside its register, and
+        ``upd`` is their OR, so no OR tree of the cells' logic ends a path
+        (the cell's iteration into a flip-flop, as into its own register).
     marks : Out(9)
         Bit 0: the EDT's self mark (a present pixel not done next to one done
         in RAM); bit i = 1..8: the tile in direction i is marked (EDT: a halo
@@ -143,7 +146,11 @@ class TileArray(wiring.Component):
         for (a, b), cell in cells.items():
             for i, (dr, dc) in OFFSETS.items():
                 m.d.comb += getattr(cell, f"n{i}").eq(nbs[a + dr, b + dc])
-        m.d.comb += self.upd.eq(Cat(*[c.upd for c in cells.values()]).any())
+        # The cells' change bits, registered where they are computed (one
+        # vector: one process in the simulators), then OR-ed from flip-flops.
+        chg = Signal(len(cells), name="chg_q")
+        m.d.sync += chg.eq(Cat(*[c.upd for c in cells.values()]))
+        m.d.comb += self.upd.eq(chg.any())
 
         # Marks (read in the store, from registers that no longer change).
         inside = set(cells)

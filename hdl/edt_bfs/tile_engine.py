@@ -372,8 +372,6 @@ class TileEngine(wiring.Component):
         col_present = Signal(t_c + 2)
         iters = Signal(w["iters"])
         stepped = Signal()                        # BFS: ITER has stepped the array in this visit
-        upd_r = Signal()                          # ... and its last step changed a cell (the array's OR,
-                                                  # registered: off the FSM's next-state path)
         sj = Signal(range(t_r + 1))               # store: rows written
         pushed = Signal(9)
         with m.If(at["SCHED0"]):
@@ -418,13 +416,14 @@ class TileEngine(wiring.Component):
                                       mem.rd_data.payload.right))]
 
         # ITER: EDT one iteration; BFS until one changes nothing (counted), then one cycle (no step)
-        # that sees it in upd_r (Timing.stop)
+        # that sees it in arr.upd (Timing.stop: the cells' change bits are flip-flops, so the
+        # FSM reads their OR a cycle after the step, and no cell's logic reaches the FSM)
         with m.If(at["ITER"]):
-            with m.If(bfs & stepped & ~upd_r):
+            with m.If(bfs & stepped & ~arr.upd):
                 goto("STORE")
             with m.Else():
                 m.d.comb += arr.step.eq(1)
-                m.d.sync += [iters.eq(iters + 1), stepped.eq(1), upd_r.eq(arr.upd)]
+                m.d.sync += [iters.eq(iters + 1), stepped.eq(1)]
                 with m.If(~bfs):
                     goto("STORE")
 
