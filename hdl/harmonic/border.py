@@ -6,6 +6,7 @@ from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..block_ram import BlockRam
 from ..params import REQUIRED, Param, check, checked_init
 
 __all__ = ["Border", "BorderExponentsSignature", "SIDES"]
@@ -240,24 +241,27 @@ class Border(wiring.Component):
                 # used): never one address in one cycle, so yosys need not
                 # emulate collisions (no logic between the RAM and its
                 # output register).
+                if not self.exponents:
+                    # The LSB-first reads, registered (the block RAM's output
+                    # register, as in the cluster: read latency 2, no address
+                    # multiplexer before it: hdl/block_ram.py).
+                    ram = BlockRam(sl.stop - sl.start, self.depth, attrs={"no_rw_check": 1})
+                    m.submodules[f"ram_{name}_{k}"] = ram
+                    m.d.comb += [ram.w_data.eq(wdata[sl]), ram.w_en.eq(self.w_en), ram.w_addr.eq(self.w_addr),
+                                 ram.r_addr.eq(src),
+                                 getattr(self, f"h_{side}")[sl].eq(Mux(ok2, ram.r_data, 0))]
+                    continue
                 ram = Memory(shape=sl.stop - sl.start, depth=self.depth, init=[], attrs={"no_rw_check": 1})
                 m.submodules[f"ram_{name}_{k}"] = ram
                 lsb = ram.read_port()
                 wp = ram.write_port()
                 m.d.comb += [wp.data.eq(wdata[sl]), wp.en.eq(self.w_en), wp.addr.eq(self.w_addr)]
-                # The LSB-first read data register (the block RAM's output
-                # register, as in the cluster: read latency 2).
+                # The LSB-first read data register (read latency 2), and the
+                # scan and the raw reads: a second read port, MSB first, also
+                # while the block writes (yosys doubles the RAM).
                 lsb_data = Signal(sl.stop - sl.start, name=f"lsb_{name}_{k}", reset_less=True)
                 m.d.sync += lsb_data.eq(lsb.data)
-                if not self.exponents:
-                    m.d.comb += [
-                        lsb.addr.eq(src),
-                        getattr(self, f"h_{side}")[sl].eq(Mux(ok2, lsb_data, 0)),
-                    ]
-                else:
-                    # The scan and the raw reads: a second read port, MSB
-                    # first, also while the block writes (yosys doubles the RAM).
-                    conv(src, sl, lsb, lsb_data, ram.read_port())
+                conv(src, sl, lsb, lsb_data, ram.read_port())
         if self.exponents:
             self._scan_control(m)
         return m

@@ -2,9 +2,9 @@
 
 from amaranth.hdl import Cat, Module, Mux, Signal, signed, unsigned
 from amaranth.lib import wiring
-from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from ..block_ram import BlockRam
 from ..params import Constraint, Param, check, checked_init
 from .counters import Counters, le_const
 from .limits import DEPTH_WHY, MAX_DEPTH
@@ -24,10 +24,11 @@ class Cluster(wiring.Component):
     then value bits p..0 (:func:`models.harmonic.ram_image`).  The read port
     reads it LSB first for the Update and the Maximum (LSB-first compare);
     the write port writes the results two bit positions behind, so the RAM
-    is one simple dual-port block RAM.  Its read data is registered (read
-    latency 2: the block RAM's output register, ``REGMODE OUTREG`` on an
-    ECP5 DP16KD, which scripts/ecp5_pack.py maps for yosys) and each node's
-    write bit is a register.  One iteration takes L = p+2 cycles (p >= 4;
+    is one simple dual-port block RAM (a deeper one: :class:`~hdl.block_ram.BlockRam`,
+    the word in lanes of blocks that each hold the whole depth).  Its read
+    data is registered (read latency 2: the block RAM's output register,
+    ``REGMODE OUTREG`` on an ECP5 DP16KD, which scripts/ecp5_pack.py maps
+    for yosys) and each node's write bit is a register.  One iteration takes L = p+2 cycles (p >= 4;
     :func:`models.harmonic.iteration_cycles`: 6 for p = 2, 3; a shift
     iteration of block exponents one more).  A read and a write never meet
     on one address in one cycle (the memories carry yosys' ``no_rw_check``).
@@ -202,13 +203,11 @@ class Cluster(wiring.Component):
         # A read and a write never meet on one address in one cycle (the
         # pipeline's order: models/harmonic/ram.py), so yosys need not
         # emulate any collision behaviour (no logic after the RAM's output).
-        m.submodules.ram = ram = Memory(shape=NODES, depth=self.depth, init=[], attrs={"no_rw_check": 1})
-        port_r = ram.read_port()
-        port_w = ram.write_port()
-        # The read data register: the block RAM's output register (read
-        # latency 2); no reset, like the RAM's data.
-        data = Signal(NODES, reset_less=True)
-        m.d.sync += data.eq(port_r.data)
+        # Its read data are registered: the block RAM's output register (read
+        # latency 2; hdl/block_ram.py lays a deep RAM out so that no address
+        # multiplexer sits before that register).
+        m.submodules.ram = ram = BlockRam(NODES, self.depth, attrs={"no_rw_check": 1})
+        data = ram.r_data
 
         running = Signal()
         stopping = Signal()     # the stop command was taken: run until its done
@@ -298,14 +297,14 @@ class Cluster(wiring.Component):
 
         # RAM ports: counters while iterating, host port while idle.
         m.d.comb += [
-            port_r.addr.eq(Mux(running, cnt.addrR, self.host_addr)),
-            port_w.addr.eq(Mux(running, w_addr, self.host_addr)),
-            port_w.data.eq(self.host_wdata),
-            port_w.en.eq(Mux(running, write, self.host_we)),
+            ram.r_addr.eq(Mux(running, cnt.addrR, self.host_addr)),
+            ram.w_addr.eq(Mux(running, w_addr, self.host_addr)),
+            ram.w_data.eq(self.host_wdata),
+            ram.w_en.eq(Mux(running, write, self.host_we)),
             self.h.eq(data),
             self.host_rdata.eq(data),
         ]
-        m.d.comb += [self.w_addr.eq(port_w.addr), self.w_en.eq(running & write)]
+        m.d.comb += [self.w_addr.eq(ram.w_addr), self.w_en.eq(running & write)]
 
         # The nodes' adder mask, a register (one LUT level less before the
         # nodes' sum): mask | clr_a of the next cycle.
@@ -354,7 +353,7 @@ class Cluster(wiring.Component):
                     m.d.comb += getattr(node, f"h_{name}").eq(nodes[rr][cc].to if inside else h_edge[k])
         w_bits = [nodes[r][c].w for r in range(ROWS) for c in range(COLS)]
         with m.If(running):
-            m.d.comb += port_w.data.eq(Cat(*w_bits))
+            m.d.comb += ram.w_data.eq(Cat(*w_bits))
         # The nodes' bits themselves, not the host multiplexer's output: the
         # border storage writes them with w_en (issue 17: one LUT less
         # between the nodes' registers and the border RAMs' data pins).
