@@ -14,17 +14,20 @@ BANK_DEPTH = BLOCK_SHAPES[-1][0]
 
 
 def ram_layout(width, depth):
-    """How :class:`BlockRam` splits ``width`` x ``depth``: ``(banks, bank_depth, lanes)``.
+    """How :class:`BlockRam` splits ``width`` x ``depth``: a list of banks, each ``(depth, lanes)``.
 
-    A lane is a slice of the word in a block RAM of the widest shape that
-    holds the bank's whole depth, so no block's output goes through an
-    address multiplexer; banks split a depth beyond 16384 words (the one
-    multiplexer left, behind the output registers).  ``lanes``: the slices.
+    Banks of 16384 words split a deeper RAM (their multiplexer, behind the
+    output registers, is the one left), the last bank holding the rest.  A
+    bank's lanes are slices of the word, each in block RAMs of the widest
+    shape that holds the bank's whole depth, so that no block's output goes
+    through an address multiplexer.  ``lanes``: the slices.
     """
-    bank_depth = min(depth, BANK_DEPTH)
-    lane = next(w for d, w in BLOCK_SHAPES if d >= bank_depth)
-    lanes = [slice(s, min(s + lane, width)) for s in range(0, width, lane)]
-    return -(-depth // BANK_DEPTH), bank_depth, lanes
+    banks = []
+    for start in range(0, depth, BANK_DEPTH):
+        d = min(BANK_DEPTH, depth - start)
+        lane = next(w for bd, w in BLOCK_SHAPES if bd >= d)
+        banks.append((d, [slice(s, min(s + lane, width)) for s in range(0, width, lane)]))
+    return banks
 
 
 class BlockRam(wiring.Component):
@@ -41,7 +44,8 @@ class BlockRam(wiring.Component):
     instead of 8), each lane's data go straight into a flip-flop that
     becomes the block's output register (scripts/ecp5_pack.py: REGMODE
     OUTREG), and only a depth beyond 16384 words keeps a bank multiplexer,
-    behind those registers.  At most 1024 words of up to 18 bits this is
+    behind those registers (the last bank laid out for the words it holds:
+    17028 x 12 bits is 12 one-bit lanes of 16384 and one 644 x 12 block).  At most 1024 words of up to 18 bits this is
     one memory, as before.  The same cycles as one memory with a read-data
     register.
 
@@ -72,29 +76,28 @@ class BlockRam(wiring.Component):
 
     def elaborate(self, platform):
         m = Module()
-        banks, bank_depth, lanes = ram_layout(self.width, self.depth)
-        bank_bits = (bank_depth - 1).bit_length()
+        banks = ram_layout(self.width, self.depth)
+        bank_bits = (BANK_DEPTH - 1).bit_length()
         outs = []
-        for b in range(banks):
-            depth = min(bank_depth, self.depth - b * bank_depth)
-            w_here = self.w_en if banks == 1 else self.w_en & (self.w_addr[bank_bits:] == b)
+        for b, (depth, lanes) in enumerate(banks):
+            w_here = self.w_en if len(banks) == 1 else self.w_en & (self.w_addr[bank_bits:] == b)
             q = Signal(self.width, name=f"q{b}", reset_less=True)   # the blocks' output registers
             for k, sl in enumerate(lanes):
                 mem = Memory(shape=sl.stop - sl.start, depth=depth, init=[], attrs=self.attrs)
-                m.submodules[f"bank{b}_lane{k}" if banks > 1 else f"lane{k}"] = mem
+                m.submodules[f"bank{b}_lane{k}" if len(banks) > 1 else f"lane{k}"] = mem
                 rp, wp = mem.read_port(), mem.write_port()
                 m.d.comb += [rp.addr.eq(self.r_addr), wp.addr.eq(self.w_addr),
                              wp.data.eq(self.w_data[sl]), wp.en.eq(w_here)]
                 m.d.sync += q[sl].eq(rp.data)
             outs.append(q)
-        if banks == 1:
+        if len(banks) == 1:
             m.d.comb += self.r_data.eq(outs[0])
         else:
             # the bank of the word on r_data: the read address's high bits, two cycles old
-            sel1, sel2 = (Signal(range(banks), name=n, reset_less=True) for n in ("bank1", "bank2"))
+            sel1, sel2 = (Signal(range(len(banks)), name=n, reset_less=True) for n in ("bank1", "bank2"))
             m.d.sync += [sel1.eq(self.r_addr[bank_bits:]), sel2.eq(sel1)]
             data = outs[0]
-            for b in range(1, banks):
+            for b in range(1, len(banks)):
                 data = Mux(sel2 == b, outs[b], data)
             m.d.comb += self.r_data.eq(data)
         return m

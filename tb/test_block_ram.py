@@ -19,7 +19,7 @@ from navcores.sim.rtl.clock import start
 from navcores.sim.rtl.runner import SIMULATORS, run
 from tb.harmonic.serial import next_cycle
 
-# (width, depth): 18 bits over two banks (16384 + 3616 words, 1-bit lanes: 36 memories);
+# (width, depth): 18 bits over two banks (16384 words in 1-bit lanes, 3616 in 4-bit lanes: 23 memories);
 # 7 bits at 3000 words (4-bit lanes: 4 + 3)
 SHAPES = ((18, 20000), (7, 3000))
 
@@ -57,16 +57,16 @@ async def block_ram_follows_list(dut):
     dut.w_en.value = 0
     banks_seen = len(seen)
     assert checked > 500, f"only {checked} reads of written words"
-    assert banks_seen == ram_layout(width, depth)[0], f"reads reached {banks_seen} bank(s)"
+    assert banks_seen == len(ram_layout(width, depth)), f"reads reached {banks_seen} bank(s)"
 
 
 def test_layout():
-    assert ram_layout(18, 1024) == (1, 1024, [slice(0, 18)])
-    assert ram_layout(18, 200) == (1, 200, [slice(0, 18)])
-    assert ram_layout(18, 8192) == (1, 8192, [slice(k, k + 2) for k in range(0, 18, 2)])
-    assert ram_layout(7, 3000) == (1, 3000, [slice(0, 4), slice(4, 7)])
-    banks, depth, lanes = ram_layout(18, 32768)
-    assert (banks, depth, len(lanes)) == (2, 16384, 18)
+    assert ram_layout(18, 1024) == [(1024, [slice(0, 18)])]
+    assert ram_layout(18, 200) == [(200, [slice(0, 18)])]
+    assert ram_layout(18, 8192) == [(8192, [slice(k, k + 2) for k in range(0, 18, 2)])]
+    assert ram_layout(7, 3000) == [(3000, [slice(0, 4), slice(4, 7)])]
+    assert ram_layout(18, 32768) == [(16384, [slice(k, k + 1) for k in range(18)])] * 2
+    assert ram_layout(12, 17028) == [(16384, [slice(k, k + 1) for k in range(12)]), (644, [slice(0, 12)])]
     with pytest.raises(ValueError, match="width 0 and depth 8"):
         BlockRam(0, 8)
 

@@ -37,8 +37,9 @@ from tb.harmonic.serial import next_cycle
 SETS = {
     "small": ({"depth": 64, "p_max": 62}, "2,3,4,8,13,32,62"),
     "paper": ({"depth": 1024}, "100"),            # the paper's 1Kx18 RAM, p_max 1022
-    # a deep RAM: two banks of 18 one-bit lanes (hdl/block_ram.py, whose
-    # own test, tb/test_block_ram.py, covers every bank on both simulators)
+    # a deep RAM: a bank of 18 one-bit lanes and one of 16 words
+    # (hdl/block_ram.py, whose own test, tb/test_block_ram.py, reads and
+    # writes every bank on both simulators)
     "deep": ({"depth": 16400, "p_max": 62}, "13"),
 }
 DEPTH = int(os.environ.get("CLUSTER_DEPTH", "64"))
@@ -227,7 +228,7 @@ async def cluster_refuses_bad_precision(dut):
 # The paper set on Verilator only, the deep one on Icarus only: the
 # cluster's logic is the same at every depth (the small set runs on both
 # simulators), Icarus takes about a minute for the paper set's p = 100
-# iterations, and Verilator's build grows with the deep set's 36 memories.
+# iterations, and Verilator's build grows with the deep set's 19 memories.
 ONE_SIM = {("icarus", "paper"), ("verilator", "deep")}
 
 
