@@ -304,16 +304,20 @@ class Planner(wiring.Component):
         # gates host.we): no FSM state on the RAM's read multiplexer, which
         # was the planner's critical path after DECODE (issue 17).
         m.d.comb += host.cluster.eq(rd_ci)
+        # rd_j == rd_end as a register set a count ahead (rd_end >= 3): the
+        # read's end drives the enables of the Decision's 257-bit values, and
+        # the comparator before them was the 6x3-block planner's path (issue 17)
+        rd_last = Signal()
         with m.If(rd_go):
-            m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0)]
+            m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0), rd_last.eq(0)]
         with m.Elif(rd_busy):
-            m.d.sync += [rd_j.eq(rd_j + 1), h_addr.eq(h_addr + 1)]
+            m.d.sync += [rd_j.eq(rd_j + 1), h_addr.eq(h_addr + 1), rd_last.eq(rd_j + 1 == rd_end)]
             got = host.rdata.bit_select(rd_bit, 1)
             with m.If(rd_j == READ_LATENCY):
                 m.d.sync += rd_const.eq(got)
             with m.Elif(rd_j > READ_LATENCY):
                 m.d.sync += rd_val.eq(Cat(got, rd_val[:-1]))
-            with m.If(rd_j == rd_end):
+            with m.If(rd_last):
                 m.d.sync += rd_busy.eq(0)
                 m.d.comb += rd_done.eq(1)
 
