@@ -4,12 +4,12 @@ per node on a whole map held in one state RAM, one pipelined node update
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from navcores.models.harmonic.node_exponents import (ENGINE_HALF_EXTRA, ENGINE_SLOTS, P_LIMIT, RAM_LATENCY,
                                                      UPDATE_LATENCY)
 
-from ..block_ram import BlockRam
 from ..params import Constraint, Param, check, checked_init
 from ..ram_init import UNDEFINED_INIT
 from .node_exponents import E_MAX_LIMIT, NEIGHBOURS, NodeExponentUpdate, word_layout
@@ -124,9 +124,10 @@ class NodeExponentEngine(wiring.Component):
         state = data.StructLayout({"v": p + 1, "e": max(1, e_max.bit_length()), "const": 1})
         # No initial value (hdl/ram_init.py: a 64K-word init block stalls yosys' front end): every
         # word a job reads is loaded first; a neighbour outside the map is read but replaced by zero.
-        # hdl/block_ram.py: lanes of blocks that each hold a bank's whole depth, each lane's data
-        # in its block's output register, only the banks' multiplexer behind them.
-        m.submodules.ram = ram = BlockRam(state.size, self.max_h << cw, attrs={UNDEFINED_INIT: 1, "no_rw_check": 1})
+        m.submodules.ram = ram = Memory(shape=state, depth=self.max_h << cw, init=[],
+                                        attrs={UNDEFINED_INIT: 1, "no_rw_check": 1})
+        rd = ram.read_port()
+        wr = ram.write_port()
 
         H, W = Signal(range(self.max_h + 1), name="H"), Signal(range(self.max_w + 1), name="W")
         max_iter = Signal(MAX_ITER_BITS)
@@ -157,18 +158,17 @@ class NodeExponentEngine(wiring.Component):
         sweep_addr = Cat(cc[:cw], rr[:rw])
         # A read's slot and whether it was inside the map ride along with it.  The read has latency
         # RAM_LATENCY = 3: the address registered (it fans out to every block of
-        # the RAM: 128 at 256 x 256), the block RAM, then the blocks' output registers (each was the
-        # critical path in turn; before hdl/block_ram.py a register behind the multiplexer that
-        # joined 128 blocks' unregistered outputs).
-        addr_q = Signal(len(ram.r_addr), name="addr_q")
+        # the RAM: 128 at 256 x 256), the block RAM, then a register behind the multiplexer that joins
+        # the blocks (each was the critical path in turn).
+        addr_q = Signal(len(rd.addr), name="addr_q")
         a_slot, a_in, a_valid = Signal.like(slot, name="a_slot"), Signal(name="a_in"), Signal(name="a_valid")
         issued_slot, issued_in, issued = (Signal.like(slot, name="issued_slot"), Signal(name="issued_in"),
                                           Signal(name="issued"))
-        m.d.comb += ram.r_addr.eq(addr_q)
+        m.d.comb += rd.addr.eq(addr_q)
         m.d.sync += [issued_slot.eq(a_slot), issued_in.eq(a_in), issued.eq(a_valid)]
         got_slot, got_in, got_valid = Signal.like(slot, name="got_slot"), Signal(name="got_in"), Signal(name="got_valid")
-        rd_q = state(ram.r_data)
-        m.d.sync += [got_slot.eq(issued_slot), got_in.eq(issued_in), got_valid.eq(issued)]
+        rd_q = Signal(state, name="rd_q")
+        m.d.sync += [rd_q.eq(rd.data), got_slot.eq(issued_slot), got_in.eq(issued_in), got_valid.eq(issued)]
         data_in = Signal(state)
         m.d.comb += data_in.eq(Mux(got_in, rd_q, zero))
         nb = {k: Signal(state, name=f"nb_{k}") for k in ("own", "N", "W", "E")}
@@ -295,8 +295,8 @@ class NodeExponentEngine(wiring.Component):
         # The one write port, registered (its address, data and enable fan out to every block of the
         # RAM; a word lands a cycle after it is chosen, WRITE_LATENCY): the load's cells, else the
         # sweep's new words.
-        wa, wd, we = Signal(len(ram.w_addr), name="wr_addr_q"), Signal(state, name="wr_data_q"), Signal(name="wr_en_q")
-        m.d.comb += [ram.w_addr.eq(wa), ram.w_data.eq(wd), ram.w_en.eq(we)]
+        wa, wd, we = Signal(len(wr.addr), name="wr_addr_q"), Signal(state, name="wr_data_q"), Signal(name="wr_en_q")
+        m.d.comb += [wr.addr.eq(wa), wr.data.eq(wd), wr.en.eq(we)]
         with m.If(load_write):
             m.d.sync += [wa.eq(Cat(c, r)), wd.eq(load_word), we.eq(1)]
         with m.Else():
