@@ -561,8 +561,14 @@ class Planner(wiring.Component):
             dec.start.eq(fsm.ongoing("DECIDE_GO")),
             rd_go.eq(fsm.ongoing("LOCATE")),
         ]
-        # Responses without a value: clear the data fields.
-        with m.If(self.i_stream.valid & self.i_stream.ready):
+        # Responses without a value: clear the data fields, a cycle after the
+        # command is taken (no response is raised sooner, and READ / DIRECTION
+        # write them much later), from a register: the accept's logic into
+        # the ~780 flip-flops' synchronous clear was the 6x3-block planner's
+        # path (issue 17).
+        clear_data = Signal()
+        m.d.sync += clear_data.eq(self.i_stream.valid & self.i_stream.ready)
+        with m.If(clear_data):
             m.d.sync += [resp.value.eq(0), resp.const.eq(0), resp.triangle.eq(0),
                          resp.g_row.eq(0), resp.g_col.eq(0)]
             if X:
