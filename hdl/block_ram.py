@@ -45,9 +45,9 @@ class BlockRam(wiring.Component):
     becomes the block's output register (scripts/ecp5_pack.py: REGMODE
     OUTREG), and only a depth beyond 16384 words keeps a bank multiplexer,
     behind those registers (the last bank laid out for the words it holds:
-    17028 x 12 bits is 12 one-bit lanes of 16384 and one 644 x 12 block).  At most 1024 words of up to 18 bits this is
-    one memory, as before.  The same cycles as one memory with a read-data
-    register.
+    17028 x 12 bits is 12 one-bit lanes of 16384 and one 644 x 12 block).
+    At most 1024 words of up to 18 bits this is one memory, as before.  The
+    same cycles as one memory with a read-data register.
 
     Parameters
     ----------

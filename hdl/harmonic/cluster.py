@@ -24,11 +24,12 @@ class Cluster(wiring.Component):
     then value bits p..0 (:func:`models.harmonic.ram_image`).  The read port
     reads it LSB first for the Update and the Maximum (LSB-first compare);
     the write port writes the results two bit positions behind, so the RAM
-    is one simple dual-port block RAM (a deeper one: :class:`~hdl.block_ram.BlockRam`,
-    the word in lanes of blocks that each hold the whole depth).  Its read
-    data is registered (read latency 2: the block RAM's output register,
-    ``REGMODE OUTREG`` on an ECP5 DP16KD, which scripts/ecp5_pack.py maps
-    for yosys) and each node's write bit is a register.  One iteration takes L = p+2 cycles (p >= 4;
+    is one simple dual-port block RAM (a deeper one:
+    :class:`~hdl.block_ram.BlockRam`, the word in lanes of blocks that each
+    hold the whole depth).  Its read data is registered (read latency 2: the
+    block RAM's output register, ``REGMODE OUTREG`` on an ECP5 DP16KD, which
+    scripts/ecp5_pack.py maps for yosys) and each node's write bit is a
+    register.  One iteration takes L = p+2 cycles (p >= 4;
     :func:`models.harmonic.iteration_cycles`: 6 for p = 2, 3; a shift
     iteration of block exponents one more).  A read and a write never meet
     on one address in one cycle (the memories carry yosys' ``no_rw_check``).
