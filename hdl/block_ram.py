@@ -5,12 +5,16 @@ from amaranth.lib import wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
+from .harmonic.limits import MAX_DEPTH
+from .params import Param, check, checked_init
+
 __all__ = ["BlockRam", "BLOCK_SHAPES", "ram_layout"]
 
 # The port shapes (depth, width) of one 18 Kbit block RAM: the ECP5's DP16KD,
 # like the Virtex-II / Spartan-3 RAMB16 of the papers.
 BLOCK_SHAPES = ((512, 36), (1024, 18), (2048, 9), (4096, 4), (8192, 2), (16384, 1))
 BANK_DEPTH = BLOCK_SHAPES[-1][0]
+MAX_WIDTH = 1024        # elaboration limit: wider than any word here (the cluster's 18 bits, a border's few hundred)
 
 
 def ram_layout(width, depth):
@@ -67,9 +71,17 @@ class BlockRam(wiring.Component):
         Write port: ``w_data`` at ``w_addr`` when ``w_en`` (readable from the next cycle on).
     """
 
+    PARAMS = (
+        Param("width", int, lo=1, hi=MAX_WIDTH, doc="word width in bits",
+              message="BlockRam width {value!r}: must be an integer in {lo}..{hi}"),
+        Param("depth", int, lo=2, hi=MAX_DEPTH, doc="words",
+              message="BlockRam depth {value!r}: must be an integer in {lo}..{hi} (the harmonic cluster's "
+                      "limit: hdl/harmonic/limits.py)"),
+    )
+
+    @checked_init
     def __init__(self, width, depth, attrs=None):
-        if not (isinstance(width, int) and width >= 1 and isinstance(depth, int) and depth >= 2):
-            raise ValueError(f"BlockRam: width {width!r} and depth {depth!r} must be integers >= 1 and >= 2")
+        check(self.PARAMS, width=width, depth=depth)
         self.width, self.depth, self.attrs = width, depth, dict(attrs or {})
         super().__init__({"r_addr": In(range(depth)), "r_data": Out(width),
                           "w_addr": In(range(depth)), "w_data": In(width), "w_en": In(1)})

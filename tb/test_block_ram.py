@@ -67,8 +67,10 @@ def test_layout():
     assert ram_layout(7, 3000) == [(3000, [slice(0, 4), slice(4, 7)])]
     assert ram_layout(18, 32768) == [(16384, [slice(k, k + 1) for k in range(18)])] * 2
     assert ram_layout(12, 17028) == [(16384, [slice(k, k + 1) for k in range(12)]), (644, [slice(0, 12)])]
-    with pytest.raises(ValueError, match="width 0 and depth 8"):
+    with pytest.raises(ValueError, match=r"BlockRam width 0: must be an integer in 1\.\.1024"):
         BlockRam(0, 8)
+    with pytest.raises(ValueError, match=r"BlockRam depth 1: must be an integer in 2\.\.1048576"):
+        BlockRam(8, 1)
 
 
 @pytest.mark.parametrize("shape", SHAPES, ids=[f"{w}x{d}" for w, d in SHAPES])
