@@ -308,10 +308,12 @@ class Planner(wiring.Component):
         # read's end drives the enables of the Decision's 257-bit values, and
         # the comparator before them was the 6x3-block planner's path (issue 17)
         rd_last = Signal()
+        rd_hit = Signal()
+        m.d.comb += rd_hit.eq(rd_j + 1 == rd_end)
         with m.If(rd_go):
             m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0), rd_last.eq(0)]
         with m.Elif(rd_busy):
-            m.d.sync += [rd_j.eq(rd_j + 1), h_addr.eq(h_addr + 1), rd_last.eq(rd_j + 1 == rd_end)]
+            m.d.sync += [rd_j.eq(rd_j + 1), h_addr.eq(h_addr + 1), rd_last.eq(rd_hit)]
             got = host.rdata.bit_select(rd_bit, 1)
             with m.If(rd_j == READ_LATENCY):
                 m.d.sync += rd_const.eq(got)
@@ -320,6 +322,10 @@ class Planner(wiring.Component):
             with m.If(rd_last):
                 m.d.sync += rd_busy.eq(0)
                 m.d.comb += rd_done.eq(1)
+
+        # the word read: its last bit arrives with rd_done
+        word = Signal(p_max + 1, name="rd_word")
+        m.d.comb += word.eq(Cat(host.rdata.bit_select(rd_bit, 1), rd_val[:-1]))
 
         # DIRECTION: the centre, then N, E, S, W (0 outside the map): q
         # indexes NEIGHBOURHOOD, the Decision module's values.
@@ -473,11 +479,7 @@ class Planner(wiring.Component):
                 with m.If(t_in):
                     m.d.sync += [f_blk.eq(t_blk), f_row.eq(t_row), f_col.eq(t_col)]
                     m.next = "LOCATE"
-                with m.Else():
-                    with m.Switch(q):
-                        for i in range(1, 5):
-                            with m.Case(i):
-                                m.d.sync += vals[NEIGHBOURHOOD[i]].eq(0)
+                with m.Else():              # outside the map: its value stays 0 (cleared below)
                     m.d.sync += q.eq(q + 1)
                     with m.If(q == 4):
                         m.next = "DECIDE_GO"
@@ -492,14 +494,9 @@ class Planner(wiring.Component):
                 m.next = "FETCH_WAIT"
             with m.State("FETCH_WAIT"):
                 with m.If(rd_done):
-                    word = Cat(host.rdata.bit_select(rd_bit, 1), rd_val[:-1])
                     if X:
                         # A neighbour in another block: into the centre's units first.
                         m.d.sync += cv.eq(word)
-                    with m.Switch(q):
-                        for i in range(1 if X else 5):
-                            with m.Case(i):
-                                m.d.sync += vals[NEIGHBOURHOOD[i]].eq(word)
                     with m.If(c.op == Op.READ):
                         m.next = "READ_RESP"
                     if X:
@@ -561,6 +558,20 @@ class Planner(wiring.Component):
             dec.start.eq(fsm.ongoing("DECIDE_GO")),
             rd_go.eq(fsm.ongoing("LOCATE")),
         ]
+        # The Decision's values (5 x p_max+1 flip-flops) load from enables that
+        # are flip-flops: ld[i] is set a cycle ahead of the read's end (rd_busy
+        # holds only in FETCH_WAIT, and q holds there), so ld[i] <=> rd_done &
+        # q == i; and the first FETCH's LOCATE (q = 0) clears the neighbours,
+        # so one outside the map needs no write.  q and the read's end -> these
+        # enables was the 6x3-block planner's path (issue 17).  With block
+        # exponents only the centre loads here (the rest after CONVERT).
+        ld = Signal(5)
+        m.d.sync += ld.eq(Mux(rd_busy & ~rd_last & rd_hit, Cat(q == i for i in range(5)), 0))
+        with m.If(fsm.ongoing("LOCATE") & (q == 0)):
+            m.d.sync += [vals[NEIGHBOURHOOD[i]].eq(0) for i in range(1, 5)]
+        for i in range(1 if X else 5):
+            with m.If(ld[i]):
+                m.d.sync += vals[NEIGHBOURHOOD[i]].eq(word)
         # Responses without a value: clear the data fields, a cycle after the
         # command is taken (no response is raised sooner, and READ / DIRECTION
         # write them much later), from a register: the accept's logic into
