@@ -567,11 +567,11 @@ class Planner(wiring.Component):
         # exponents only the centre loads here (the rest after CONVERT).
         ld = Signal(5)
         m.d.sync += ld.eq(Mux(rd_busy & ~rd_last & rd_hit, Cat(q == i for i in range(5)), 0))
-        with m.If(fsm.ongoing("LOCATE") & (q == 0)):
-            m.d.sync += [vals[NEIGHBOURHOOD[i]].eq(0) for i in range(1, 5)]
         for i in range(1 if X else 5):
             with m.If(ld[i]):
                 m.d.sync += vals[NEIGHBOURHOOD[i]].eq(word)
+        with m.If(fsm.ongoing("LOCATE") & (q == 0)):     # never with ld: a synchronous reset
+            m.d.sync += [vals[NEIGHBOURHOOD[i]].eq(0) for i in range(1, 5)]
         # Responses without a value: clear the data fields, a cycle after the
         # command is taken (no response is raised sooner, and READ / DIRECTION
         # write them much later), from a register: the accept's logic into
