@@ -162,10 +162,8 @@ ready, counted from the command (exclusive) to the last beat:
     goals      = goal * len(goals)      read the goal's word, write hop 0 and push its tile
                                         (when in the cfr and not queued) in the same beat
     BFS        = sum over visits: visit
-    path       = 1 + latency + (latency + step) * (len(path) - 1)
-                                        (1 + latency without a path; 0 without a start):
-                                        each pixel's read needs the previous one's parent, and
-                                        its address is registered first (step)
+    path       = 1 + latency * len(path)   (1 + latency without a path; 0 without a start):
+                                        each pixel's read needs the previous one's parent
     readout    = latency + H * W        optional: every pixel, one per beat (reads run ahead)
 
     visit(t)   = sched + latency + read_beats(t) + iterations [+ stop, BFS] + max(write_beats(t), marks)
@@ -183,9 +181,7 @@ while it schedules the visit), one per beat during the store.  The
 constants are :class:`Timing`'s; the RTL's (``Timing()``): sched 2 (pop,
 window set-up), latency 2 (the block RAM's read register and its output
 register, which keeps the RAM's slow data output off the clock's paths),
-level 1, goal 3 (= 1 + latency: issue the read, wait for the word), stop 1,
-step 1 (the path's next address leaves a register, not the RAM's word: the
-data-to-address loop was the tile engine's critical path, issue 17).
+level 1, goal 3 (= 1 + latency: issue the read, wait for the word), stop 1.
 Words moved counts every word read or written; the floor is each visit
 reading and writing each pixel of its tile once, ``2 ceil(T_r T_c / p)``
 words per visit.
@@ -215,10 +211,9 @@ class Timing:
     level: int = 1        # EDT: swap the worklists of levels k and k+1
     goal: int = 3         # per goal: read its word (cfr?; 1 + latency), write hop 0 and push its tile
     stop: int = 1         # per BFS visit: the cycle that reads the registered "no cell changed" and leaves
-    step: int = 1         # path: per pixel after the first, the cycle that registers its read's address
 
     def __post_init__(self):
-        for name in ("sched", "latency", "level", "goal", "stop", "step"):
+        for name in ("sched", "latency", "level", "goal", "stop"):
             v = getattr(self, name)
             if not isinstance(v, int) or v < 0:
                 raise ValueError(f"Timing.{name} {v!r}: must be an integer >= 0")
@@ -648,7 +643,7 @@ def plan_path_tiled(obstacle, goals, start, dfar, array=(8, 8), word_pixels=None
     parent = eng.plain(eng.parent).copy()
     path = trace_path(visited, parent, start)
     if start is not None:
-        eng.cycles["path"] = 1 + tm.latency + (tm.latency + tm.step) * max(0, len(path) - 1)
+        eng.cycles["path"] = 1 + tm.latency * (len(path) if path else 1)
     if readout:
         eng.cycles["readout"] = tm.latency + h * w
     rows, cols = np.indices((h, w))

@@ -135,7 +135,7 @@ class TileEngine(wiring.Component):
         ``trace``).
 
     Timing (:mod:`models.edt_bfs_tiled`'s cycle model, ``Timing()``: sched
-    2, latency 2, level 1, goal 3, stop 1, step 1; source always valid, sink always ready;
+    2, latency 2, level 1, goal 3, stop 1; source always valid, sink always ready;
     cycles from the command's handshake, exclusive, to the last busy cycle;
     the RAM's read latency 2 is its read register and its output register,
     which keeps the block RAM's slow data output off the clock's paths)::
@@ -145,9 +145,8 @@ class TileEngine(wiring.Component):
         EDT     = sum over levels (1 + sum over the level's visits: visit)
         goals   = 3 * goals                  read the goal's word (1 + latency); write hop 0, push its tile
         BFS     = sum over visits: visit
-        path    = 3 * len(path)              (3 without a path; 0 without a start): a pixel's
-                                             read needs the previous pixel's parent, its address
-                                             registered first (1 + 2 for the start, 1 + 2 per pixel)
+        path    = 1 + 2 * len(path)          (3 without a path; 0 without a start): a pixel's
+                                             read needs the previous pixel's parent
         readout = 2 + H * W                  (0 without; the reads run ahead of the beats)
         visit   = 2 (pop; address, queued bits) + 2 (RAM latency) + window rows in the map
                   + iterations (EDT 1; BFS: until one changes nothing, + 1 to see that from the
@@ -513,6 +512,7 @@ class TileEngine(wiring.Component):
         path_px = named(m, "path_px", mem.rd_data.payload.word[cur_j], pixel_layout(w))
         no_path = named(m, "no_path", p_first & (path_px.hop == nonehop))
         beat_path = named(m, "beat_path", at["PATH"] & mem.rd_data.valid & ~no_path)
+        advance = named(m, "advance", beat_path & self.o_stream.ready & (path_px.parent != 0))
         nxt = Signal(goal_layout(w))
         nxt_w = Signal.like(cur_w)
         nxt_j = Signal.like(cur_j)
@@ -524,9 +524,6 @@ class TileEngine(wiring.Component):
                 if dc:
                     edge, dw, j_in = wrap[dc]
                     m.d.comb += [nxt_w.eq(Mux(edge, cur_w + dw, cur_w)), nxt_j.eq(Mux(edge, j_in, cur_j + dc))]
-        # The next pixel's read is issued from these registers in the cycle
-        # after the beat (Timing.step): the word's parent -> the next address
-        # -> the RAM's address was the engine's critical path (issue 17).
         with m.If(at["PATH"]):
             with m.If(mem.rd.valid):
                 m.d.sync += p_need.eq(~mem.rd.ready)
@@ -538,7 +535,7 @@ class TileEngine(wiring.Component):
                     with m.If(path_px.parent == 0):
                         after_path()
                     with m.Else():
-                        m.d.sync += [cur.eq(nxt), cur_w.eq(nxt_w), cur_j.eq(nxt_j), p_need.eq(1)]
+                        m.d.sync += [cur.eq(nxt), cur_w.eq(nxt_w), cur_j.eq(nxt_j)]
 
         # -- READOUT: every pixel, row-major, one per beat; the reads (rr_*) run ahead of the
         # beats (ro_*) as far as the RAM's pipeline takes them, so a word costs no latency
@@ -578,7 +575,9 @@ class TileEngine(wiring.Component):
         with m.Elif(at["GOAL1"]):
             m.d.comb += mem.rd_data.ready.eq(mem.wr.ready)
         with m.Elif(at["PATH"]):
-            m.d.comb += [mem.rd.valid.eq(p_need), rd.row.eq(cur.row), rd.wcol.eq(cur_w),
+            pos = named(m, "path_pos", Mux(advance, nxt.as_value(), cur.as_value()), goal_layout(w))
+            m.d.comb += [mem.rd.valid.eq(p_need | advance), rd.row.eq(pos.row),
+                         rd.wcol.eq(Mux(advance, nxt_w, cur_w)),
                          mem.rd_data.ready.eq(no_path | self.o_stream.ready)]
         with m.Elif(at["READOUT"]):
             m.d.comb += [mem.rd.valid.eq(rr_more), rd.row.eq(rr_row), rd.wcol.eq(rr_w),
