@@ -289,6 +289,12 @@ class Planner(wiring.Component):
         # after the still blocks' choice, issue 17).
         h_addr = Signal(range(self.depth), name="h_addr")
         m.d.comb += host.addr.eq(h_addr)
+        # LOAD's write data, a register too (words 0 and 1: the flags or'ed
+        # with the goals, then the goals; 0 after): the FSM state and LOAD's
+        # word count -> the data -> every cluster RAM's write-data
+        # multiplexer was the 6x3-block planner's path (issue 17).
+        wdata = Signal.like(host.wdata, name="h_wdata")
+        m.d.comb += host.wdata.eq(wdata)
         rd_ci, rd_bit = Signal.like(c_ci), Signal.like(c_bit)
         rd_j = Signal(range(S + 2))
         rd_val, rd_const = Signal(p_max + 1), Signal()
@@ -419,7 +425,7 @@ class Planner(wiring.Component):
                             # LOCATE does for a read): the host port's cluster
                             # select is then a flip-flop in every state.
                             m.d.sync += [load_a.eq(0), h_addr.eq(times(c.block, S) if B > 1 else 0),
-                                         rd_ci.eq(c_ci)]
+                                         rd_ci.eq(c_ci), wdata.eq(c.flags | c.goals)]
                             with m.If(c.flag):
                                 m.d.sync += has_goal.eq(k_goals)
                             with m.Else():
@@ -459,11 +465,9 @@ class Planner(wiring.Component):
                 respond(Code.OK, Op.START)
                 m.next = "IDLE"
             with m.State("LOAD"):
-                with m.If(load_a == 0):
-                    m.d.comb += host.wdata.eq(c.flags | c.goals)
-                with m.Elif(load_a == 1):
-                    m.d.comb += host.wdata.eq(c.goals)
-                m.d.sync += [load_a.eq(load_a + 1), h_addr.eq(h_addr + 1)]
+                # the next word's data: the goals after the flags, then 0
+                m.d.sync += [wdata.eq(Mux(load_a == 0, c.goals, 0)),
+                             load_a.eq(load_a + 1), h_addr.eq(h_addr + 1)]
                 with m.If(load_a == S - 1):
                     respond(Code.OK, Op.LOAD)
                     m.next = "IDLE"
