@@ -565,7 +565,7 @@ class Planner(wiring.Component):
         # The Decision's values (5 x p_max+1 flip-flops) load from enables that
         # are flip-flops: ld[i] is set a cycle ahead of the read's end (rd_busy
         # holds only in FETCH_WAIT, and q holds there), so ld[i] <=> rd_done &
-        # q == i; and the first FETCH's LOCATE (q = 0) clears the neighbours,
+        # q == i; and the first LOCATE (q = 0) clears the neighbours,
         # so one outside the map needs no write.  q and the read's end -> these
         # enables was the 6x3-block planner's path (issue 17).  With block
         # exponents only the centre loads here (the rest after CONVERT).
@@ -574,7 +574,12 @@ class Planner(wiring.Component):
         for i in range(1 if X else 5):
             with m.If(ld[i]):
                 m.d.sync += vals[NEIGHBOURHOOD[i]].eq(word)
-        with m.If(fsm.ongoing("LOCATE") & (q == 0)):     # never with ld: a synchronous reset
+        # The clear in the first LOCATE, from a flip-flop set in FETCH (q = 0 is
+        # always in the map): the FSM state into the ~1028 flip-flops'
+        # synchronous reset was the next path.  Never with ld: a reset.
+        clr_nb = Signal()
+        m.d.sync += clr_nb.eq(fsm.ongoing("FETCH") & (q == 0))
+        with m.If(clr_nb):
             m.d.sync += [vals[NEIGHBOURHOOD[i]].eq(0) for i in range(1, 5)]
         # Responses without a value: clear the data fields, a cycle after the
         # command is taken (no response is raised sooner, and READ / DIRECTION
