@@ -117,8 +117,10 @@ class Decision(wiring.Component):
         # the 6x3-block planner's path once the still blocks' choice was
         # prepared during the visit).  h holds from start to done.
         bit = {}
-        wrap = Signal()                     # nxt == top: the next cycle reads bit 0 again
-        m.d.comb += wrap.eq(nxt == top)
+        # wrap == (nxt == top): the next cycle reads bit 0 again.  A register
+        # following nxt and top (both 0 at reset): nxt's comparator before the
+        # shift registers' reload was the 6x3-block planner's path (issue 17).
+        wrap = Signal(init=1)
         for k in ("c", "N", "E", "S", "W"):
             bit[k] = Signal(name=f"bit_{k}")
             sr = Signal(w, name=f"bits_{k}")        # h >> nxt: bit 0 is the next bit
@@ -200,9 +202,11 @@ class Decision(wiring.Component):
 
         m.d.sync += self.done.eq(0)
         with m.If(self.start):
-            m.d.sync += [pass1.eq(1), pass2.eq(0), i.eq(0), nxt.eq(1), top.eq(self.p + 1)]
+            m.d.sync += [pass1.eq(1), pass2.eq(0), i.eq(0), nxt.eq(1), top.eq(self.p + 1),
+                         wrap.eq(self.p == 0)]
         with m.Elif(pass1 | pass2):
-            m.d.sync += [i.eq(i + 1), nxt.eq(Mux(wrap, 0, nxt + 1))]
+            m.d.sync += [i.eq(i + 1), nxt.eq(Mux(wrap, 0, nxt + 1)),
+                         wrap.eq(Mux(wrap, top == 0, nxt + 1 == top))]
             with m.If(last):
                 m.d.sync += i.eq(0)
                 with m.If(pass1):
