@@ -507,6 +507,16 @@ class Controller(wiring.Component):
         # they are defined from time 0 on every simulator.
         mode, iters, fsm, k, seen = (v[x] for x in ("mode", "iters", "fsm", "k", "seen"))
         limit = Signal(9)
+        # Whether a take in VRUN starts another iteration, a register (issue
+        # 17: k's comparison with the mode's limit, a carry chain, sat between
+        # the mode register and every cluster's take logic).  Its inputs k,
+        # seen, mode, iters (and rep, rem) change only in VSTART/VEND, at a
+        # take (k, rem) or at a cluster's done (seen: cycle 2 of an
+        # iteration).  A visit's first take comes 3 cycles after VSTART (the
+        # clusters' two-cycle lead-in) and takes are L >= 6 cycles apart
+        # (iteration_cycles pads short words), so the value sampled in the
+        # cycle before a take is the value at the take: no cycle changes.
+        more = Signal(name="more")
         blk = self.block
         if not self.paper:
             m.d.comb += blk.abort.eq(fsm.ongoing("VRUN") & blk.done & blk.all_stable & v["upd_visit"])
@@ -519,7 +529,7 @@ class Controller(wiring.Component):
                 x["need_scan"].eq(blk.border.scan & (blk.border.scan_len != 0)),
             ]
             m.d.comb += limit.eq(Mux((mode == Mode.UPDATE) & ~rep, iters, 1))
-            more = Mux(rep, x["rem"] != 0, (k < limit) & ~((mode == Mode.UPDATE) & seen))
+            m.d.sync += more.eq(Mux(rep, x["rem"] != 0, (k < limit) & ~((mode == Mode.UPDATE) & seen)))
             m.d.comb += [
                 blk.run.eq((fsm.ongoing("VSTART") & ~v["need_scan"])
                            | (fsm.ongoing("VRUN") & blk.take & more)),
@@ -527,9 +537,8 @@ class Controller(wiring.Component):
             ]
         else:
             m.d.comb += limit.eq(Mux(mode == Mode.UPDATE, iters, 1))
-            m.d.comb += blk.run.eq(
-                fsm.ongoing("VSTART")
-                | (fsm.ongoing("VRUN") & blk.take & (k < limit) & ~((mode == Mode.UPDATE) & seen)))
+            m.d.sync += more.eq((k < limit) & ~((mode == Mode.UPDATE) & seen))
+            m.d.comb += blk.run.eq(fsm.ongoing("VSTART") | (fsm.ongoing("VRUN") & blk.take & more))
 
     # Block exponents (issue 10; models.harmonic.plan_exponents(..., rtl=True)).
     # Not elaborated by default.

@@ -23,6 +23,7 @@ from navcores.hdl.harmonic.controller import Controller
 from navcores.sim.rtl.runner import seed_from_env
 
 L = 3           # the mock's cycles per iteration (take ... done)
+LEAD_IN = 3     # cycles from the run request to the first take (the clusters' two-cycle lead-in)
 ITERS = 3       # I
 P1, STEP, P_LAST = 4, 2, 8      # two precision rises, then not converged
 
@@ -194,7 +195,8 @@ def _run(BR, BC, rng, runs):
                                                   f"edges, dirty before: {getattr(ref, 'last', None)})")
                 assert ctx.get(blk.base) == ref.b * 18, "base is not b * (p_max + 2)"
                 ctx.set(blk.busy, 1)
-                await ctx.tick()
+                for _ in range(LEAD_IN):
+                    await ctx.tick()
                 assert await _take(ctx, blk), "the first take does not run"
                 stable, edges, mx = False, set(), False
                 script = scripts[run] if run < len(scripts) else []
