@@ -38,11 +38,18 @@ class Code(enum.Enum, shape=3):
     BAD_ITERS = 6       # START with iters = 0
 
 
-# Cycles of one value read besides its p+2 addresses and the RAM's
-# READ_LATENCY: FETCH (the node or neighbour selected and registered) and
+# Cycles of one value read besides its p+2 addresses and the host port's
+# HOST_READ_LATENCY: FETCH (the node or neighbour selected and registered) and
 # LOCATE (its cluster, bit and RAM base registered: the table look-ups are
 # kept out of FETCH's path, issue 17).
 READ_SETUP = 2
+# The serial read's bit (the selected cluster's word, then the node's bit of
+# it) is registered before it is used: the host port's data come
+# HOST_READ_LATENCY cycles after the address, one more than the RAM's (issue
+# 17: the cluster and bit multiplexers after the RAMs' output registers were
+# the 6x3-block planner's path, 9.6 ns, and with the bank multiplexer the
+# 11x6 and 14x6 planners').  Every value read costs a cycle more.
+HOST_READ_LATENCY = READ_LATENCY + 1
 # DECODE: a command's checks are registered in the cycle that takes it and
 # acted on in the next (issue 17), before any response.
 DECODE_CYCLES = 1
@@ -52,15 +59,16 @@ def direction_latency(p, inside=4):
     """DIRECTION's response latency at precision ``p`` (fixed point), in
     cycles from the clock edge that takes the command to the one that
     raises ``o_stream.valid``: DECODE_CYCLES to act on the registered checks,
-    then the node and its ``inside`` neighbours in the map are read serially (p+2+READ_SETUP+READ_LATENCY = p+6 cycles each:
+    then the node and its ``inside`` neighbours in the map are read serially
+    (p+2+READ_SETUP+HOST_READ_LATENCY = p+7 cycles each:
     FETCH registers the node, LOCATE its cluster, bit and RAM base, then the
-    flag and p+1 value bits through the host port, whose data come
-    READ_LATENCY cycles after the address), a neighbour outside the map
+    flag and p+1 value bits through the host port, whose bit comes
+    HOST_READ_LATENCY cycles after the address), a neighbour outside the map
     costs 1 cycle, then 1 cycle starts the Decision, whose 2p+5 cycles (two
-    serial passes) end with the response: 7p+37 inside the map, 6p+32 on an
-    edge, 5p+27 in a corner.  With block exponents each value read adds its
+    serial passes) end with the response: 7p+42 inside the map, 6p+36 on an
+    edge, 5p+30 in a corner.  With block exponents each value read adds its
     conversion: 1 + the shift cycles."""
-    return (DECODE_CYCLES + (1 + inside) * (p + 2 + READ_SETUP + READ_LATENCY) + (4 - inside) + 1
+    return (DECODE_CYCLES + (1 + inside) * (p + 2 + READ_SETUP + HOST_READ_LATENCY) + (4 - inside) + 1
             + (2 * p + 5))
 
 
@@ -127,7 +135,7 @@ class Planner(wiring.Component):
                gradient (g_row, g_col) of :func:`models.harmonic.decision`
                (block exponents: of :func:`models.harmonic.decision_exponents`,
                in the centre's units; ``exponent`` = its e_b).  Response
-               after :func:`direction_latency` cycles (7p+37 inside the map).
+               after :func:`direction_latency` cycles (7p+42 inside the map).
     =========  ===============================================================
 
     Errors (``code``): BAD_NODE (block >= B, row >= n or col >= m), NO_GOAL
@@ -214,8 +222,8 @@ class Planner(wiring.Component):
                 "block_visit_cycles": "K*L+7 for K iterations",
                 "schedule": "paper's" if self.paper else "still blocks",
                 "response": "one o_stream beat per i_stream command, in order",
-                "direction_latency": "7p+37 cycles (a node with 4 neighbours in the map; "
-                                     "p+5 fewer per neighbour outside it: direction_latency())",
+                "direction_latency": "7p+42 cycles (a node with 4 neighbours in the map; "
+                                     "p+6 fewer per neighbour outside it: direction_latency())",
                 "run_cycles": "reported by STATUS (cycles field)"}
 
     def elaborate(self, platform):
@@ -280,7 +288,8 @@ class Planner(wiring.Component):
             ]
 
         # Serial read of one node word through the host port (p+2 addresses,
-        # data READ_LATENCY cycles after its address): flag, then value MSB first.
+        # the node's bit registered HOST_READ_LATENCY cycles after its
+        # address): flag, then value MSB first.
         rd_go, rd_done = Signal(), Signal()
         # The host port's address is this register in every state: set to
         # the block's word base when LOAD or a read is decided, then one up
@@ -296,15 +305,15 @@ class Planner(wiring.Component):
         wdata = Signal.like(host.wdata, name="h_wdata")
         m.d.comb += host.wdata.eq(wdata)
         rd_ci, rd_bit = Signal.like(c_ci), Signal.like(c_bit)
-        rd_j = Signal(range(S + 2))
+        rd_j = Signal(range(S + 3))                # up to rd_end = p_max + 1 + HOST_READ_LATENCY
         rd_val, rd_const = Signal(p_max + 1), Signal()
         rd_busy = Signal()
         # p+1 and the read's last count, registered: ctl.p holds while idle
         # (the only time READ / DIRECTION read), so the adders leave the
         # read's path (issue 17).
         p_top = Signal(range(p_max + 2))
-        rd_end = Signal(range(S + 2))
-        m.d.sync += [p_top.eq(ctl.p + 1), rd_end.eq(ctl.p + 1 + READ_LATENCY)]
+        rd_end = Signal(range(S + 3))
+        m.d.sync += [p_top.eq(ctl.p + 1), rd_end.eq(ctl.p + 1 + HOST_READ_LATENCY)]
         # The host port's cluster select is the register rd_ci in every state
         # (LOAD and reads set it a cycle ahead; it only selects read data and
         # gates host.we): no FSM state on the RAM's read multiplexer, which
@@ -316,14 +325,16 @@ class Planner(wiring.Component):
         rd_last = Signal()
         rd_hit = Signal()
         m.d.comb += rd_hit.eq(rd_j + 1 == rd_end)
+        got = Signal(name="rd_got")             # the node's bit of the word read
+        with m.If(rd_busy):
+            m.d.sync += got.eq(host.rdata.bit_select(rd_bit, 1))
         with m.If(rd_go):
             m.d.sync += [rd_busy.eq(1), rd_j.eq(0), rd_val.eq(0), rd_last.eq(0)]
         with m.Elif(rd_busy):
             m.d.sync += [rd_j.eq(rd_j + 1), h_addr.eq(h_addr + 1), rd_last.eq(rd_hit)]
-            got = host.rdata.bit_select(rd_bit, 1)
-            with m.If(rd_j == READ_LATENCY):
+            with m.If(rd_j == HOST_READ_LATENCY):
                 m.d.sync += rd_const.eq(got)
-            with m.Elif(rd_j > READ_LATENCY):
+            with m.Elif(rd_j > HOST_READ_LATENCY):
                 m.d.sync += rd_val.eq(Cat(got, rd_val[:-1]))
             with m.If(rd_last):
                 m.d.sync += rd_busy.eq(0)
@@ -331,7 +342,7 @@ class Planner(wiring.Component):
 
         # the word read: its last bit arrives with rd_done
         word = Signal(p_max + 1, name="rd_word")
-        m.d.comb += word.eq(Cat(host.rdata.bit_select(rd_bit, 1), rd_val[:-1]))
+        m.d.comb += word.eq(Cat(got, rd_val[:-1]))
 
         # DIRECTION: the centre, then N, E, S, W (0 outside the map): q
         # indexes NEIGHBOURHOOD, the Decision module's values.
