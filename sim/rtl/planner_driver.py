@@ -32,6 +32,15 @@ __all__ = ["PlannerDriver", "planner_params", "run_planner_rtl", "Op", "Code"]
 POLL = 128          # cycles between STATUS polls while a run is on
 
 
+def response_timeout(p_max):
+    """Cycles a command may wait for its response before the driver gives
+    up: every response comes within DIRECTION's latency (with block
+    exponents' conversions about 12 p_max + 50 cycles) or LOAD's p_max + 2
+    writes, plus the random idle and back-pressure cycles; this bound leaves
+    a wide margin, so that a planner that hangs fails its test at once."""
+    return 64 * (p_max + 64)
+
+
 class PlannerDriver:
     """The Planner's host streams under cocotb: one command, one response.
 
@@ -65,7 +74,7 @@ class PlannerDriver:
         that took the command up to the one that raised the response's valid
         (back-pressure on the response does not count)."""
         self.cmd.put({"op": op, **fields})
-        resp = await self.resp.recv()
+        resp = await self.resp.recv(timeout_cycles=response_timeout(self.p_max))
         self.latency = self.resp.starts[-1] - self.cmd.beats[-1][0] - 1
         self.commands += 1
         assert resp["op"] == op, f"response to {op} says {resp['op']}"
