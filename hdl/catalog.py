@@ -147,6 +147,9 @@ SETS = (
     # The tile engine (issue 18): an 8x8 array over maps up to 64x64 in block RAM.
     Set("edt_tile_8x8", "edt_tile_engine", {"t_r": 8, "t_c": 8, "max_h": 64, "max_w": 64}, emit=True,
         beyond="the paper's future work: a small array over a map in block RAM"),
+    # ... and a 4x8 array over maps up to 512x512 (maze512-1-0) whose state lives outside (an SDRAM controller).
+    Set("edt_tile_ext", "edt_tile_engine", {"t_r": 4, "t_c": 8, "max_h": 512, "max_w": 512, "store": "external"},
+        emit=True, beyond="the tile engine with its per-pixel state in an external store (maze512-1-0: 13.9 Mbit)"),
 )
 
 # (top, params) of every set make verilog emits, in order.

@@ -9,7 +9,7 @@ from navcores.models.edt_bfs_tiled import Timing
 
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
-from .state_ram import StateRam
+from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
 from ..arith import divmod_const, times
 from .tile_layouts import named, pixel_layout, tile_widths
@@ -25,6 +25,8 @@ TIMING = Timing()       # the cycle constants this RTL implements (the model's d
 MAX_CELLS = 256         # T_r * T_c: a 16 x 16 array of the paper's cells is ~120k LUT4, beyond the LFE5U-85F
 MAX_SIDE = 4096         # a map side (issue 18: real maps are 200 .. 4000 cells a side)
 MAX_PIXELS = 1 << 20    # on-chip state of a 1024 x 1024 map is ~50 Mbit: more than any FPGA's block RAM today
+MAX_EXT_PIXELS = 1 << 22    # an external store: 2048 x 2048 pixels of ~60 bits fill a ULX3S's 32 MB SDRAM
+STORES = ("bram", "external")
 
 
 def command_layout(w):
@@ -91,8 +93,15 @@ class TileEngine(wiring.Component):
     max_h, max_w : int
         The largest map (the RAM: ``max_h * ceil(ceil(max_w / T_c) / 3)``
         words of ``T_c`` pixels in each of 3 banks; more than one tile each
-        way, up to 4096 a side and 2^20 pixels).  The widths follow it
+        way, up to 4096 a side and 2^20 pixels, 2^22 with an external
+        store).  The widths follow it
         (:func:`~hdl.edt_bfs.tile_layouts.tile_widths`).
+    store : "bram" or "external"
+        Where the per-pixel state lives: the engine's own block RAM
+        (:class:`~hdl.edt_bfs.state_ram.StateRam`), or a store outside the
+        engine behind the ``state`` port (an SDRAM controller, say), for
+        maps whose state exceeds the part's block RAM (maze512-1-0: 13.9
+        Mbit against the LFE5U-85F's 3.7).
 
     Ports
     -----
@@ -133,6 +142,15 @@ class TileEngine(wiring.Component):
         A monitor: ``valid`` for one cycle as each visit ends, with its
         phase, tile, iterations and the tiles it enqueued (the model's
         ``trace``).
+    state : In(StateSignature) (``store="external"`` only)
+        The state store's port, the engine's side:
+        ``rd`` (out: read a word column of a map row), ``rd_data`` (in:
+        the answers, in order), ``wr`` (out: write a word's EDT or BFS
+        fields); the contract in
+        :class:`~hdl.edt_bfs.state_ram.StateSignature`.  The cycle counts
+        below hold for a store with StateRam's timing (always ready,
+        answers two cycles after the command); a slower store adds cycles
+        and changes no result.
 
     Timing (:mod:`models.edt_bfs_tiled`'s cycle model, ``Timing()``: sched
     2, latency 2, level 1, goal 3, stop 1; source always valid, sink always ready;
@@ -166,6 +184,9 @@ class TileEngine(wiring.Component):
               message="largest map height max_h {value!r}: must be an integer in {lo}..{hi}"),
         Param("max_w", int, lo=3, hi=MAX_SIDE, doc="largest map width (the RAM)",
               message="largest map width max_w {value!r}: must be an integer in {lo}..{hi}"),
+        Param("store", str, "bram", choices=STORES,
+              doc="the state store: the engine's block RAM, or an external one on the state port",
+              message="state store {value!r}: must be {allowed}"),
     )
     CONSTRAINTS = (
         Constraint("max_h > t_r and max_w > t_c", lambda p: p["max_h"] > p["t_r"] and p["max_w"] > p["t_c"],
@@ -174,15 +195,22 @@ class TileEngine(wiring.Component):
         Constraint(f"t_r * t_c <= {MAX_CELLS}", lambda p: p["t_r"] * p["t_c"] <= MAX_CELLS,
                    "array {t_r}x{t_c} has {n} cells: at most " + str(MAX_CELLS) +
                    " (16x16 is ~120k LUT4, more than the largest ECP5)", lambda p: {"n": p["t_r"] * p["t_c"]}),
-        Constraint(f"max_h * max_w <= {MAX_PIXELS}", lambda p: p["max_h"] * p["max_w"] <= MAX_PIXELS,
+        Constraint(f"max_h * max_w <= {MAX_PIXELS} (bram)",
+                   lambda p: p["store"] != "bram" or p["max_h"] * p["max_w"] <= MAX_PIXELS,
                    "largest map {max_h}x{max_w} has {n} pixels: the on-chip state store holds at most "
-                   + str(MAX_PIXELS) + " (about 50 Mbit)", lambda p: {"n": p["max_h"] * p["max_w"]}),
+                   + str(MAX_PIXELS) + " (about 50 Mbit); store=external takes more",
+                   lambda p: {"n": p["max_h"] * p["max_w"]}),
+        Constraint(f"max_h * max_w <= {MAX_EXT_PIXELS} (external)",
+                   lambda p: p["max_h"] * p["max_w"] <= MAX_EXT_PIXELS,
+                   "largest map {max_h}x{max_w} has {n} pixels: an external store holds at most "
+                   + str(MAX_EXT_PIXELS) + " (2048 x 2048 pixels of ~60 bits fill a 32 MB SDRAM)",
+                   lambda p: {"n": p["max_h"] * p["max_w"]}),
     )
 
     @checked_init
-    def __init__(self, t_r, t_c, max_h, max_w):
-        check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w)
-        self.t_r, self.t_c, self.max_h, self.max_w = t_r, t_c, max_h, max_w
+    def __init__(self, t_r, t_c, max_h, max_w, store="bram"):
+        check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, store=store)
+        self.t_r, self.t_c, self.max_h, self.max_w, self.store = t_r, t_c, max_h, max_w, store
         w = self.w = tile_widths(t_r, t_c, max_h, max_w)
         super().__init__({
             "c_stream": In(stream.Signature(command_layout(w))),
@@ -192,6 +220,7 @@ class TileEngine(wiring.Component):
             "busy": Out(1), "cmd_err": Out(1), "start_err": Out(1), "goal_err": Out(1),
             "path_found": Out(1), "levels": Out(w["k"]), "tile_visits": Out(32),
             "visit": Out(visit_layout(w)),
+            **({"state": In(StateSignature(w, t_c))} if store == "external" else {}),
         })
 
     def timing(self):
@@ -202,18 +231,22 @@ class TileEngine(wiring.Component):
                 "visit_cycles": f"{t.sched} + {t.latency} + window rows + iterations (+ {t.stop} in the BFS) "
                                 "+ max(tile rows, marks)",
                 "path_cycles": f"1 + {t.latency} * len(path)", "readout_cycles": f"{t.latency} + H * W",
-                "note": "source always valid, sink always ready; back-pressure adds cycles"}
+                "note": "source always valid, sink always ready; back-pressure adds cycles"
+                        + ("; the external store with StateRam's timing (always ready, answers 2 cycles after "
+                           "the command); a slower store adds cycles" if self.store == "external" else "")}
 
     def elaborate(self, platform):
         m = Module()
         t_r, t_c, w = self.t_r, self.t_c, self.w
         nonedi = (1 << w["di"]) - 1
         nonehop = (1 << w["hop"]) - 1
-        m.submodules.ram = ram = StateRam(w, t_c, self.max_h)
         m.submodules.work = work = Worklist(w)
         m.submodules.front = front = FrontierFlags(w, t_c)
         m.submodules.array = arr = TileArray(t_r, t_c, w)
-        mem = ram                                 # the state store's ports (StateSignature)
+        if self.store == "bram":
+            m.submodules.ram = mem = StateRam(w, t_c, self.max_h)     # the store's ports (StateSignature)
+        else:
+            mem = self.state
 
         state = Signal(range(len(STATES)))
         at = {name: named(m, f"at_{name.lower()}", state == n) for n, name in enumerate(STATES)}

@@ -19,6 +19,8 @@ decodes the results into the fields of
 start and d_far in; the model's result object out.
 """
 
+import random
+
 import cocotb
 import numpy as np
 from cocotb.clock import Clock
@@ -31,6 +33,7 @@ from navcores.models.edt_bfs_tiled import EdtBfsTiledResult
 
 from .clock import PERIOD_NS
 from .edt_bfs_driver import compare_fields
+from .state_store import StateStore
 from .stream import Streams, pauses, unpack
 
 __all__ = ["TileEngineDriver", "compare", "FIELDS"]
@@ -50,10 +53,12 @@ class TileEngineDriver:
 
     ``cmd``, ``map``, ``goal``: the :class:`.stream.StreamSource` on
     ``c_stream`` / ``m_stream`` / ``g_stream``; ``res``: the
-    :class:`.stream.StreamSink` on ``o_stream``.  ``on_visit`` (if set) is
+    :class:`.stream.StreamSink` on ``o_stream``; ``store``: with an external
+    store (``store="external"``), the :class:`.state_store.StateStore` on
+    its ``state`` port (``seed``: its random bits and timing), else None.  ``on_visit`` (if set) is
     called with the count of visits so far at each visit (progress)."""
 
-    def __init__(self, dut, t_r, t_c, max_h, max_w):
+    def __init__(self, dut, t_r, t_c, max_h, max_w, seed=0):
         self.dut, self.t_r, self.t_c, self.max_h, self.max_w = dut, t_r, t_c, max_h, max_w
         w = self.widths = tile_widths(t_r, t_c, max_h, max_w)
         self.vis = visit_layout(w)
@@ -62,6 +67,9 @@ class TileEngineDriver:
         self.map = self.streams.source("m_stream", map_layout(t_c))
         self.goal = self.streams.source("g_stream", goal_layout(w))
         self.res = self.streams.sink("o_stream", result_layout(w))
+        # an engine built with store="external": the store on its state port, StateRam's timing
+        self.store = (StateStore(self.streams, w, t_c, random.Random(seed))
+                      if hasattr(dut, "state__rd__valid") else None)
         self.on_visit = None
 
     def set_stalls(self, rng=None, idle=0.0, back_pressure=0.0):
@@ -80,6 +88,8 @@ class TileEngineDriver:
         """Synchronous reset (:meth:`.stream.Streams.apply_reset`): drops what
         the sources hold and the results not yet read."""
         await self.streams.apply_reset(cycles)
+        if self.store is not None:
+            self.store.reset()
 
     def words(self, img):
         """The map stream: row-major, ceil(W / T_c) words a row, bit j = column w T_c + j."""

@@ -41,13 +41,14 @@ JOBS = int(os.environ.get("TILE_JOBS", "6"))
 MID = tuple(int(v) for v in os.environ.get("TILE_MID", f"{MAX_H}x{MAX_W}").split("x"))
 BUNDLED = [n for n in os.environ.get("TILE_MAPS", "").split(",") if n]
 LARGE = os.environ.get("TILE_LARGE") == "1"
+EXTERNAL = os.environ.get("TILE_STORE") == "external"
 MAPS = Path(__file__).resolve().parents[2] / "maps"
 
 
 async def _setup(dut):
-    drv = TileEngineDriver(dut, T_R, T_C, MAX_H, MAX_W)
-    await drv.start()
     seed = seed_from_env()
+    drv = TileEngineDriver(dut, T_R, T_C, MAX_H, MAX_W, seed=seed)
+    await drv.start()
     dut._log.info(f"seed {seed} (replay with SEED={seed})")
     return drv, np.random.default_rng(seed)
 
@@ -56,13 +57,14 @@ def _model(img, goals, start, dfar, readout=True):
     return plan_path_tiled(img, goals, start, dfar, array=(T_R, T_C), readout=readout)
 
 
-async def _check(drv, img, goals, start, dfar, readout=True, **kw):
-    """One job on the engine and the model; everything compared, the cycles
-    too (the model's plus what the stalls set by the caller cost)."""
+async def _check(drv, img, goals, start, dfar, readout=True, cycles=True, **kw):
+    """One job on the engine and the model; everything compared, with
+    ``cycles`` the cycles too (the model's plus what the stalls set by the
+    caller cost)."""
     model = _model(img, goals, start, dfar, readout)
     raw = await drv.job(img, goals, start, dfar, readout=readout, **kw)
     got = drv.decode(raw, img.shape, readout)
-    n = compare(got, model, readout=readout)
+    n = compare(got, model, cycles=cycles, readout=readout)
     assert raw["cmd_err"] == raw["start_err"] == raw["goal_err"] == 0
     return n, model, raw
 
@@ -239,8 +241,42 @@ async def refusals(dut):
     _, _, raw = await _check(drv, img, goals, start, 0)
 
 
+@cocotb.test(skip=not EXTERNAL)
+async def external_store(dut):
+    """The engine with its state outside (store="external") on the test's store
+    (sim/rtl/state_store.py): with StateRam's timing the same results and
+    cycles; with random latency and stalls on the store, idle cycles on the
+    map and goals and back-pressure on the results the same results and
+    trace in more cycles; a reset with answers in flight, then an exact job."""
+    drv, rng = await _setup(dut)
+    st = drv.store
+    assert st is not None, "the top has no state port"
+    jobs = 0
+    for shape in (MID, (_partial(2, MAX_H, T_R), _partial(2, MAX_W, T_C))):
+        img, start, goals = _case(rng, shape)
+        await _check(drv, img, goals, start, 0)                  # StateRam's timing: cycle-exact
+        jobs += 1
+    st.set_timing(latency=2, extra=0.5, stall=0.3)
+    drv.set_stalls(rng, 0.2, 0.3)
+    for n in range(3):
+        img, start, goals = _case(rng, MID if n else (MAX_H, MAX_W), "rooms" if n else "random")
+        late, paused = st.late, st.rd.paused + st.wr.paused
+        _, model, raw = await _check(drv, img, goals, start, n % 2, cycles=False)
+        assert raw["cycles"] > model.cycles + raw["starved"] + raw["stalls"], (raw["cycles"], model.cycles)
+        assert st.late > late and st.rd.paused + st.wr.paused > paused     # the store's delays happened
+        jobs += 1
+    img, start, goals = _case(rng, MID, "rooms")
+    m = _model(img, goals, start, 0)
+    assert await drv.job(img, goals, start, 0, abort_after=m.cycles // 2) is None
+    await _idle_after_reset(drv)
+    st.set_timing()
+    drv.set_stalls()
+    await _check(drv, img, goals, start, 0)
+    dut._log.info(f"{jobs + 1} jobs compared, {st.reads} reads, {st.writes} writes, {st.late} late answers")
+
+
 def _params(p):
-    return dict(zip(("t_r", "t_c", "max_h", "max_w"), p))
+    return dict(zip(("t_r", "t_c", "max_h", "max_w", "store"), p))
 
 
 # One build per simulator and parameter set.  An 8x8 array on a 64x64 RAM on
@@ -272,4 +308,14 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
     if only:
         env["COCOTB_TEST_FILTER"] = only
     ran = run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env)
-    assert ran == (len(only.split("|")) if only else 6), f"{ran} cocotb tests ran"
+    # without a filter: the six, and external_store (skipped: a block-RAM top has no state port)
+    assert ran == (len(only.split("|")) if only else 7), f"{ran} cocotb tests ran"
+
+
+# The external store: a 4x8 array (a power-of-two word) over maps up to 21x35 (partial tiles).
+@pytest.mark.parametrize("sim", ["icarus", "verilator"])
+def test_edt_tile_engine_external(sim):
+    params = (4, 8, 21, 35, "external")
+    env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": "external",
+           "COCOTB_TEST_FILTER": "external_store"}
+    assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1

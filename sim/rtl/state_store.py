@@ -1,0 +1,136 @@
+"""An external per-pixel state store under cocotb: what sits on a tile engine's ``state`` port.
+
+The tile engine with ``store="external"`` (hdl/edt_bfs/tile_engine.py)
+keeps the map's per-pixel state outside the FPGA (an SDRAM controller on a
+board) and talks to it through
+:class:`~hdl.edt_bfs.state_ram.StateSignature`'s three streams.
+:class:`StateStore` plays that store on the stream driver (sim/rtl/stream.py):
+a sink on ``state__rd`` (read commands), a source on ``state__rd_data``
+(the answers, in command order) and a sink on ``state__wr`` (writes), and
+keeps the words in a dict.  It honours the contract of StateSignature and
+nothing more, so a test on it shows the engine relies on nothing more:
+
+* an answer holds the word at the command's cycle with every write accepted
+  in an earlier cycle applied (a write in the same cycle is not seen: the
+  block RAM's read-before-write); the word's left and right neighbours'
+  edge pixels beside it;
+* a word never written (outside the map of every job so far, or beyond the
+  widest map) reads as random bits: the engine must gate such pixels;
+* with :meth:`set_timing` ``latency`` 2 and no stalls it is
+  :class:`~hdl.edt_bfs.state_ram.StateRam`'s timing (answers two cycles
+  after the command, always ready), the cycle model's; ``extra`` adds a
+  random latency to each answer and ``stall`` holds ``rd.ready`` and
+  ``wr.ready`` low at random (an SDRAM's refresh and row misses).
+
+Words are plain integers (no per-pixel unpacking: a job moves thousands of
+them); field offsets come from the layouts in hdl/edt_bfs/state_ram.py.
+"""
+
+from navcores.hdl.edt_bfs.state_ram import read_data_layout, read_layout, write_layout
+from navcores.hdl.edt_bfs.tile_layouts import EDT_FIELDS, BFS_FIELDS, pixel_layout
+
+from .stream import pauses
+
+__all__ = ["StateStore"]
+
+
+class StateStore:
+    """The store on ``streams``' DUT's ``state`` port, for engine widths ``w`` and ``p`` pixels a word.
+
+    ``rng``: a ``random.Random`` (the unwritten words' bits, the random
+    timing).  ``reads`` / ``writes`` count the commands served; ``late``
+    the answers that waited beyond ``latency``."""
+
+    def __init__(self, streams, w, p, rng):
+        self.streams, self.p, self.rng = streams, p, rng
+        px = pixel_layout(w)
+        self.px = px.size
+        self.word_bits = px.size * p
+        wl = write_layout(w, p)
+        self._wf = {name: (wl[name].offset, wl[name].width) for name in ("row", "wcol", "edt", "bfs", "word")}
+        rl = read_layout(w)
+        self._rf = {name: (rl[name].offset, rl[name].width) for name in ("row", "wcol")}
+        dl = read_data_layout(w, p)
+        self._word_at, self._right_at = dl["word"].offset, dl["right"].offset
+        assert dl["left"].offset == 0
+
+        def group_mask(fields):
+            one = sum(((1 << px[f].width) - 1) << px[f].offset for f in fields)
+            return sum(one << (j * px.size) for j in range(p))
+        self._mask = {"edt": group_mask(EDT_FIELDS), "bfs": group_mask(BFS_FIELDS)}
+        self.words = {}
+        self._pending_writes = []               # (cycle, row, wcol, edt, bfs, word) not applied yet
+        self._due = []                          # cycle each queued answer may be presented from
+        self.reads = self.writes = self.late = 0
+        self.latency, self.extra, self.stall = 2, 0.0, 0.0
+        self.rd = streams.sink("state__rd")
+        self.wr = streams.sink("state__wr")
+        self.rd_data = streams.source("state__rd_data", pause=self._wait())
+        self.rd.callback = self._on_read
+        self.wr.callback = self._on_write
+
+    def set_timing(self, latency=2, extra=0.0, stall=0.0):
+        """Answers ``latency`` cycles after the command (at least 1), plus
+        with probability ``extra`` per cycle one more (geometric); ``rd``
+        and ``wr`` not ready with probability ``stall`` each cycle."""
+        assert latency >= 1
+        self.latency, self.extra, self.stall = latency, extra, stall
+        self.rd.set_pause(pauses(self.rng, stall))
+        self.wr.set_pause(pauses(self.rng, stall))
+
+    def _wait(self):
+        """The answers' pause generator (asked only when the source is about
+        to present its next answer): hold it until its due cycle."""
+        while True:
+            if self._due and self.streams.cycle < self._due[0]:
+                yield True
+            else:
+                if self._due:
+                    self._due.pop(0)
+                yield False
+
+    def _field(self, word, where):
+        off, width = where
+        return (word >> off) & ((1 << width) - 1)
+
+    def _word(self, row, wcol):
+        if (row, wcol) not in self.words:           # never written: don't-care bits
+            self.words[row, wcol] = self.rng.getrandbits(self.word_bits)
+        return self.words[row, wcol]
+
+    def _apply_writes(self, before):
+        keep = []
+        for item in self._pending_writes:
+            cycle, row, wcol, edt, bfs, word = item
+            if cycle >= before:
+                keep.append(item)
+                continue
+            mask = (self._mask["edt"] if edt else 0) | (self._mask["bfs"] if bfs else 0)
+            self.words[row, wcol] = (self._word(row, wcol) & ~mask) | (word & mask)
+        self._pending_writes = keep
+
+    def _on_write(self, cycle, value):
+        f = {k: self._field(value, v) for k, v in self._wf.items()}
+        self._pending_writes.append((cycle, f["row"], f["wcol"], f["edt"], f["bfs"], f["word"]))
+        self.writes += 1
+
+    def _on_read(self, cycle, value):
+        self._apply_writes(cycle)
+        row, wcol = self._field(value, self._rf["row"]), self._field(value, self._rf["wcol"])
+        last = self.px * (self.p - 1)
+        left = self._word(row, wcol - 1) >> last if wcol > 0 else self.rng.getrandbits(self.px)
+        right = self._word(row, wcol + 1) & ((1 << self.px) - 1)
+        answer = left | (self._word(row, wcol) << self._word_at) | (right << self._right_at)
+        delay = self.latency
+        while self.extra and self.rng.random() < self.extra:
+            delay += 1
+        self.late += delay > self.latency
+        # in order: an answer is never presented before the one ahead of it
+        self._due.append(max(cycle + delay, self._due[-1] if self._due else 0))
+        self.rd_data.put(answer)
+        self.reads += 1
+
+    def reset(self):
+        """The engine was reset: the answers in flight are dropped (the source's queue is cleared by
+        the stream driver); accepted writes stay written."""
+        self._due.clear()
