@@ -240,13 +240,13 @@ class TileEngine(wiring.Component):
         t_r, t_c, w = self.t_r, self.t_c, self.w
         nonedi = (1 << w["di"]) - 1
         nonehop = (1 << w["hop"]) - 1
-        m.submodules.work = work = Worklist(w)
-        m.submodules.front = front = FrontierFlags(w, t_c)
-        m.submodules.array = arr = TileArray(t_r, t_c, w)
         if self.store == "bram":
             m.submodules.ram = mem = StateRam(w, t_c, self.max_h)     # the store's ports (StateSignature)
         else:
             mem = self.state
+        m.submodules.work = work = Worklist(w)
+        m.submodules.front = front = FrontierFlags(w, t_c)
+        m.submodules.array = arr = TileArray(t_r, t_c, w)
 
         state = Signal(range(len(STATES)))
         at = {name: named(m, f"at_{name.lower()}", state == n) for n, name in enumerate(STATES)}
