@@ -70,9 +70,6 @@ class Counters(wiring.Component):
         read / write addresses ``base + cntR`` and ``base + cntW``, counted
         in registers beside the offsets, so that the block RAM's address
         pins see a flip-flop and no adder (the clock's critical path).
-        addrW holds ``base`` in the first slot after ``start`` (its lag is
-        added in the first advancing cycle: no sum at start), so it is
-        defined from slot 1 on; no write comes earlier.
     mask, z, ph1, fl, ph2, wcyc : Out(1)
         The nodes' cycle strobes (held while ``advance`` is low).
     mask_next : Out(1)
@@ -133,23 +130,10 @@ class Counters(wiring.Component):
 
         base_p1 = Signal.like(self.base, name="base_plus_p_plus_1")    # the absolute reload value
 
-        # Timing (issue 17): ``start`` loads no sum.  The absolute addresses
-        # load the plain base at start (the Controller's base register, set
-        # the cycle before), and the sums wait for the first advancing cycle
-        # after it (``first``), where they add registers: base + p + 1 (the
-        # reload value, and the read address of slot 1) and the write
-        # address's lag.  Until then addrW holds base: no write comes in the
-        # lead-in (the cluster's write window opens at the first iteration's
-        # ph1), so the write address is only defined from slot 1 on.
-        first = Signal()            # the first advancing cycle after start is next
-        first_w = Signal()          # addrW lacks its lag (p >= P_MIN); else it may reload to base + p + 1
-
-        def phase(value, q, absolute, first_value):
+        def phase(value, q, absolute):
             """One read-slot counter: value p+1 .. 1, then 0 for S+1 cycles
             (q counts them), and base + value beside it; returns its flags
-            (value == 0, value == 1, q == S).  ``first_value``: the
-            (flag, value) that replaces absolute's next value in the first
-            advancing cycle after start, when the flag is set.
+            (value == 0, value == 1, q == S).
 
             Timing (issue 17): the flags are registers, updated from the
             comparisons one slot earlier (value == 2, q + 1 == S), so that
@@ -159,12 +143,11 @@ class Counters(wiring.Component):
             one = Signal(name=f"{value.name}_one")                  # value == 1
             q_end = Signal(name=f"{value.name}_q_end", init=1)      # q == S
             count_pad = zero & ~q_end
-            flag, alt = first_value
             # (value and absolute hold in the pad cycles, a clock enable, and
             # reload when zero and q == S; ``start`` loads them below)
             with m.If(self.advance & ~self.start & ~count_pad):
                 m.d.sync += [value.eq(Mux(zero, p1, value - 1)),
-                             absolute.eq(Mux(flag, alt, Mux(zero, base_p1, absolute - 1)))]
+                             absolute.eq(Mux(zero, base_p1, absolute - 1))]
             with m.If(self.advance & ~self.start):
                 m.d.sync += [q.eq(Mux(count_pad, q + 1, 0)),
                              zero.eq(count_pad | one),          # a reload (p + 1 >= 3) is neither 0 nor 1
@@ -173,13 +156,9 @@ class Counters(wiring.Component):
             return zero, one, q_end
 
         qR, qW = Signal(2), Signal(2)
-        zR, oneR, qendR = phase(self.cntR, qR, self.addrR, (first, self.addrR + p1))
+        zR, oneR, qendR = phase(self.cntR, qR, self.addrR)
         reloadR = zR & qendR
-        zW, oneW, qendW = phase(self.cntW, qW, self.addrW, (first, self.addrW + Mux(first_w, lag - 1, p1)))
-        with m.If(self.advance & ~self.start):
-            m.d.sync += [first.eq(0), first_w.eq(0)]
-        with m.If(first & self.advance & ~self.start):
-            m.d.sync += base_p1.eq(self.addrR + p1)
+        zW, oneW, qendW = phase(self.cntW, qW, self.addrW)
         with m.If(self.advance & ~self.start):
             m.d.sync += self.r_cnt.eq(Mux(reloadR, 1, Mux(zR | oneR, 0, self.r_cnt + 1)))
 
@@ -212,12 +191,12 @@ class Counters(wiring.Component):
                                                for b in range(2))), self.shift))]
         with m.If(self.start):
             m.d.sync += [S.eq(s_new), p1.eq(self.p + 1), self.cntR.eq(0), qR.eq(0), self.r_cnt.eq(0),
-                         self.addrR.eq(self.base), self.addrW.eq(self.base), first.eq(1), first_w.eq(~small),
+                         base_p1.eq(self.base + self.p + 1), self.addrR.eq(self.base),
                          zR.eq(1), oneR.eq(0), qendR.eq(s_new == 0)]
             with m.If(small):
-                m.d.sync += [self.cntW.eq(0), qW.eq(self.p + s_new - 3),
+                m.d.sync += [self.cntW.eq(0), qW.eq(self.p + s_new - 3), self.addrW.eq(self.base),
                              zW.eq(1), oneW.eq(0), qendW.eq(self.p == 3)]    # q = p + S - 3 = 1 == S
             with m.Else():
-                m.d.sync += [self.cntW.eq(lag), qW.eq(0),
+                m.d.sync += [self.cntW.eq(lag), qW.eq(0), self.addrW.eq(self.base + lag),
                              zW.eq(0), oneW.eq(0), qendW.eq(s_new == 0)]
         return m
