@@ -182,12 +182,6 @@ class Controller(wiring.Component):
             m.d.sync += [pend.eq(1), pend_br.eq(order.br), pend_bc.eq(order.bc),
                          pend_row.eq(order.row), pend_col.eq(order.col), pend_sat.eq(order.sat)]
 
-        # Timing (issue 17): ``in_vstart`` is a flip-flop that is high exactly
-        # in the VSTART cycles: every transition sets it with the next state
-        # (:meth:`_next_state`), so the clusters' start request (``run``) leaves a
-        # register, not the state register's decode.
-        self._in_vstart = in_vstart = Signal(name="in_vstart")
-        m.d.sync += in_vstart.eq(0)
         with m.FSM() as fsm:
             with m.State("IDLE"):
                 with m.If(self.start):
@@ -205,33 +199,33 @@ class Controller(wiring.Component):
                         self.sweeps.eq(0), self.block_iterations.eq(0),
                         self.check_iterations.eq(0), self.clear_passes.eq(0), self.cycles.eq(0),
                     ]
-                    self._next_state(m, "VSTART")
+                    m.next = "VSTART"
                 with m.Elif(pend):          # an order while idle: a clear pass now
                     latch_order()
                     m.d.sync += [mode.eq(Mode.CLEAR), idle_clear.eq(1), self.busy.eq(1),
                                  br.eq(0), bc.eq(0), base.eq(0)]
                     if not self.paper:
                         m.d.sync += still["cur"].eq(1)
-                    self._next_state(m, "VSTART")
+                    m.next = "VSTART"
             with m.State("VSTART"):
                 if not self.paper:
                     m.d.sync += still["acc"].eq(0)
                 if X:
                     with m.If(need_scan):
                         m.d.sync += scan_j.eq(1)
-                        self._next_state(m, "SCANW")
+                        m.next = "SCANW"
                     with m.Else():
                         m.d.sync += [k.eq(0), seen.eq(0), first.eq(1), first_ok.eq(0)]
-                        self._next_state(m, "VRUN")
+                        m.next = "VRUN"
                 else:
                     m.d.sync += [k.eq(0), seen.eq(0), first.eq(1), first_ok.eq(0)]
-                    self._next_state(m, "VRUN")
+                    m.next = "VRUN"
             if X:
                 with m.State("SCANW"):          # the clamp scan: L more cycles
                     m.d.sync += scan_j.eq(scan_j + 1)
                     with m.If(scan_j == blk.border.scan_len):
                         m.d.sync += scanned.eq(1)
-                        self._next_state(m, "VSTART")
+                        m.next = "VSTART"
             with m.State("VRUN"):
                 with m.If(blk.take):
                     m.d.sync += k.eq(k + 1)
@@ -251,15 +245,15 @@ class Controller(wiring.Component):
                             m.d.sync += still["acc"].eq(still["acc"] | blk.edge_changed.as_value())
                             with m.If(blk.all_stable):
                                 m.d.sync += still["mx_cur"].eq(blk.any_max)
-                                self._next_state(m, "VEND")
+                                m.next = "VEND"
                     with m.If(mode == Mode.CHECK):
                         m.d.sync += self.check_iterations.eq(self.check_iterations + 1)
                         with m.If(blk.any_max):
                             m.d.sync += anymax.eq(1)
                     with m.If(~blk.busy):
-                        self._next_state(m, "VEND")
+                        m.next = "VEND"
             with m.State("VEND"):
-                self._next_state(m, "VSTART")
+                m.next = "VSTART"
                 vend = self._vend if self.paper else self._vend_still
                 if X:
                     m.d.sync += scanned.eq(0)
@@ -269,11 +263,6 @@ class Controller(wiring.Component):
                     vend(m, locals())
         self._tail(m, locals())
         return m
-
-    def _next_state(self, m, state):
-        """The next state, and ``in_vstart`` beside it (every transition goes through here)."""
-        m.next = state
-        m.d.sync += self._in_vstart.eq(state == "VSTART")
 
     def _count_pass(self, m, mode):
         """The counters at the end of a pass: a sweep, or a clear pass of a run."""
@@ -303,7 +292,7 @@ class Controller(wiring.Component):
                 m.d.sync += mode.eq(Mode.CLEAR)
             with m.Elif(idle_clear):
                 m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
-                self._next_state(m, "IDLE")
+                m.next = "IDLE"
             with m.Elif(mode == Mode.UPDATE):
                 with m.If(~changed & first_ok):
                     m.d.sync += mode.eq(Mode.CHECK)
@@ -313,14 +302,14 @@ class Controller(wiring.Component):
                 m.d.sync += mode.eq(Mode.UPDATE)
                 with m.If(~anymax):
                     m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
-                    self._next_state(m, "IDLE")
+                    m.next = "IDLE"
                 with m.Elif(rise_ok):
                     m.d.sync += self.p.eq(p_up)
                     if X:
                         self._rise(m, v)
                 with m.Else():
                     m.d.sync += [self.running.eq(0), self.busy.eq(0)]
-                    self._next_state(m, "IDLE")
+                    m.next = "IDLE"
 
     # The default schedule: still blocks (models.harmonic.schedule, StillBlocks
     # and StillTiming).  Not elaborated with paper_schedule.
@@ -494,7 +483,7 @@ class Controller(wiring.Component):
                 self._goto(m, v, 1)
             with m.Elif(idle_clear):
                 m.d.sync += [idle_clear.eq(0), self.busy.eq(0)]
-                self._next_state(m, "IDLE")
+                m.next = "IDLE"
             with m.Elif(mode == Mode.CLEAR):            # every free node is 0 again
                 m.d.sync += [mode.eq(Mode.UPDATE), x["dirty"].eq(x["all"])]
                 self._goto(m, v, 1)
@@ -502,7 +491,7 @@ class Controller(wiring.Component):
                 self._goto(m, v, first)
             with m.Elif(mx_none):                       # no local maximum: converged
                 m.d.sync += [self.converged.eq(1), self.running.eq(0), self.busy.eq(0)]
-                self._next_state(m, "IDLE")
+                m.next = "IDLE"
             with m.Elif(rise_ok):
                 m.d.sync += [self.p.eq(p_up), x["dirty"].eq(x["all"])]
                 self._goto(m, v, 1)
@@ -510,7 +499,7 @@ class Controller(wiring.Component):
                     self._rise(m, v)
             with m.Else():
                 m.d.sync += [self.running.eq(0), self.busy.eq(0)]
-                self._next_state(m, "IDLE")
+                m.next = "IDLE"
 
     def _tail(self, m, v):
         # The clusters' run: start request in VSTART, then the command at each
@@ -542,14 +531,14 @@ class Controller(wiring.Component):
             m.d.comb += limit.eq(Mux((mode == Mode.UPDATE) & ~rep, iters, 1))
             m.d.sync += more.eq(Mux(rep, x["rem"] != 0, (k < limit) & ~((mode == Mode.UPDATE) & seen)))
             m.d.comb += [
-                blk.run.eq((self._in_vstart & ~v["need_scan"])
+                blk.run.eq((fsm.ongoing("VSTART") & ~v["need_scan"])
                            | (fsm.ongoing("VRUN") & blk.take & more)),
                 x["rep_take"].eq(fsm.ongoing("VRUN") & blk.take & rep & (x["rem"] != 0)),
             ]
         else:
             m.d.comb += limit.eq(Mux(mode == Mode.UPDATE, iters, 1))
             m.d.sync += more.eq((k < limit) & ~((mode == Mode.UPDATE) & seen))
-            m.d.comb += blk.run.eq(self._in_vstart | (fsm.ongoing("VRUN") & blk.take & more))
+            m.d.comb += blk.run.eq(fsm.ongoing("VSTART") | (fsm.ongoing("VRUN") & blk.take & more))
 
     # Block exponents (issue 10; models.harmonic.plan_exponents(..., rtl=True)).
     # Not elaborated by default.

@@ -417,11 +417,6 @@ class Planner(wiring.Component):
         # critical path (10.8 ns, issue 17).  Every response comes one cycle
         # later for it (DECODE_CYCLES in direction_latency).
         k_in_map, k_p_bad, k_iters0, k_goals = Signal(), Signal(), Signal(), Signal()
-        # ``start_go``: high exactly in START_GO, a flip-flop set with that
-        # transition (the Controller's start request leaves a register, not the
-        # state register's decode: issue 17)
-        start_go = Signal()
-        m.d.sync += start_go.eq(0)
         with m.FSM() as fsm:
             with m.State("IDLE"):
                 with m.If(accept):
@@ -462,7 +457,6 @@ class Planner(wiring.Component):
                         with m.Elif(~has_goal):
                             respond(Code.NO_GOAL, c.op)
                         with m.Else():
-                            m.d.sync += start_go.eq(1)
                             m.next = "START_GO"
                     with m.Case(Op.STATUS):
                         respond(Code.OK, c.op)
@@ -569,9 +563,8 @@ class Planner(wiring.Component):
             accept.eq(fsm.ongoing("IDLE") & self.i_stream.valid & ~self.o_stream.valid),
             # START is checked in DECODE (its checks registered when taken) and
             # run from the registered command a cycle later (START_GO): the
-            # checks -> the Controller's 48-bit counters was one path (issue 17);
-            # start_go is that state as a flip-flop
-            ctl.start.eq(start_go), ctl.p1.eq(c.p1), ctl.step.eq(c.step),
+            # checks -> the Controller's 48-bit counters was one path (issue 17)
+            ctl.start.eq(fsm.ongoing("START_GO")), ctl.p1.eq(c.p1), ctl.step.eq(c.step),
             ctl.p_last.eq(c.p_last), ctl.iters.eq(c.iters),
             ctl.order.valid.eq(fsm.ongoing("SET")), ctl.order.payload.br.eq(c_br),
             ctl.order.payload.bc.eq(c_bc), ctl.order.payload.row.eq(c.row),
