@@ -258,13 +258,26 @@ def largest_map(blocks=LFE5U_85F_EBR, word_pixels=8):
     return n
 
 
+def _store_bits_min(counts, height, width):
+    """The least a state store moves in a job: every visit reads its window's pixels (the tile and its
+    halo inside the map, every field) and writes its tile's pixels (the phase's field group only)."""
+    f = state_bits(height, width)["fields"]
+    return (counts["pixels_read"] * sum(f.values())
+            + counts["pixels_written_edt"] * (f["di"] + f["dx"] + f["dy"])
+            + counts["pixels_written_bfs"] * (f["hop"] + f["parent"]))
+
+
 @dataclass
 class EdtBfsTiledResult(EdtBfsResult):
     """:class:`models.edt_bfs.EdtBfsResult`'s fields (same values) plus the tile engine's figures.
 
     ``cycles`` is the tile engine's job (module docstring); ``stats`` holds
     the counts: levels, visits and array iterations per phase, words read
-    and written, the floor, marks, the cycle breakdown.
+    and written, the floor, marks, the cycle breakdown; pixels read (the
+    visits' windows inside the map) and written (their tiles, per phase)
+    and ``store_bits_min``, the bits a state store moves at least (every
+    field of a window pixel read, the phase's fields of a tile pixel
+    written): the bandwidth an external store needs.
     """
     hop: np.ndarray = None          # H x W int: BFS hop count, -1 not visited
     array: tuple = (0, 0)           # (T_r, T_c)
@@ -309,6 +322,9 @@ class Geometry:
         win_words = np.minimum(self.w - 1, self.c0 + tc) // p - np.maximum(0, self.c0 - 1) // p + 1
         own_words = (np.minimum(self.w, self.c0 + tc) - 1) // p - self.c0 // p + 1
         self.read_words, self.write_words = win_rows * win_words, own_rows * own_words
+        # pixels of the map a visit needs (its window) and changes (its tile): what a store moves at least
+        win_cols = np.minimum(self.w, self.c0 + tc + 1) - np.maximum(0, self.c0 - 1)
+        self.read_px, self.write_px = win_rows * win_cols, own_rows * (np.minimum(self.w, self.c0 + tc) - self.c0)
         self.read_beats = win_rows * -(-win_words // banks)
         self.write_beats = own_rows * -(-own_words // banks)
         # nbr[t, i]: the tile in direction i (Fig. 1) of tile t, -1 outside; nbr[t, 0] = t
@@ -443,7 +459,8 @@ class TileEngine:
         self.cfr = np.zeros(g.shape, dtype=bool)
         self.visits = np.zeros(g.tiles, dtype=np.int64)      # per tile, EDT + BFS
         self.counts = {"levels": 0, "visits_edt": 0, "visits_bfs": 0, "array_iterations_edt": 0,
-                       "array_iterations_bfs": 0, "words_read": 0, "words_written": 0, "marks": 0}
+                       "array_iterations_bfs": 0, "words_read": 0, "words_written": 0, "marks": 0,
+                       "pixels_read": 0, "pixels_written_edt": 0, "pixels_written_bfs": 0}
         self.cycles = {"load": g.h * -(-g.w // g.p), "scan": g.tiles, "edt": 0, "goals": 0,
                        "bfs": 0, "path": 0, "readout": 0}
         self.trace = []          # every visit in order: (phase, level (0 in the BFS), tile, iterations, marks)
@@ -460,6 +477,8 @@ class TileEngine:
         self.counts[f"array_iterations_{phase}"] += iterations
         self.counts["words_read"] += int(g.read_words[t])
         self.counts["words_written"] += int(g.write_words[t])
+        self.counts["pixels_read"] += int(g.read_px[t])
+        self.counts[f"pixels_written_{phase}"] += int(g.write_px[t])
         self.counts["marks"] += marks
         self.cycles[phase] += (tm.sched + tm.latency + int(g.read_beats[t]) + iterations
                                + (tm.stop if phase == "bfs" else 0) + max(int(g.write_beats[t]), marks))
@@ -652,6 +671,7 @@ def plan_path_tiled(obstacle, goals, start, dfar, array=(8, 8), word_pixels=None
     visits = c["visits_edt"] + c["visits_bfs"]
     stats = dict(c, tiles=g.tiles, word_pixels=g.p, banks=g.banks,
                  words_moved=c["words_read"] + c["words_written"],
+                 store_bits_min=_store_bits_min(c, h, w),
                  words_floor=2 * visits * -(-g.tr * g.tc // g.p),
                  max_visits_per_tile=int(eng.visits.max()), cycles=dict(eng.cycles),
                  state_bits=state_bits(h, w)["total"])

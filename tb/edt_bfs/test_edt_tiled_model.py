@@ -294,8 +294,12 @@ def test_cycle_model_brute_force():
         nc = -(-w // tc)
         cyc = {"edt": 0, "bfs": 0}
         read = written = 0
+        px = {"read": 0, "edt": 0, "bfs": 0}           # map pixels of the windows read, the tiles written
         for phase, _, t, iterations, marks in res.trace:
             r0, c0 = t // nc * tr, t % nc * tc
+            inside = lambda rows, cols: sum(0 <= r < h and 0 <= c < w for r in rows for c in cols)  # noqa: E731
+            px["read"] += inside(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1))
+            px[phase] += inside(range(r0, r0 + tr), range(c0, c0 + tc))
             rw, rb = _brute_beats(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w, p, banks)
             ww, wb = _brute_beats(range(r0, r0 + tr), range(c0, c0 + tc), h, w, p, banks)
             read, written = read + rw, written + ww
@@ -308,6 +312,11 @@ def test_cycle_model_brute_force():
         assert res.stats["cycles"]["edt"] == cyc["edt"] and res.stats["cycles"]["bfs"] == cyc["bfs"]
         assert res.cycles == total
         assert res.stats["words_floor"] == 2 * len(res.trace) * -(-tr * tc // p)
+        assert (res.stats["pixels_read"], res.stats["pixels_written_edt"], res.stats["pixels_written_bfs"]) == \
+            (px["read"], px["edt"], px["bfs"])
+        f = state_bits(h, w)["fields"]
+        assert res.stats["store_bits_min"] == (px["read"] * sum(f.values()) + px["edt"] * (f["di"] + f["dx"] + f["dy"])
+                                               + px["bfs"] * (f["hop"] + f["parent"]))
 
 
 def test_cycles_by_hand():
