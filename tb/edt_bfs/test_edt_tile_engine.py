@@ -15,7 +15,10 @@ map and goal streams and back-pressure on the results (same results and
 trace, more cycles); a reset in the EDT, the BFS and the read-out, after
 which the engine is idle and the next job exact; refusals (a map larger
 than the RAM, an empty one: cmd_err; a start outside the map: start_err; a
-goal outside the map: goal_err, dropped).  Environment: TILE_PARAMS
+goal outside the map: goal_err, dropped); with TILE_STORE=external the
+engine with its state outside on sim/rtl/state_store.py's store, at
+StateRam's timing (cycle-exact) and with random latency and stalls (the
+same results in more cycles).  Environment: TILE_PARAMS
 (t_r,t_c,max_h,max_w), TILE_JOBS (random jobs), TILE_MID (HxW of the maps
 of the edge cases, stalls, resets and changed environments), TILE_MAPS
 (the bundled maps to run, comma-separated), TILE_LARGE (1: random maps
@@ -247,7 +250,8 @@ async def external_store(dut):
     (sim/rtl/state_store.py): with StateRam's timing the same results and
     cycles; with random latency and stalls on the store, idle cycles on the
     map and goals and back-pressure on the results the same results and
-    trace in more cycles; a reset with answers in flight, then an exact job."""
+    trace in more cycles; a reset in mid-job with the slow store (what it
+    still holds dropped), then an exact job."""
     drv, rng = await _setup(dut)
     st = drv.store
     assert st is not None, "the top has no state port"
