@@ -137,7 +137,8 @@ class Constraint:
 
 def check(params, constraints=(), **values):
     """Check ``values`` against the declarations (each parameter, then the
-    constraints, in declaration order); returns them.  Raises the component's
+    constraints, in declaration order, with the defaults of the parameters
+    not given; when a required one is missing, no constraint); returns them.  Raises the component's
     ValueError (TypeError for an unknown name)."""
     names = {p.name for p in params}
     unknown = sorted(set(values) - names)
@@ -147,9 +148,12 @@ def check(params, constraints=(), **values):
     for p in params:
         if p.name in values:
             p.check(values[p.name])
-    if all(p.name in values for p in params):
+    # the constraints see the defaults of the parameters not given (a caller
+    # that checks a subset still gets every constraint those values break)
+    full = {p.name: values.get(p.name, p.default) for p in params}
+    if all(v is not REQUIRED for v in full.values()):
         for c in constraints:
-            c.check(values)
+            c.check(full)
     return values
 
 
