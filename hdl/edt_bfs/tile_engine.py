@@ -61,6 +61,11 @@ def visit_layout(w):
                               "iterations": w["iters"], "marks": 4})
 
 
+def _pixels(p):
+    """The largest map's pixel count, for the RAM-size constraints' messages."""
+    return {"n": p["max_h"] * p["max_w"]}
+
+
 def _above(value, limit):
     """value > limit, or 0 when the field cannot exceed it (no constant comparison in the Verilog)."""
     return value > limit if limit < (1 << len(value)) - 1 else Const(0)
@@ -199,12 +204,12 @@ class TileEngine(wiring.Component):
                    lambda p: p["store"] != "bram" or p["max_h"] * p["max_w"] <= MAX_PIXELS,
                    "largest map {max_h}x{max_w} has {n} pixels: the on-chip state store holds at most "
                    + str(MAX_PIXELS) + " (about 50 Mbit); store=external takes more",
-                   lambda p: {"n": p["max_h"] * p["max_w"]}),
+                   _pixels),
         Constraint(f"max_h * max_w <= {MAX_EXT_PIXELS} (external)",
                    lambda p: p["max_h"] * p["max_w"] <= MAX_EXT_PIXELS,
                    "largest map {max_h}x{max_w} has {n} pixels: an external store holds at most "
                    + str(MAX_EXT_PIXELS) + " (2048 x 2048 pixels of ~60 bits fill a 32 MB SDRAM)",
-                   lambda p: {"n": p["max_h"] * p["max_w"]}),
+                   _pixels),
     )
 
     @checked_init
