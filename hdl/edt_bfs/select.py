@@ -24,23 +24,22 @@ from navcores.models.edt_bfs import OFFSETS
 __all__ = ["candidate", "inc", "min_select", "pick"]
 
 
-def candidate(m, i, d2, dx, dy, d2_shape, gate=None, otherwise=0):
+def candidate(m, i, d2, dx, dy, d2_shape, gate=None):
     """ADD-SUB: neighbour p_i's squared distance to its obstacle seen from the cell p (eq. 2-3 in the d2 form).
 
     With ``(sr, sc) = p - p_i``: ``d2_i = d2(p_i) + DX_i + DY_i`` with
     ``DX_i = 2 sr dx(p_i) + 1`` (0 when sr = 0), DY_i likewise (eq. 2), so
     ``d2_i = dx_i^2 + dy_i^2`` (:func:`inc`'s vector) = ``K(k-1) - delta_i``
     of eq. 3.  Computed in ``d2_shape`` (the caller states why it cannot wrap).
-    ``gate``: where 0, DX_i + DY_i is replaced by ``otherwise`` and
-    ``d2_i = d2(p_i) + otherwise`` (a cell whose comparators also serve
-    another key, the tile cell's BFS offer hop + 1).
+    ``gate``: where 0, DX_i and DY_i are 0 and ``d2_i = d2(p_i)`` (a cell
+    whose comparators also serve another key, the tile cell's BFS hop).
     """
     sr, sc = -OFFSETS[i][0], -OFFSETS[i][1]
     # 2 sr dx + 1 without a multiplier: {dx, 1} or 1 - {dx, 0}
     big_x = (Cat(C(1, 1), dx).as_signed() if sr > 0 else 1 - Cat(C(0, 1), dx).as_signed()) if sr else 0
     big_y = (Cat(C(1, 1), dy).as_signed() if sc > 0 else 1 - Cat(C(0, 1), dy).as_signed()) if sc else 0
     d = Signal(d2_shape, name=f"d2_{i}")
-    m.d.comb += d.eq(d2 + big_x + big_y if gate is None else d2 + Mux(gate, big_x + big_y, otherwise))
+    m.d.comb += d.eq(d2 + big_x + big_y if gate is None else d2 + Mux(gate, big_x + big_y, 0))
     return d
 
 

@@ -29,11 +29,11 @@ class TileCell(wiring.Component):
     ``d2_i = d2(p_i) + DX_i + DY_i``, ``DX_i = 2 sr dx(p_i) + 1``,
     ``dx_i = dx(p_i) + sr``), the MIN over the done neighbours picks the
     vector, and a present cell not done with a done neighbour becomes done
-    with ``di = k`` and the winner's vector when ``d2_m <= kk``, tested as
-    the untiled cell does, on every candidate beside the selection (some
-    done neighbour passes iff the smallest does), so the cell's register
-    follows one adder, one comparator and the one-hot logic.  ``kk`` = K(k)
-    = k^2 + k comes from the engine.
+    with ``di = k`` and the winner's vector when ``d2_m <= kk``, one
+    comparator on the winner's d2 (the untiled cell tests every candidate
+    beside the selection instead: here eight comparators cost 10 % of the
+    cell for 5 % of its clock).  ``kk`` = K(k) = k^2 + k comes from the
+    engine.
 
     This is the paper's cell, bit for bit.  The loader gives a done
     neighbour ``delta_{k-1}(p_i) = K(k-1) - d2(p_i)`` (the invariant of
@@ -49,11 +49,9 @@ class TileCell(wiring.Component):
     one iteration, and the loader computes each level's d2 from the vector.
 
     *BFS* (relaxation, one iteration per clock): the same MIN on the
-    neighbours' offers ``hop + 1`` (the candidate adder adding 1; smallest
-    offer, ties to the smallest index: the smallest hop's) gives ``m + 1``
-    and its index; a cfr cell with a visited neighbour takes ``hop = m + 1``
-    when that is below its hop (or it is not visited: each offer compared
-    with ``hop - 1`` beside the selection, on the EDT's comparators); the
+    neighbours' ``hop`` (smallest hop, ties to the smallest index) gives
+    ``m`` and its index; a cfr cell with a visited neighbour takes
+    ``hop = m + 1`` when that is below its hop (or it is not visited); the
     parent register takes that index when ``hop = m + 1`` (else 0) in every
     iteration, so the last one, which changes nothing, leaves the parent of
     the final values (:meth:`models.edt_bfs_tiled.TileEngine.bfs_visit`).
@@ -107,51 +105,38 @@ class TileCell(wiring.Component):
         n = {i: nb_layout(w)(getattr(self, f"n{i}")) for i in OFFSETS}
 
         # ADD-SUB and INC (eq. 1-3 in the d2 form): one candidate per neighbour.
-        # The key is d2_i (EDT) or the neighbour's offer hop + 1 (BFS: DX_i + DY_i
-        # replaced by 1, one adder either way; a visited hop is below NONE =
-        # 2^hop - 1, so the offer fits in val); the MIN of the offers is the MIN
-        # of the hops plus one, and the winner's key is the new hop, so no adder
-        # follows the selection.  d2_i cannot wrap where it counts
-        # (tile_layouts.tile_widths).
-        hop = r.val[:hb]
-        # Each key's test beside the selection, against one reference: EDT d2_i <= kk
-        # (the third enable, delta_i + 2k >= 0), BFS offer < hop (offer <= hop - 1,
-        # none when hop = 0: a root).  Some valid key passes iff the winner's does
-        # (it is the smallest), so the enables are an OR of the eight, not a
-        # comparator after the selection.
-        ref = Signal(max(w["val"], w["kk"]), name="ref")
-        ref_ok = Signal(name="ref_ok")
-        m.d.comb += [ref.eq(Mux(self.phase, hop - 1, self.kk)), ref_ok.eq(~self.phase | (hop != 0))]
+        # The key is d2_i (EDT) or the hop (BFS: DX_i, DY_i gated to 0, so the
+        # comparators take val as it is, a hop below 2^hop with the upper bits 0;
+        # one adder instead of an adder and a multiplexer in front of them).
+        # d2_i cannot wrap where it counts (tile_layouts.tile_widths).
         cands = []
         for i in OFFSETS:
             nb = n[i]
-            key = candidate(m, i, nb.val, nb.dx, nb.dy, w["val"], gate=~self.phase, otherwise=1)
+            key = candidate(m, i, nb.val, nb.dx, nb.dy, w["val"], gate=~self.phase)
             x, y = inc(m, str(i), nb.dx, nb.dy, -OFFSETS[i][0], -OFFSETS[i][1], w["dx"], w["dy"])
-            near = Signal(name=f"near_{i}")
-            same = Signal(name=f"same_{i}")
-            m.d.comb += [near.eq(nb.flag & (key <= ref)), same.eq(key == hop)]
-            cands.append((nb.flag, key, x, y, near, same))
+            cands.append((nb.flag, key, x, y, nb.val[:hb]))
 
-        # MIN: flat, ties to the smallest index; the winner's vector (EDT), offer (BFS), index.
+        # MIN: flat, ties to the smallest index; the winner's d2 (EDT), vector, hop (BFS), index.
         win = min_select(m, [c[0] for c in cands], [c[1] for c in cands])
         xm = pick(m, win, [c[2] for c in cands], signed(w["dx"]), "x_m")
         ym = pick(m, win, [c[3] for c in cands], signed(w["dy"]), "y_m")
-        om = pick(m, win, [c[1] for c in cands], hb, "offer_m")
+        km = pick(m, win, [c[1] for c in cands], w["val"], "key_m")
+        hm = pick(m, win, [c[4] for c in cands], hb, "hop_m")
         im = pick(m, win, list(OFFSETS), 4, "i_m")
         vm = Signal(name="v_m")
-        passes = Signal(name="passes")
-        same_m = Signal(name="same_m")
-        m.d.comb += [vm.eq(Cat(*[c[0] for c in cands]).any()), passes.eq(Cat(*[c[4] for c in cands]).any()),
-                     same_m.eq(Cat(*[wi & c[5] for wi, c in zip(win, cands)]).any())]
+        m.d.comb += vm.eq(Cat(*[c[0] for c in cands]).any())
 
-        # EDT: a done neighbour with d2_i <= kk (delta_i + 2k >= 0).
+        # EDT: the third enable, d2_m <= kk (delta_m + 2k >= 0), on the winner's d2.
         en_edt = Signal(name="en_edt")
-        m.d.comb += en_edt.eq(self.step & ~self.phase & r.present & ~r.flag & passes)
+        m.d.comb += en_edt.eq(self.step & ~self.phase & r.present & ~r.flag & vm & (km <= self.kk))
 
-        # BFS: the smallest offer m + 1 below hop (or the cell not yet visited).
+        # BFS: m = the smallest visited neighbour hop.
+        m1 = Signal(hb + 1, name="m1")
+        m.d.comb += m1.eq(hm + 1)
+        hop = r.val[:hb]
         en_bfs = Signal(name="en_bfs")
-        m.d.comb += en_bfs.eq(self.step & self.phase & r.cfr & vm & (~r.flag | (ref_ok & passes)))
-        parent = Mux(r.flag & same_m, im, 0)
+        m.d.comb += en_bfs.eq(self.step & self.phase & r.cfr & vm & (~r.flag | (m1 < hop)))
+        parent = Mux(r.flag & vm & (hop == m1), im, 0)
 
         with m.If(self.clear):
             m.d.sync += [r.present.eq(0), r.flag.eq(0), r.fresh.eq(0), r.cfr.eq(0), r.chg.eq(0)]
@@ -162,8 +147,8 @@ class TileCell(wiring.Component):
         with m.Elif(self.step & self.phase):
             m.d.sync += r.aux.eq(parent)
             with m.If(en_bfs):
-                m.d.sync += [r.flag.eq(1), r.chg.eq(1), r.val.eq(om)]
+                m.d.sync += [r.flag.eq(1), r.chg.eq(1), r.val.eq(m1)]
 
-        in_ram = Cat(*[n[i].ram for i in OFFSETS]).any()
-        m.d.comb += [self.upd.eq(en_edt | en_bfs), self.smark.eq(r.present & ~r.flag & in_ram)]
+        near = Cat(*[n[i].ram for i in OFFSETS]).any()
+        m.d.comb += [self.upd.eq(en_edt | en_bfs), self.smark.eq(r.present & ~r.flag & near)]
         return m

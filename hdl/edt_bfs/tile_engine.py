@@ -66,32 +66,6 @@ def _pixels(p):
     return {"n": p["max_h"] * p["max_w"]}
 
 
-class _Stepped:
-    """Register ``v`` (the path's row, column or word column), stepped by -1, 0 or +1, with v - 1
-    and v + 1 kept in registers beside it (modulo its width), so that the next position after a
-    path beat is a multiplexer of registers on the parent's decode: no adder follows the RAM's
-    output on the way to the next read address."""
-
-    def __init__(self, m, v, name):
-        self.m, self.v = m, v
-        self.lo = Signal(len(v), name=f"{name}_m1")
-        self.hi = Signal(len(v), name=f"{name}_p1")
-
-    def at(self, d):
-        """The value after a step by ``d`` (-1, 0, 1)."""
-        return {-1: self.lo, 0: self.v, 1: self.hi}[d]
-
-    def load(self, x):
-        self.m.d.sync += [self.v.eq(x), self.lo.eq(x - 1), self.hi.eq(x + 1)]
-
-    def step(self, d):
-        """Take the step ``d`` (in the branch where it is taken): the adders read registers only."""
-        if d < 0:
-            self.m.d.sync += [self.v.eq(self.lo), self.hi.eq(self.v), self.lo.eq(self.lo - 1)]
-        elif d > 0:
-            self.m.d.sync += [self.v.eq(self.hi), self.lo.eq(self.v), self.hi.eq(self.hi + 1)]
-
-
 def _above(value, limit):
     """value > limit, or 0 when the field cannot exceed it (no constant comparison in the Verilog)."""
     return value > limit if limit < (1 << len(value)) - 1 else Const(0)
@@ -310,7 +284,6 @@ class TileEngine(wiring.Component):
         cur_j = Signal(range(t_c))                # cur.col, stepped with it: no division on the path)
         start_w = Signal(range(w["words"]))
         start_j = Signal(range(t_c))
-        row, col, wcol = _Stepped(m, cur.row, "cur_row"), _Stepped(m, cur.col, "cur_col"), _Stepped(m, cur_w, "cur_w")
         p_need = Signal()                         # path: a read is owed
         p_first = Signal()
         ro_row = Signal(w["row"])
@@ -322,9 +295,7 @@ class TileEngine(wiring.Component):
 
         def after_bfs():
             with m.If(want_path & ~self.start_err):
-                for reg, x in ((row, start.row), (col, start.col), (wcol, start_w)):
-                    reg.load(x)
-                m.d.sync += [cur_j.eq(start_j), p_need.eq(1), p_first.eq(1)]
+                m.d.sync += [cur.eq(start), cur_w.eq(start_w), cur_j.eq(start_j), p_need.eq(1), p_first.eq(1)]
                 goto("PATH")
             with m.Else():
                 after_path()
@@ -585,13 +556,12 @@ class TileEngine(wiring.Component):
         nxt_j = Signal.like(cur_j)
         m.d.comb += [nxt.eq(cur), nxt_w.eq(cur_w), nxt_j.eq(cur_j)]
         wrap = {1: (cur_j == t_c - 1, 1, 0), -1: (cur_j == 0, -1, t_c - 1)}   # crossing into the next word
-        step = {i: named(m, f"path_step{i}", path_px.parent == i) for i in OFFSETS}
         for i, (dr, dc) in OFFSETS.items():
-            with m.If(step[i]):
-                m.d.comb += [nxt.row.eq(row.at(dr)), nxt.col.eq(col.at(dc))]
+            with m.If(path_px.parent == i):
+                m.d.comb += [nxt.row.eq(cur.row + dr), nxt.col.eq(cur.col + dc)]
                 if dc:
                     edge, dw, j_in = wrap[dc]
-                    m.d.comb += [nxt_w.eq(Mux(edge, wcol.at(dw), cur_w)), nxt_j.eq(Mux(edge, j_in, cur_j + dc))]
+                    m.d.comb += [nxt_w.eq(Mux(edge, cur_w + dw, cur_w)), nxt_j.eq(Mux(edge, j_in, cur_j + dc))]
         with m.If(at["PATH"]):
             with m.If(mem.rd.valid):
                 m.d.sync += p_need.eq(~mem.rd.ready)
@@ -603,14 +573,7 @@ class TileEngine(wiring.Component):
                     with m.If(path_px.parent == 0):
                         after_path()
                     with m.Else():
-                        m.d.sync += cur_j.eq(nxt_j)
-                        for i, (dr, dc) in OFFSETS.items():
-                            with m.If(step[i]):
-                                row.step(dr)
-                                col.step(dc)
-                                if dc:
-                                    with m.If(wrap[dc][0]):
-                                        wcol.step(dc)
+                        m.d.sync += [cur.eq(nxt), cur_w.eq(nxt_w), cur_j.eq(nxt_j)]
 
         # -- READOUT: every pixel, row-major, one per beat; the reads (rr_*) run ahead of the
         # beats (ro_*) as far as the RAM's pipeline takes them, so a word costs no latency
