@@ -271,6 +271,11 @@ def test_level_order_one_tile_at_a_time():
     assert levels > 20
 
 
+def _brute_inside(rows, cols, h, w):
+    """Pixels of rows x cols inside the h x w map, by enumeration."""
+    return sum(0 <= r < h and 0 <= c < w for r in rows for c in cols)
+
+
 def _brute_beats(rows, cols, h, w, p, banks):
     """Words and beats of the pixels rows x cols clipped to the map, by enumeration."""
     words = beats = 0
@@ -297,9 +302,8 @@ def test_cycle_model_brute_force():
         px = {"read": 0, "edt": 0, "bfs": 0}           # map pixels of the windows read, the tiles written
         for phase, _, t, iterations, marks in res.trace:
             r0, c0 = t // nc * tr, t % nc * tc
-            inside = lambda rows, cols: sum(0 <= r < h and 0 <= c < w for r in rows for c in cols)  # noqa: E731
-            px["read"] += inside(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1))
-            px[phase] += inside(range(r0, r0 + tr), range(c0, c0 + tc))
+            px["read"] += _brute_inside(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w)
+            px[phase] += _brute_inside(range(r0, r0 + tr), range(c0, c0 + tc), h, w)
             rw, rb = _brute_beats(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w, p, banks)
             ww, wb = _brute_beats(range(r0, r0 + tr), range(c0, c0 + tc), h, w, p, banks)
             read, written = read + rw, written + ww
