@@ -208,10 +208,10 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
                          f"a 16-bit SDRAM, through which the transfers alone take {floor * 1e3:.1f} ms or more at "
                          f"its {SDRAM_BITS_PER_S / 16 / 1e6:.0f} MHz peak, so the job there takes at least "
                          f"{max(floor, r['hw_seconds']) * 1e3:.1f} ms: "
-                         + (f"below scipy's only at a peak no SDRAM controller sustains (row misses, refresh, "
-                            f"latency)" if max(floor, r['hw_seconds']) < r['sw_seconds'] else
+                         + ("below scipy's only at a peak no SDRAM controller sustains (row misses, refresh, "
+                            "latency)" if max(floor, r['hw_seconds']) < r['sw_seconds'] else
                             "not below scipy's even at the SDRAM's peak")
-                         + f"; a board with "
+                         + "; a board with "
                          f"a 16-bit DDR3 has the bandwidth on paper. So the goal is not shown met on a board: no "
                          f"SDRAM or DDR3 controller is built. "
                          f"Cost: {r['visits_edt'] + r['visits_bfs']:,} "
