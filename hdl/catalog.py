@@ -12,6 +12,8 @@ and reported beside the paper's figures).
 * :class:`Set` and :data:`SETS`: the named parameter sets of the tops
   (``hdl.emit.TOPS``), each with its uses (emitted by default, synthesized
   for a family) and the figures it is compared with.
+* :class:`Goal` and :data:`TIMING_GOALS`: issue 17's timing-closure table,
+  the tops ``make bench`` places on the LFE5U-85F against their goals.
 
 Papers (/work/shared/papers/): 000 harmonic planner (Tables 1-3 and
 section 5.4), 003 DFLC (section 7), 004 EDT/BFS array (Tables I-II).
@@ -19,7 +21,8 @@ section 5.4), 003 DFLC (section 7), 004 EDT/BFS array (Tables I-II).
 
 from dataclasses import dataclass, field
 
-__all__ = ["Figures", "PAPER", "PAPER_JOBS", "Set", "SETS", "DEFAULT_SETS", "SYNTHESIZED", "get"]
+__all__ = ["Figures", "PAPER", "PAPER_JOBS", "Set", "SETS", "DEFAULT_SETS", "SYNTHESIZED", "get", "Goal",
+           "TIMING_GOALS"]
 
 
 @dataclass(frozen=True)
@@ -164,3 +167,71 @@ def get(name):
         if s.name == name:
             return s
     raise KeyError(f"no parameter set {name!r} in the catalog; sets: {', '.join(s.name for s in SETS)}")
+
+
+@dataclass(frozen=True)
+class Goal:
+    """A row of issue 17's timing-closure table: top ``top`` at ``params``
+    placed on the LFE5U-85F (``seeds`` place-and-route seeds, nextpnr's
+    ``router``) against ``goal_mhz``; ``start``: its clock when the issue
+    was filed; ``remedy``: what the path that remains would take, where the
+    goal is not met (the modules' READMEs, timing sections, hold the steps
+    tried)."""
+
+    label: str
+    top: str
+    params: dict
+    start: str
+    goal_mhz: float
+    remedy: str = ""
+    seeds: int = 3
+    router: str = "router1"
+
+
+# The 32x32, 64x64 and den312d maps' planners (bench's planner_params: 6x12 blocks, p_max 256).
+_MAP_PLANNER = {"n": 6, "m": 12, "p_max": 256}
+_RAM_READ = ("routing between RAMs that fill most of the part's EBR rows: a register after the bank "
+             "multiplexer (a cycle more per iteration, p+3, or per value read), placement constraints per cluster")
+
+TIMING_GOALS = (
+    Goal("harmonic node", "harmonic_node", {}, "219 MHz (iCE40-HX8K)", 300),
+    Goal("harmonic cluster (1Kx18 RAM)", "harmonic_cluster", {"depth": 1024}, "65.7 MHz (iCE40), 83 MHz (ECP5)",
+         200, "the nodes' write bits kept apart from the Stable logic; a fabric register after the RAM's output "
+              "register (read latency 3, P_MIN 5: a cycle more per iteration)"),
+    Goal("harmonic block 6x12 (2x2 blocks)", "harmonic_block", BLOCK, "65.0 MHz (iCE40)", 200,
+         "the AND of the 72 Stable flags pipelined per cluster (the flags a cycle later: a visit K*L+8); the "
+         "border RAMs' write data from a register"),
+    Goal("planner, fixed point (2x2 blocks of 6x12, p_max 62)", "harmonic_planner", PLANNER, "not timed", 150,
+         "the clusters' `run` and the Counters' start loads from registers set a cycle ahead (a visit K*L+8; "
+         "the cycle-neutral versions were tried and gave nothing within the seeds' spread: hdl/harmonic/README.md)"),
+    Goal("planner, block exponents (same)", "harmonic_planner", {**PLANNER, "block_exponents": 1}, "not timed",
+         150, "e_b, the neighbours' exponents and the re-pick registered over a visit's lead-in (they change only "
+              "between visits: a cycle per visit of the exponent option)"),
+    Goal("the 32x32 maps' planner (6x3 blocks of 6x12, p_max 256)", "harmonic_planner",
+         {**_MAP_PLANNER, "br": 6, "bc": 3, "depth": 8192}, "not timed", 150,
+         "the Counters' start loads (`p + 1`, `base + p + 1`) from registers set with p and the base"),
+    Goal("empty-16-16's planner (6x3 blocks of 3x6, p_max 256)", "harmonic_planner",
+         {"n": 3, "m": 6, "br": 6, "bc": 3, "p_max": 256, "depth": 8192}, "not timed", 150,
+         "the FSM's START into the Controller from a register (mostly routing)"),
+    Goal("the 64x64 maps' planner (11x6 blocks)", "harmonic_planner",
+         {**_MAP_PLANNER, "br": 11, "bc": 6, "depth": 32768}, "not timed", 150, _RAM_READ),
+    Goal("den312d's planner (14x6 blocks)", "harmonic_planner",
+         {**_MAP_PLANNER, "br": 14, "bc": 6, "depth": 32768}, "not timed", 150, _RAM_READ),
+    Goal("DFLC core, Table 1, sequential", "dflc_core", {"fll": "table1"}, "57.6 MHz (iCE40)", 150),
+    Goal("DFLC core, Table 1, parallel", "dflc_core", {"fll": "table1", "par": 1}, "58.6 MHz (iCE40)", 150),
+    Goal("EDT/BFS cell (the paper's, 16x16 widths)", "edt_cell", {"height": 16, "width": 16}, "29.8 MHz (iCE40)",
+         100, "one iteration a clock is the loop neighbour -> candidate adder -> comparators -> selection -> "
+              "register: two images interleaved in a two-stage cell (C-slow), an interface change"),
+    Goal("EDT/BFS array's own top (8x8)", "edt_bfs", {"height": 8, "width": 8}, "not timed", 100,
+         "the cell's loop (above) across the array's routing"),
+    Goal("EDT/BFS tile engine (4x8 cells, 128x128 RAM)", "edt_tile_engine",
+         {"t_r": 4, "t_c": 8, "max_h": 128, "max_w": 128}, "not built", 100,
+         "the path read-out's address loop (RAM word -> pixel parent -> next address) registered at two "
+         "cycles more per path pixel, then the cell's loop (above); the cell's enables beside its MIN gave "
+         "the cell alone 40.9 -> 55.5 MHz but the external-store top no longer routed (hdl/edt_bfs/README.md)",
+         seeds=1, router="router2"),
+    Goal("EDT/BFS tile engine, external store (4x8 cells, maps to 512x512)", "edt_tile_engine",
+         {"t_r": 4, "t_c": 8, "max_h": 512, "max_w": 512, "store": "external"}, "not built", 100,
+         "the cell's loop (above); narrower hop keys (a longest-path parameter) to pay for the enables' "
+         "comparators", router="router2"),
+)

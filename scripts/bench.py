@@ -74,6 +74,7 @@ sys.path.insert(0, str(ROOT))       # tb/ (not installed): the cluster's iterati
 os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
 
 import fmax as fmax_mod  # noqa: E402
+import kept  # noqa: E402
 import software  # noqa: E402
 import synth  # noqa: E402
 import toolchain  # noqa: E402
@@ -86,7 +87,7 @@ PERIOD_NS = 10                  # every cocotb bench here clocks at 10 ns
 HX8K_LCS = 7680
 CLOCK_PART = fmax_mod.part("iCE40-HX8K")     # the part of the clock column
 PY = sys.executable
-PARTS = ("hardware", "harmonic", "dflc", "edt", "simspeed", "study", "boards")
+PARTS = ("hardware", "timing", "harmonic", "dflc", "edt", "simspeed", "study", "boards")
 
 # (key, core, emitted top, params, yosys family, hierarchical synth, paper's figures):
 # the catalog's synthesized sets (hdl/catalog.py).
@@ -143,11 +144,22 @@ def place(top, lut4):
                     f"{len(r['seeds'])} seeds", "utilization": util}
 
 
+def ecp5_counts(top):
+    """The cells of ``top`` after the ECP5 synthesis `make fit` places (the
+    same cached run): {lut4, ff, bram, dsp}, or {error}."""
+    key, core, name, params, *_ = top
+    log(f"synth_ecp5 {top_name(name, params)}")
+    try:
+        return fmax_mod.counts(name, params, JOB_PART)[4]
+    except fmax_mod.FlowError as e:
+        return {"error": str(e).splitlines()[0]}
+
+
 def hardware(jobs=2):
-    """{key: {ff, lut4, mult, bram, fmax_mhz, ...}} for every top of TOPS."""
+    """{key: {ff, lut4, mult, bram, fmax_mhz, ecp5, ...}} for every top of TOPS."""
     def one(top):
         s = synthesize(top)
-        return {**s, **place(top, s.get("lut4"))}
+        return {**s, "ecp5": ecp5_counts(top), **place(top, s.get("lut4"))}
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         return dict(zip([t[0] for t in TOPS], pool.map(one, TOPS)))
 
@@ -155,6 +167,32 @@ def hardware(jobs=2):
 # Every job's clock: the top that runs it, placed and routed on this part (issue 17).
 JOB_PART = fmax_mod.part("LFE5U-85F")
 _CLOCKS = {}
+
+
+def timing_closure():
+    """Issue 17's timing-closure table (hdl/catalog.TIMING_GOALS): each top
+    placed on :data:`JOB_PART` with its goal's seeds and router (the fit
+    flow's cache makes an unchanged top quick), as rows of dicts."""
+    rows = []
+    for g in catalog.TIMING_GOALS:
+        module = top_name(g.top, g.params)
+        log(f"timing: fit {module} on {JOB_PART.name} ({g.seeds} seed{'s' * (g.seeds > 1)}, {g.router})")
+        r = {"label": g.label, "top": module, "start": g.start, "goal_mhz": g.goal_mhz, "remedy": g.remedy}
+        try:
+            f = fmax_mod.fit(g.top, g.params, JOB_PART, seeds=tuple(range(1, g.seeds + 1)), jobs=1,
+                             router=g.router)
+        except fmax_mod.FlowError as e:
+            rows.append({**r, "fits": None, "fmax_mhz": None, "why": f"no clock: {str(e).splitlines()[0]}"})
+            continue
+        rows.append({**r, **{k: f[k] for k in ("fits", "fmax_mhz", "lut4", "ff", "bram", "dsp", "critical_path",
+                                               "seeds", "router")},
+                     "why": "" if f["fits"] else f"does not fit: {fmax_mod.shortfall(f)}"})
+    return rows
+
+
+def _path(cp):
+    """A critical path as the report writes it."""
+    return f"{cp['from']['cell']} -> {cp['to']['cell']}, {cp['delay_ns']} ns, {cp['logic_levels']} levels"
 
 
 def _no_clock(name, params):
@@ -561,9 +599,12 @@ def markdown(data, hw, extra):
         f"place and route ({toolchain.prepare('nextpnr-ice40')}, median of 3 seeds) on an "
         f"**{CLOCK_PART.name} ({CLOCK_PART.package})** (Lattice iCE40, not the papers' Virtex/"
         "Spartan), the top between registered ports (scripts/fmax.py), so the figure is the core's "
-        "register-to-register timing.", "",
-        "| top | family | FF | LUT4 | MULT18X18 | BRAM | iCE40 clock (MHz) | iCE40 logic cells | paper |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "register-to-register timing. ECP5: the core's cells after the `synth_ecp5` that `make fit` places "
+        "(LUT4 counts a CCU2C carry as 2; DSP = MULT18X18D); its clocks on the "
+        f"{JOB_PART.name}: the job tops and the timing-closure table below.", "",
+        "| top | family | FF | LUT4 | MULT18X18 | BRAM | ECP5 LUT4 / FF / EBR / DSP | iCE40 clock (MHz) | "
+        "iCE40 logic cells | paper |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     if data.get("hardware_carried"):        # a partial run: the last full table, as it was
         lines[-4:] = [f"Not measured by this run: the table of the run of {data['carried_from']}, as it was "
@@ -577,8 +618,11 @@ def markdown(data, hw, extra):
         h = hw[key]
         util = (h.get("utilization") or {}).get("ICESTORM_LC", "").replace(" ", "")
         clock = _fmt(h.get("fmax_mhz")) if h.get("fmax_mhz") else h.get("error", "—")
+        e = h.get("ecp5") or {}
+        ecp5 = e.get("error") or (" / ".join(_fmt(e.get(k)) for k in ("lut4", "ff", "bram", "dsp")) if e else "—")
         lines.append(f"| {top_name(name, params)}{' (hierarchical)' if hier else ''} | {family} | {_fmt(h.get('ff'))} | "
-                     f"{_fmt(h.get('lut4'))} | {_fmt(h.get('mult'))} | {_fmt(h.get('bram'))} | {clock} | {util or '—'} | {paper} |")
+                     f"{_fmt(h.get('lut4'))} | {_fmt(h.get('mult'))} | {_fmt(h.get('bram'))} | {ecp5} | {clock} | "
+                     f"{util or '—'} | {paper} |")
     lines += ["", "## Jobs: hardware time against the software a user would pick", "",
               f"Hardware time = cycles / the clock of the top that runs the job (the *top* column: its own "
               f"parameters, e.g. an EDT/BFS array of the map's size), placed and routed on the **{JOB_PART.name}** "
@@ -606,12 +650,37 @@ def markdown(data, hw, extra):
                   "|---|---|---|---|---|---|---|---|---|"]
         for t in tops.values():
             cp = t.get("critical_path")
-            path = f"{cp['from']['cell']} -> {cp['to']['cell']}, {cp['delay_ns']} ns, {cp['logic_levels']} levels" \
-                if cp else "—"
+            path = _path(cp) if cp else "—"
             fits = "yes" if t["fits"] else (t.get("why") or "—")
             seeds = ", ".join(f"{x['fmax_mhz']:.1f}" for x in t.get("seeds", [])) or "—"
             lines.append(f"| {t['top']} | {fits} | {_fmt(t['lut4'])} | {_fmt(t['ff'])} | {_fmt(t['bram'])} | "
                          f"{_fmt(t['dsp'])} | {_fmt(t['fmax_mhz'])} | {seeds} | {path} |")
+    timing = data.get("timing") or []
+    if timing:
+        lines += ["", f"### Timing closure against issue 17's goals on the {JOB_PART.name}", "",
+                  f"Each top placed and routed on the {JOB_PART.name} ({JOB_PART.package}, speed "
+                  f"{JOB_PART.speed_grade}) by this run's fit flow (cached place-and-route runs of the same Verilog "
+                  "and tools count as this run's: nextpnr is deterministic for a seed), the median of its seeds "
+                  "(one seed where the router takes most of an hour), against the goal issue 17 set and the "
+                  "clock it started from (hdl/catalog.TIMING_GOALS). Where the goal is not met: the path that "
+                  "remains (nextpnr's critical path at the median seed) and what it would take; the steps "
+                  "tried: the modules' READMEs (timing sections) and the sections below."
+                  + (f" Not measured by this run: carried from the run of {timing[0]['carried_from']}."
+                     if timing[0].get("carried_from") else ""), "",
+                  "| top | at the issue's start | now (MHz) | seeds | LUT4 / FF / EBR / DSP | goal | met | "
+                  "the path that remains | what it would take |",
+                  "|---|---|---|---|---|---|---|---|---|"]
+        for t in timing:
+            met = t["fmax_mhz"] is not None and t["fmax_mhz"] >= t["goal_mhz"]
+            now = _fmt(t["fmax_mhz"]) if t["fmax_mhz"] else (t.get("why") or "—")
+            seeds = ", ".join(f"{x['fmax_mhz']:.1f}" for x in t.get("seeds", [])) or "—"
+            if t.get("router", "router1") != "router1":
+                seeds += f" ({t['router']})"
+            res = " / ".join(_fmt(t.get(k)) for k in ("lut4", "ff", "bram", "dsp")) if t.get("fits") else "—"
+            cp = t.get("critical_path")
+            lines.append(f"| {t['label']} (`{t['top']}`) | {t['start']} | {now} | {seeds} | {res} | "
+                         f"{t['goal_mhz']:g} | {'yes' if met else 'no'} | {'-' if met or not cp else _path(cp)} | "
+                         f"{'-' if met else t['remedy'] or '—'} |")
     lines += ["", "## Simulation speed", "",
               "Simulated clock cycles per wall-clock second, build excluded. *Probe*: sim/rtl/simspeed.py, reset "
               "and then the clock runs with the inputs at 0 for "
@@ -699,7 +768,7 @@ def update_study(md, keys=None):
         log(f"{md} does not exist: run the whole bench first")
         return 2
     t0 = time.time()
-    text = md.read_text()
+    text = old = md.read_text()
     order = list(_titles().values())
     for title, body in study_sections(keys):
         stamp = (f"(This section: `scripts/bench.py --only {','.join(keys) if keys else 'study'}`, "
@@ -717,7 +786,7 @@ def update_study(md, keys=None):
             at = text.rfind("\nBench run time")
             at = len(text) if at < 0 else at + 1
         text = text[:at] + section + "\n" + text[at:]
-    md.write_text(text)
+    md.write_text(kept.carry(text, old))
     log(f"replaced the study sections of {md} in {time.time() - t0:.0f} s")
     return 0
 
@@ -790,6 +859,7 @@ def main(argv=None):
     hw = hardware() if "hardware" not in skip else {t[0]: {} for t in TOPS}
     for (key, core, name, params, *_), h in zip(TOPS, hw.values()):
         h["top"] = top_name(name, params)
+    timing = timing_closure() if "timing" not in skip else (previous or {}).get("timing") or []
     speeds, problems, rows = {}, [], []
     for part, fn in (("harmonic", harmonic_jobs), ("dflc", dflc_jobs), ("edt", edt_jobs)):
         if part not in skip:
@@ -823,6 +893,7 @@ def main(argv=None):
         "sim_cycles_per_second_detail": speeds,
         "hardware": hw,
         "job_tops": {k: v for k, v in _CLOCKS.items()},
+        "timing": timing,
         "hardware_carried": previous["hardware"] if previous and "hardware" in skip else None,
         "carried_from": previous["date"] if previous else None,
         "skipped": ",".join(sorted(skip)),
@@ -833,7 +904,9 @@ def main(argv=None):
     data["bench_seconds"] = round(time.time() - t0)
     Path(args.json).parent.mkdir(parents=True, exist_ok=True)
     Path(args.json).write_text(json.dumps(data, indent=1, default=str))
-    Path(args.md).write_text(markdown(data, hw, extra) + f"\nBench run time: {data['bench_seconds']} s.\n")
+    md = Path(args.md)
+    text = markdown(data, hw, extra) + f"\nBench run time: {data['bench_seconds']} s.\n"
+    md.write_text(kept.carry(text, md.read_text() if md.exists() else ""))
     log(f"wrote {args.md} and {args.json} in {data['bench_seconds']} s")
     for p in problems:
         log(f"PROBLEM: {p}")
@@ -857,7 +930,8 @@ def previous_results(path):
     rows = [{**r, "job_top": (tops[r["top"]]["name"], tops[r["top"]]["params"]) if r.get("top") in tops else None,
              "carried_from": r.get("carried_from") or data["date"]} for r in data.get("rows", [])]
     hw = data.get("hardware_carried")
-    return {"date": data["date"], "hardware": hw or [], "rows": rows}
+    timing = [{**t, "carried_from": t.get("carried_from") or data["date"]} for t in data.get("timing") or []]
+    return {"date": data["date"], "hardware": hw or [], "rows": rows, "timing": timing}
 
 
 def carry(r):

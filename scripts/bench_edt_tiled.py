@@ -64,6 +64,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 import fmax  # noqa: E402
+import kept  # noqa: E402
 import software  # noqa: E402
 from navcores.models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, largest_map, plan_path_tiled,  # noqa: E402
                                   ram_blocks, state_bits)
@@ -342,8 +343,8 @@ def main(argv=None):
         old = md.read_text()
         new = f"## {SECTION}\n\n{text}\n"
         pattern = re.compile(rf"^## {re.escape(SECTION)}\n.*?(?=^## |\Z)", re.S | re.M)
-        md.write_text(pattern.sub(lambda _: new + "\n", old) if pattern.search(old)
-                      else old.rstrip("\n") + "\n\n" + new)
+        md.write_text(kept.carry(pattern.sub(lambda _: new + "\n", old) if pattern.search(old)
+                                 else old.rstrip("\n") + "\n\n" + new, old))
     return 0
 
 

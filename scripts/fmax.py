@@ -331,18 +331,12 @@ def _took(run):
     return " (cached)" if cached else f" ({seconds:.0f} s)"
 
 
-def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1"):
-    """The fit of ``name`` at ``params`` on Part ``prt``: a JSON-ready dict
-    (see scripts/fit.py).  Raises FlowError when a tool fails otherwise than
-    by the design's size, toolchain.ToolError when a tool is missing."""
+def counts(name, params, prt, progress=None):
+    """The synthesis that :func:`fit` places: (toolchain.Run, the netlist to
+    place, read registers packed, the core's cells, {lut4, ff, bram, dsp})."""
     module = top_name(name, params)
     work = ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
     _, syn, cells = synthesize(name, params, prt.synth, work, progress)
-    res = resources(prt.family, cells)
-    if progress:
-        progress(f"{module}: {res['lut4']} LUT4, {res['ff']} FF, {res['bram']} BRAM, {res['dsp']} DSP"
-                 f"{_took(syn)}; "
-                 f"nextpnr on {prt.name}, seed{'s' * (len(seeds) > 1)} {', '.join(map(str, seeds))}")
     netlist = syn.dir / "netlist.json"
     packed = 0
     if prt.family == "ecp5":
@@ -350,9 +344,22 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
         # leaves them in the fabric: scripts/ecp5_pack.py).
         netlist, packed = pack_ecp5(netlist, work)
         cells = {**cells, "TRELLIS_FF": cells.get("TRELLIS_FF", 0) - packed}
-        res = resources(prt.family, cells)
-        if progress and packed:
-            progress(f"{module}: {packed} read-data flip-flops packed into DP16KD output registers")
+    res = resources(prt.family, cells)
+    if progress:
+        progress(f"{module}: {res['lut4']} LUT4, {res['ff']} FF, {res['bram']} BRAM, {res['dsp']} DSP"
+                 f"{_took(syn)}" + (f"; {packed} read-data flip-flops packed into DP16KD output registers"
+                                    if packed else ""))
+    return syn, netlist, packed, cells, res
+
+
+def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1"):
+    """The fit of ``name`` at ``params`` on Part ``prt``: a JSON-ready dict
+    (see scripts/fit.py).  Raises FlowError when a tool fails otherwise than
+    by the design's size, toolchain.ToolError when a tool is missing."""
+    module = top_name(name, params)
+    syn, netlist, packed, cells, res = counts(name, params, prt, progress)
+    if progress:
+        progress(f"{module}: nextpnr on {prt.name}, seed{'s' * (len(seeds) > 1)} {', '.join(map(str, seeds))}")
 
     def one(seed):
         if progress:

@@ -35,3 +35,12 @@ def test_paper_column():
     assert {s.paper for s in catalog.SYNTHESIZED if s.paper} <= set(catalog.PAPER.values())
     with pytest.raises(KeyError, match="no parameter set 'nope'"):
         catalog.get("nope")
+
+
+def test_timing_goals_are_valid_tops():
+    """Issue 17's timing-closure rows (make bench places them): each a buildable top, named once."""
+    modules = [emit.top_name(g.top, g.params) for g in catalog.TIMING_GOALS]
+    assert len(modules) == len(set(modules)), "a timing goal listed twice"
+    for g in catalog.TIMING_GOALS:
+        assert g.top in emit.TOPS and g.goal_mhz > 0 and g.seeds >= 1 and g.router in ("router1", "router2"), g
+        emit.manifest(g.top, g.params)          # builds the component: its own checks pass

@@ -44,3 +44,21 @@ def test_previous_report_reads_the_jobs_table_only(tmp_path):
     assert [(x["core"], x["job"], x["cycles"], x["sw_seconds"]) for x in r["rows"]] == [
         ("dflc", "one sample", 4, 30.2e-3), ("edt_bfs", "room 8x8", 95, None)]
     assert r["hardware"][-1].startswith("| harmonic_node |")
+
+
+def test_kept_blocks_survive_a_rewrite():
+    """A hand-written block (`make fit` runs with their history) comes back, once, at the end of its
+    section, when the report is rewritten without it; one whose section is gone goes to the end."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import kept
+    block = f"{kept.OPEN}\n### Timing closure\n\n| top | now |\n|---|---|\n| node | 318.8 MHz |\n{kept.CLOSE}\n"
+    other = f"{kept.OPEN}\nThe engines placed before and after.\n{kept.CLOSE}\n"
+    old = REPORT + "\n" + block + "\n## Tiles\n\nA table.\n\n" + other + "\nBench run time: 9 s.\n"
+    assert [t for t, _ in kept.blocks(old)] == ["Jobs: hardware time against the software a user would pick",
+                                                "Tiles"]
+    new = REPORT + "\n## Simulation speed\n\nRates.\n\nBench run time: 10 s.\n"     # no Tiles section
+    out = kept.carry(new, old)
+    assert out.count(block) == 1 and out.count(other) == 1
+    assert out.index("| dflc_stream_table1 | yes") < out.index(block) < out.index("## Simulation speed")
+    assert out.index("Rates.") < out.index(other) < out.index("Bench run time: 10 s.")
+    assert kept.carry(out, old) == out                     # carried once: a second rewrite adds nothing
