@@ -85,6 +85,7 @@ from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 OUT = ROOT / "build" / "bench"
 PERIOD_NS = 10                  # every cocotb bench here clocks at 10 ns
 HX8K_LCS = 7680
+LFE5U_85F_LUT4 = 83_640         # its TRELLIS_COMB (nextpnr's utilisation): a larger top is not synthesized for it
 CLOCK_PART = fmax_mod.part("iCE40-HX8K")     # the part of the clock column
 PY = sys.executable
 PARTS = ("hardware", "timing", "harmonic", "dflc", "edt", "simspeed", "study", "boards")
@@ -144,10 +145,14 @@ def place(top, lut4):
                     f"{len(r['seeds'])} seeds", "utilization": util}
 
 
-def ecp5_counts(top):
+def ecp5_counts(top, lut4):
     """The cells of ``top`` after the ECP5 synthesis `make fit` places (the
-    same cached run): {lut4, ff, bram, dsp}, or {error}."""
+    same cached run): {lut4, ff, bram, dsp}, or {error}; not run when its
+    xc2v ``lut4`` count is beyond the LFE5U-85F (the 16x16 EDT array: its
+    synthesis alone would take most of the bench's time)."""
     key, core, name, params, *_ = top
+    if lut4 is not None and lut4 > LFE5U_85F_LUT4:
+        return {"error": f"not synthesized: {lut4:,} xc2v LUT4, beyond the {JOB_PART.name}'s {LFE5U_85F_LUT4:,}"}
     log(f"synth_ecp5 {top_name(name, params)}")
     try:
         return fmax_mod.counts(name, params, JOB_PART)[4]
@@ -159,7 +164,7 @@ def hardware(jobs=2):
     """{key: {ff, lut4, mult, bram, fmax_mhz, ecp5, ...}} for every top of TOPS."""
     def one(top):
         s = synthesize(top)
-        return {**s, "ecp5": ecp5_counts(top), **place(top, s.get("lut4"))}
+        return {**s, "ecp5": ecp5_counts(top, s.get("lut4")), **place(top, s.get("lut4"))}
     with ThreadPoolExecutor(max_workers=jobs) as pool:
         return dict(zip([t[0] for t in TOPS], pool.map(one, TOPS)))
 
