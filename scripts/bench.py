@@ -13,7 +13,13 @@ by this run on this machine; only the papers' column is copied.
    Spartan.  A top whose xc2v LUT4 count exceeds the HX8K's 7680 logic
    cells is not placed ("does not fit").  The EDT/BFS
    arrays are synthesized with their hierarchy kept (the cell module once,
-   counted per instance), the other tops flattened.
+   counted per instance), the other tops flattened.  Beside them each top's
+   ECP5 cells after the ``synth_ecp5`` that ``make fit`` places.
+   *timing*: issue 17's timing-closure table, the tops of
+   hdl/catalog.TIMING_GOALS placed on the LFE5U-85F (the fit flow, their
+   goal's seeds and router) against their goals, with the path that
+   remains.  Hand-written sections of earlier ``make fit`` runs (their
+   commands and commits in the text) are carried verbatim (scripts/kept.py).
 2. Cycles per job, from simulations: the cluster RTL's cycles per iteration
    at p = 128 (tb/harmonic/iteration_job.py), the `python -m sim` commands'
    RTL engines (planner, DFLC stream, EDT/BFS array) on Icarus and Verilator,
@@ -677,7 +683,7 @@ def markdown(data, hw, extra):
                   "|---|---|---|---|---|---|---|---|---|"]
         for t in timing:
             met = t["fmax_mhz"] is not None and t["fmax_mhz"] >= t["goal_mhz"]
-            now = _fmt(t["fmax_mhz"]) if t["fmax_mhz"] else (t.get("why") or "—")
+            now = f"{t['fmax_mhz']:.1f}" if t["fmax_mhz"] else (t.get("why") or "—")
             seeds = ", ".join(f"{x['fmax_mhz']:.1f}" for x in t.get("seeds", [])) or "—"
             if t.get("router", "router1") != "router1":
                 seeds += f" ({t['router']})"
@@ -987,9 +993,10 @@ def previous_report(path):
                          "sw_seconds": _seconds(cells["software time"]), "speedup": None,
                          "paper": cells["paper"], "note": _CARRIED.format(date=date), "carried_from": date})
     extra = []              # the study sections (titles as study_sections() writes them)
+    studies = set(_titles().values())
     for part in text.split("\n## ")[1:]:
         title, _, body = part.partition("\n")
-        if title.startswith("Harmonic planner"):
+        if title in studies:
             body = body.strip("\n")
             if body.startswith("(Not measured by this run"):
                 body = body.split("\n\n", 1)[1] if "\n\n" in body else ""
