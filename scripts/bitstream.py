@@ -175,6 +175,7 @@ def build(board, core, baud=115200, seed=1, out=None, progress=None):
     if packed.returncode or not (packed.dir / f"top{suffix}").exists():
         raise fmax.FlowError(f"{packer} failed: {(packed.text('stderr.txt').strip() or 'no output')[-200:]}")
     out = Path(out or ROOT / "build" / "bitstream")
+    out.mkdir(parents=True, exist_ok=True)         # make bench's folder is new in a fresh clone
     dest = out / f"{_name(board, core, baud)}{suffix}"
     tmp = dest.with_name(f".{dest.name}.{os.getpid()}")
     tmp.write_bytes((packed.dir / f"top{suffix}").read_bytes())
