@@ -74,8 +74,8 @@ from navcores.models.maps import load_map, longest_scenario  # noqa: E402
 
 MAPS = ("maze512-1-0", "den312d", "room-64-64-8", "random-64-64-10", "room-64-64-8x4")
 ARRAYS = ((8, 8), (16, 16))
-# make bench: also the smallest array and the largest that may fit the LFE5U-85F (hdl/edt_bfs/README.md)
-BENCH_ARRAYS = ((4, 4), (6, 6), (8, 8), (16, 16))
+# make bench: also the smallest array, 4x8 (the largest placed and routed on the LFE5U-85F) and 6x6 (hdl/edt_bfs/README.md)
+BENCH_ARRAYS = ((4, 4), (4, 8), (6, 6), (8, 8), (16, 16))
 DFAR = 0
 PART = "LFE5U-85F"
 RAMS = ((128, 128), (224, 224))     # the fitted engines' RAMs, smallest first (module docstring)
