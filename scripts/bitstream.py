@@ -107,7 +107,9 @@ def elaborate(board, core, baud):
         _fail("amaranth-boards is not installed: pip install -e '.[fpga]' (make bitstream does it)")
     top = BoardTop(board, core, baud, **CONFIGS[board, core])
     extra = {name: verilog_text(sub, name) for name, sub in top.top.instance_modules().items()}
-    plan = platform.prepare(top, name="top")
+    # No source locations: they hold this clone's absolute paths, so the RTLIL
+    # (and the cached synthesis keyed by its content) would differ between clones.
+    plan = platform.prepare(top, name="top", emit_src=False)
     return b, top, plan, extra
 
 

@@ -272,6 +272,14 @@ def shortfall(r):
     return f"no legal placement, {name} {used:,}/{available:,} ({100 * used / available:.0f} %)"
 
 
+def _does_not_fit(run):
+    """Whether a failed nextpnr Run failed by the design's size (a resource
+    beyond the part, or no legal placement): a result, kept in the cache."""
+    log = run.text("nextpnr.log")
+    return (any(u > a for u, a in utilisation(log).values())
+            or UNPLACEABLE in log + run.text("stderr.txt"))
+
+
 def place(netlist, prt, seed, progress=None, router="router1"):
     """One nextpnr run of ``netlist`` on ``prt`` with ``seed``: a dict with
     seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow
@@ -288,7 +296,7 @@ def place(netlist, prt, seed, progress=None, router="router1"):
     args = [*prt.device_args, "--json", "{netlist}", pin_flag, "--seed", str(seed),
             "--freq", str(prt.target_mhz), "--timing-allow-fail", "--report", "report.json",
             "--log", "nextpnr.log", "-q", *(("--router", router) if router != "router1" else ())]
-    run = toolchain.run(prt.nextpnr, args, {"netlist": netlist}, progress)
+    run = toolchain.run(prt.nextpnr, args, {"netlist": netlist}, progress, result_failure=_does_not_fit)
     log = run.text("nextpnr.log")
     util = utilisation(log)
     out = {"seed": seed, "seconds": run.seconds, "cached": run.cached, "version": run.version,

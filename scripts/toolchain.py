@@ -165,7 +165,7 @@ class Run:
         return path.read_text(errors="replace") if path.exists() else ""
 
 
-def run(tool, args, inputs=None, progress=None):
+def run(tool, args, inputs=None, progress=None, result_failure=None):
     """Run ``tool`` with ``args`` in a fresh directory, or find that run in the cache.
 
     ``inputs`` maps placeholder names to files: ``{name}`` in an argument
@@ -174,9 +174,12 @@ def run(tool, args, inputs=None, progress=None):
     would not reach the file), and the key holds the file's content, not its
     path.  Outputs are written relative to the run directory (the working
     directory of the tool); stdout and stderr land in stdout.txt and
-    stderr.txt.  Only successful runs are cached: a failure (a design that
-    does not fit stops early) runs again, so that no failure of the
-    environment is kept."""
+    stderr.txt.  Only successful runs are cached: a failure runs again, so
+    that no failure of the environment is kept, unless ``result_failure``
+    (a function of the failed Run) says the stored failure is the design's
+    own (a netlist that does not fit the part: nextpnr-ice40 takes 18 minutes
+    to find that the 2x2 planner has no legal placement on the HX8K, the same
+    18 on every run)."""
     inputs = {k: Path(v).resolve() for k, v in (inputs or {}).items()}
     version = prepare(tool, progress)
     key_text = json.dumps({"tool": tool, "version": version, "args": list(map(str, args)),
@@ -187,6 +190,12 @@ def run(tool, args, inputs=None, progress=None):
     if meta.exists():
         m = json.loads(meta.read_text())
         return Run(final, m["returncode"], m["seconds"], True, version)
+    failed = RESULTS / tool / f"failed-{key}"
+    if result_failure and (failed / "run.json").exists() and (failed / "key.json").exists():
+        m = json.loads((failed / "run.json").read_text())
+        stored = Run(failed, m["returncode"], m["seconds"], True, version)
+        if result_failure(stored):
+            return stored
     work = RESULTS / tool / f".{key}.{os.getpid()}.{time.monotonic_ns()}"
     work.mkdir(parents=True)
     concrete = [str(a).format(**{k: os.path.relpath(p, work) for k, p in inputs.items()}) for a in args]
@@ -205,8 +214,7 @@ def run(tool, args, inputs=None, progress=None):
     (work / "key.json").write_text(key_text + "\n")
     (work / "run.json").write_text(json.dumps({"returncode": res.returncode, "seconds": seconds,
                                                "argv": concrete}))
-    if res.returncode:          # kept for reading, replaced by the next run
-        failed = RESULTS / tool / f"failed-{key}"
+    if res.returncode:          # kept for reading (and result_failure), replaced by the next run
         shutil.rmtree(failed, ignore_errors=True)
         try:
             work.rename(failed)

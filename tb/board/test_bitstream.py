@@ -80,3 +80,17 @@ def test_refusals(tmp_path, args, says):
     assert r.returncode == 2 and r.stdout == "", (r.returncode, r.stdout)
     assert len(r.stderr.splitlines()) == 1 and says in r.stderr, r.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_design_files_name_no_clone():
+    """The files the synthesis reads (the board top's RTLIL, the Verilog of
+    the modules it instantiates) hold no path of this clone: the cache keys
+    a synthesis by their content, so a fresh clone of the same commit finds
+    the bitstream built here (the EDT/BFS one takes 20 minutes)."""
+    r = subprocess.run([sys.executable, "-c", "import sys; sys.path.insert(0, 'scripts'); import bitstream; "
+                        "b, top, plan, extra = bitstream.elaborate('ulx3s-85f', 'dflc', 115200); "
+                        "print('\\n'.join([*plan.files.values(), *extra.values()]))"],
+                       capture_output=True, text=True, cwd=ROOT, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "module" in r.stdout or "attribute" in r.stdout
+    assert str(ROOT) not in r.stdout and "site-packages" not in r.stdout

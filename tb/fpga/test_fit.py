@@ -157,3 +157,34 @@ def test_unplaceable_does_not_fit(tmp_path, monkeypatch, log, fits_reason):
     assert r["utilisation"]["TRELLIS_COMB"] == [76611, 83640]
     assert fmax.shortfall(r) == fits_reason
     assert fmax.shortfall({**r, "overflow": [{"resource": "DP16KD", "used": 210, "available": 208}]}) == "DP16KD 210/208"
+
+
+@pytest.mark.parametrize("log,kept", [
+    (UNPLACEABLE_LOG, True),
+    (UNPLACEABLE_LOG.replace("76611/  83640", "90000/  83640").replace(
+        "Unable to find legal placement for all cells", "Unable to place cell 'x'"), True),
+    (UNPLACEABLE_LOG.replace("Unable to find legal placement for all cells", "Something else broke"), False),
+], ids=["unplaceable", "overflow", "other-error"])
+def test_failure_by_size_is_cached(tmp_path, monkeypatch, log, kept):
+    """A nextpnr run that fails because the design does not fit the part is
+    a result: the next identical run reads it from the cache instead of
+    placing again (18 minutes for the 2x2 planner on the HX8K); any other
+    failure runs again.  The tool here is a stand-in that writes ``log``
+    and counts its runs."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import fmax
+    import toolchain
+    monkeypatch.setattr(toolchain, "RESULTS", tmp_path / "cache")
+    monkeypatch.setattr(toolchain, "prepare", lambda tool, progress=None: f"{tool} stand-in")
+    runs = tmp_path / "runs"
+    script = (f"import sys; open({str(runs)!r}, 'a').write('x'); open('nextpnr.log', 'w').write({log!r}); "
+              "sys.exit(255)")
+    monkeypatch.setattr(toolchain, "argv", lambda tool, args=(): [sys.executable, "-c", script])
+    netlist = tmp_path / "netlist.json"
+    netlist.write_text("{}")
+    for _ in range(2):
+        try:
+            fmax.place(netlist, fmax.part("LFE5U-85F"), 1)
+        except fmax.FlowError:
+            assert not kept
+    assert runs.read_text() == ("x" if kept else "xx")
