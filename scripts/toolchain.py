@@ -198,7 +198,10 @@ def run(tool, args, inputs=None, progress=None, result_failure=None):
             return stored
     work = RESULTS / tool / f".{key}.{os.getpid()}.{time.monotonic_ns()}"
     work.mkdir(parents=True)
-    concrete = [str(a).format(**{k: os.path.relpath(p, work) for k, p in inputs.items()}) for a in args]
+    # Relative to the run directory's real place: build/cache may be a link to another clone's
+    # (shared tool results), and the tool resolves ".." from where the directory really is.
+    real = work.resolve()
+    concrete = [str(a).format(**{k: os.path.relpath(p, real) for k, p in inputs.items()}) for a in args]
     t0 = time.monotonic()
     try:
         with open(work / "stdout.txt", "w") as out, open(work / "stderr.txt", "w") as err:
