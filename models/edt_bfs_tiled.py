@@ -258,13 +258,21 @@ def largest_map(blocks=LFE5U_85F_EBR, word_pixels=8):
     return n
 
 
+# The fields a visit of each phase reads and writes (pixel fields of state_bits).  An EDT visit
+# needs its window's di (done, obstacle) and nearest-obstacle vectors (eq. 3-4 of paper 004) and
+# writes them; a BFS visit needs di (the cfr: di > d_far) and the hop counts, and writes hop and
+# parent, so it reads the parents it writes back unchanged.  The tile engine's read commands name
+# these groups (hdl/edt_bfs/state_ram.read_layout), so an external store moves only them.
+PHASE_READS = {"edt": ("di", "dx", "dy"), "bfs": ("di", "hop", "parent")}
+PHASE_WRITES = {"edt": ("di", "dx", "dy"), "bfs": ("hop", "parent")}
+
+
 def _store_bits_min(counts, height, width):
     """The least a state store moves in a job: every visit reads its window's pixels (the tile and its
-    halo inside the map, every field) and writes its tile's pixels (the phase's field group only)."""
+    halo inside the map, the phase's PHASE_READS) and writes its tile's pixels (its PHASE_WRITES)."""
     f = state_bits(height, width)["fields"]
-    return (counts["pixels_read"] * sum(f.values())
-            + counts["pixels_written_edt"] * (f["di"] + f["dx"] + f["dy"])
-            + counts["pixels_written_bfs"] * (f["hop"] + f["parent"]))
+    return sum(counts[f"pixels_read_{ph}"] * sum(f[k] for k in PHASE_READS[ph])
+               + counts[f"pixels_written_{ph}"] * sum(f[k] for k in PHASE_WRITES[ph]) for ph in ("edt", "bfs"))
 
 
 @dataclass
@@ -275,9 +283,10 @@ class EdtBfsTiledResult(EdtBfsResult):
     the counts: levels, visits and array iterations per phase, words read
     and written, the floor, marks, the cycle breakdown; pixels read (the
     visits' windows inside the map) and written (their tiles, per phase)
-    and ``store_bits_min``, the bits a state store moves at least (every
-    field of a window pixel read, the phase's fields of a tile pixel
-    written): the bandwidth an external store needs.
+    and ``store_bits_min``, the bits a state store moves at least (the
+    phase's :data:`PHASE_READS` of a window pixel read, its
+    :data:`PHASE_WRITES` of a tile pixel written): the bandwidth an
+    external store needs.
     """
     hop: np.ndarray = None          # H x W int: BFS hop count, -1 not visited
     array: tuple = (0, 0)           # (T_r, T_c)
@@ -460,7 +469,8 @@ class TileEngine:
         self.visits = np.zeros(g.tiles, dtype=np.int64)      # per tile, EDT + BFS
         self.counts = {"levels": 0, "visits_edt": 0, "visits_bfs": 0, "array_iterations_edt": 0,
                        "array_iterations_bfs": 0, "words_read": 0, "words_written": 0, "marks": 0,
-                       "pixels_read": 0, "pixels_written_edt": 0, "pixels_written_bfs": 0}
+                       "pixels_read_edt": 0, "pixels_read_bfs": 0, "pixels_written_edt": 0,
+                       "pixels_written_bfs": 0}
         self.cycles = {"load": g.h * -(-g.w // g.p), "scan": g.tiles, "edt": 0, "goals": 0,
                        "bfs": 0, "path": 0, "readout": 0}
         self.trace = []          # every visit in order: (phase, level (0 in the BFS), tile, iterations, marks)
@@ -477,7 +487,7 @@ class TileEngine:
         self.counts[f"array_iterations_{phase}"] += iterations
         self.counts["words_read"] += int(g.read_words[t])
         self.counts["words_written"] += int(g.write_words[t])
-        self.counts["pixels_read"] += int(g.read_px[t])
+        self.counts[f"pixels_read_{phase}"] += int(g.read_px[t])
         self.counts[f"pixels_written_{phase}"] += int(g.write_px[t])
         self.counts["marks"] += marks
         self.cycles[phase] += (tm.sched + tm.latency + int(g.read_beats[t]) + iterations

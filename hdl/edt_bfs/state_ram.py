@@ -14,8 +14,13 @@ BANKS = 3       # word columns w - 1, w, w + 1 are in three different banks: a w
 
 
 def read_layout(w):
-    """A read command: word column ``wcol`` of map row ``row``."""
-    return data.StructLayout({"row": w["row"], "wcol": range(w["words"])})
+    """A read command: word column ``wcol`` of map row ``row``; ``di``, ``nnt``
+    (dx, dy) and ``bfs`` (hop, parent) name the fields the answer must hold
+    (models.edt_bfs_tiled.PHASE_READS: an EDT visit asks for di and nnt, a BFS
+    visit for di and bfs, the goals for di and bfs, the path and the map
+    read-out for all): the others may be anything, so a store that moves
+    only these saves bandwidth (an external one); :class:`StateRam` reads all."""
+    return data.StructLayout({"row": w["row"], "wcol": range(w["words"]), "di": 1, "nnt": 1, "bfs": 1})
 
 
 def read_data_layout(w, p):

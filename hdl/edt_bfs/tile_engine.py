@@ -607,18 +607,20 @@ class TileEngine(wiring.Component):
         rd, wr = mem.rd.payload, mem.wr.payload
         with m.If(at["READ"]):
             m.d.comb += [mem.rd.valid.eq(rows_left != 0), rd.row.eq(rd_row), rd.wcol.eq(vt.c),
-                         mem.rd_data.ready.eq(1)]
+                         rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs), mem.rd_data.ready.eq(1)]
         with m.Elif(at["GOAL0"]):
-            m.d.comb += [mem.rd.valid.eq(self.g_stream.valid), rd.row.eq(gp.row), rd.wcol.eq(g_wcol)]
+            m.d.comb += [mem.rd.valid.eq(self.g_stream.valid), rd.row.eq(gp.row), rd.wcol.eq(g_wcol),
+                         rd.di.eq(1), rd.bfs.eq(1)]
         with m.Elif(at["GOAL1"]):
             m.d.comb += mem.rd_data.ready.eq(mem.wr.ready)
         with m.Elif(at["PATH"]):
             pos = named(m, "path_pos", Mux(advance, nxt.as_value(), cur.as_value()), goal_layout(w))
             m.d.comb += [mem.rd.valid.eq(p_need | advance), rd.row.eq(pos.row),
-                         rd.wcol.eq(Mux(advance, nxt_w, cur_w)),
+                         rd.wcol.eq(Mux(advance, nxt_w, cur_w)), rd.di.eq(1), rd.nnt.eq(1), rd.bfs.eq(1),
                          mem.rd_data.ready.eq(no_path | self.o_stream.ready)]
         with m.Elif(at["READOUT"]):
             m.d.comb += [mem.rd.valid.eq(rr_more), rd.row.eq(rr_row), rd.wcol.eq(rr_w),
+                         rd.di.eq(1), rd.nnt.eq(1), rd.bfs.eq(1),
                          mem.rd_data.ready.eq(self.o_stream.ready & word_end)]
         with m.If(at["LOAD"]):
             m.d.comb += [mem.wr.valid.eq(self.m_stream.valid), wr.row.eq(lr), wr.wcol.eq(lw),

@@ -16,6 +16,8 @@ nothing more, so a test on it shows the engine relies on nothing more:
   edge pixels beside it;
 * a word never written (outside the map of every job so far, or beyond the
   widest map) reads as random bits: the engine must gate such pixels;
+* the fields a read command does not ask for (its ``di`` / ``nnt`` /
+  ``bfs`` bits) read as random bits: the engine must not use them;
 * with :meth:`set_timing` ``latency`` 2 and no stalls it is
   :class:`~hdl.edt_bfs.state_ram.StateRam`'s timing (answers two cycles
   after the command, always ready), the cycle model's; ``extra`` adds a
@@ -49,15 +51,18 @@ class StateStore:
         wl = write_layout(w, p)
         self._wf = {name: (wl[name].offset, wl[name].width) for name in ("row", "wcol", "edt", "bfs", "word")}
         rl = read_layout(w)
-        self._rf = {name: (rl[name].offset, rl[name].width) for name in ("row", "wcol")}
+        self._rf = {name: (rl[name].offset, rl[name].width) for name in ("row", "wcol", "di", "nnt", "bfs")}
         dl = read_data_layout(w, p)
         self._word_at, self._right_at = dl["word"].offset, dl["right"].offset
         assert dl["left"].offset == 0
 
-        def group_mask(fields):
+        def group_mask(fields, pixels=p):
             one = sum(((1 << px[f].width) - 1) << px[f].offset for f in fields)
-            return sum(one << (j * px.size) for j in range(p))
+            return sum(one << (j * px.size) for j in range(pixels))
         self._mask = {"edt": group_mask(EDT_FIELDS), "bfs": group_mask(BFS_FIELDS)}
+        # the fields of a read command's groups, over the answer's p + 2 pixels (left, word, right)
+        self._read_mask = {g: group_mask(fields, p + 2)
+                           for g, fields in (("di", ("di",)), ("nnt", ("dx", "dy")), ("bfs", BFS_FIELDS))}
         self.words = {}
         self._pending_writes = []               # (cycle, row, wcol, edt, bfs, word) not applied yet
         self._due = []                          # cycle each queued answer may be presented from
@@ -121,6 +126,9 @@ class StateStore:
         left = self._word(row, wcol - 1) >> last if wcol > 0 else self.rng.getrandbits(self.px)
         right = self._word(row, wcol + 1) & ((1 << self.px) - 1)
         answer = left | (self._word(row, wcol) << self._word_at) | (right << self._right_at)
+        # the fields the command does not ask for are don't-care: random, so the engine's use of one fails
+        asked = sum(m for g, m in self._read_mask.items() if self._field(value, self._rf[g]))
+        answer = (answer & asked) | (self.rng.getrandbits(self.px * (self.p + 2)) & ~asked)
         delay = self.latency
         while self.extra and self.rng.random() < self.extra:
             delay += 1

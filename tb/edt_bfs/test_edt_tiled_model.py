@@ -299,10 +299,10 @@ def test_cycle_model_brute_force():
         nc = -(-w // tc)
         cyc = {"edt": 0, "bfs": 0}
         read = written = 0
-        px = {"read": 0, "edt": 0, "bfs": 0}           # map pixels of the windows read, the tiles written
+        px = {"read_edt": 0, "read_bfs": 0, "edt": 0, "bfs": 0}    # map pixels of the windows read, the tiles written
         for phase, _, t, iterations, marks in res.trace:
             r0, c0 = t // nc * tr, t % nc * tc
-            px["read"] += _brute_inside(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w)
+            px[f"read_{phase}"] += _brute_inside(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w)
             px[phase] += _brute_inside(range(r0, r0 + tr), range(c0, c0 + tc), h, w)
             rw, rb = _brute_beats(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w, p, banks)
             ww, wb = _brute_beats(range(r0, r0 + tr), range(c0, c0 + tc), h, w, p, banks)
@@ -316,10 +316,12 @@ def test_cycle_model_brute_force():
         assert res.stats["cycles"]["edt"] == cyc["edt"] and res.stats["cycles"]["bfs"] == cyc["bfs"]
         assert res.cycles == total
         assert res.stats["words_floor"] == 2 * len(res.trace) * -(-tr * tc // p)
-        assert (res.stats["pixels_read"], res.stats["pixels_written_edt"], res.stats["pixels_written_bfs"]) == \
-            (px["read"], px["edt"], px["bfs"])
+        assert (res.stats["pixels_read_edt"], res.stats["pixels_read_bfs"], res.stats["pixels_written_edt"],
+                res.stats["pixels_written_bfs"]) == (px["read_edt"], px["read_bfs"], px["edt"], px["bfs"])
         f = state_bits(h, w)["fields"]
-        assert res.stats["store_bits_min"] == (px["read"] * sum(f.values()) + px["edt"] * (f["di"] + f["dx"] + f["dy"])
+        # EDT reads and writes di, dx, dy; BFS reads di, hop, parent and writes hop, parent
+        assert res.stats["store_bits_min"] == ((px["read_edt"] + px["edt"]) * (f["di"] + f["dx"] + f["dy"])
+                                               + px["read_bfs"] * (f["di"] + f["hop"] + f["parent"])
                                                + px["bfs"] * (f["hop"] + f["parent"]))
 
 
