@@ -320,8 +320,9 @@ def section(maps=MAPS, arrays=ARRAYS):
             + ", ".join(f"{r[0]}x{r[1]}" for r in RAMS) + " that holds the map; an array that does not fit "
             f"the {PART} or was not placed has no job time; maze512-1-0's state does not fit the part's block "
             "RAM: it runs on the engine with an external store (store=external, RAM 512x512, its own clock); its "
-            "time (marked ext.) assumes a store of StateRam's timing, with the floor of the same transfers through "
-            "a 16-bit SDRAM at its peak beside it (no SDRAM controller is built).\n\n" + text)
+            "time (marked ext.) assumes a store of StateRam's timing, with the floor of the same transfers (each visit "
+            "reads its phase's fields of its window, models.edt_bfs_tiled.PHASE_READS, and writes its tile's) "
+            "through a 16-bit SDRAM at its peak beside it (no SDRAM controller is built).\n\n" + text)
     return text
 
 
