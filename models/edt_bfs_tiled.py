@@ -259,7 +259,7 @@ def largest_map(blocks=LFE5U_85F_EBR, word_pixels=8):
 
 
 # The fields a visit of each phase reads and writes (pixel fields of state_bits).  An EDT visit
-# needs its window's di (done, obstacle) and nearest-obstacle vectors (eq. 3-4 of paper 004) and
+# needs its window's di (done, obstacle) and nearest-obstacle vectors (paper 004, eq. 1-3) and
 # writes them; a BFS visit needs di (the cfr: di > d_far) and the hop counts, and writes hop and
 # parent, so it reads the parents it writes back unchanged.  The tile engine's read commands name
 # these groups (hdl/edt_bfs/state_ram.read_layout), so an external store moves only them.
