@@ -951,6 +951,12 @@ def carry(r):
     unchanged) when the row names its top, else none."""
     r = dict(r)
     top = r.pop("job_top", None)
+    if r.get("fits") is False:
+        # The run before found the top beyond the part, or did not place it at all (a harmonic block
+        # with at least HARMONIC_UNROUTED's nodes: hours of place and route that do not route): its
+        # verdict stands; fitting it here would undo that.
+        return {**r, "fmax_mhz": None, "hw_seconds": None, "speedup": None,
+                "note": "; ".join(x for x in (f"carried from the run of {r['carried_from']}", r.get("note")) if x)}
     if top is None:
         return {**r, "fmax_mhz": None, "hw_seconds": None, "speedup": None,
                 "note": _CARRIED.format(date=r["carried_from"])}

@@ -62,3 +62,18 @@ def test_kept_blocks_survive_a_rewrite():
     assert out.index("| dflc_stream_table1 | yes") < out.index(block) < out.index("## Simulation speed")
     assert out.index("Rates.") < out.index(other) < out.index("Bench run time: 10 s.")
     assert kept.carry(out, old) == out                     # carried once: a second rewrite adds nothing
+
+
+def test_carried_job_that_did_not_fit_is_not_placed(monkeypatch):
+    """A partial run carries the jobs of the run before; a job whose top did not fit there (or was not
+    placed: the 66x36 harmonic block, hours of place and route) keeps that verdict: no fit is started."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import bench
+    monkeypatch.setattr(bench, "job_clock", lambda *a, **k: (_ for _ in ()).throw(AssertionError("fit started")))
+    old = {"core": "harmonic", "job": "converged field, maze512", "top": "harmonic_block_m66_n36", "fits": False,
+           "fmax_mhz": None, "cycles": 10, "note": "does not fit the LFE5U-85F: not placed",
+           "job_top": ("harmonic_block", {"n": 36, "m": 66}), "carried_from": "2026-12-05 09:36 UTC"}
+    r = bench.carry(old)
+    assert (r["fits"], r["fmax_mhz"], r["hw_seconds"], r["cycles"]) == (False, None, None, 10)
+    assert r["note"] == "carried from the run of 2026-12-05 09:36 UTC; does not fit the LFE5U-85F: not placed"
+    assert "job_top" not in r
