@@ -304,14 +304,14 @@ def place(netlist, prt, seed, progress=None, router="router1"):
     if run.returncode:
         over = {k: v for k, v in util.items() if v[0] > v[1]}
         error = _error_line(log + run.text("stderr.txt"), prt.nextpnr)
+        if not _does_not_fit(run):
+            raise FlowError(f"{prt.nextpnr} failed: {error} (see {run.dir})")
         out["overflow"] = [{"resource": k, "used": u, "available": a} for k, (u, a) in over.items()]
-        if not over and UNPLACEABLE in error:
+        if not over:
             # Every resource is within the part, yet nextpnr finds no legal
             # placement (the 7x7 EDT/BFS tile engine at 92 % of TRELLIS_COMB):
             # at the part's limit, so it does not fit; no resource overflowed.
             out["unplaceable"] = error
-        elif not over:
-            raise FlowError(f"{prt.nextpnr} failed: {error} (see {run.dir})")
         return out
     report = json.loads(run.text("report.json"))
     out["fmax_mhz"] = round(min(c["achieved"] for c in report["fmax"].values()), 2)
