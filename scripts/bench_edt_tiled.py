@@ -19,7 +19,9 @@ on the same machine in the same run: scipy.ndimage.distance_transform_edt
 
 Clock: the tile engine's own, from place and route on the LFE5U-85F
 (``make fit TOP=edt_tile_engine PARAMS="t_r=R t_c=C max_h=H max_w=W"
-PART=lfe5u-85f``: build/fit/<module>--LFE5U-85F.json, read here), of the
+PART=lfe5u-85f``: build/fit/<module>--LFE5U-85F.json, read here only when
+its verilog_sha256 is the hash of the top's Verilog emitted now, else it is
+stale: not used, said on stderr with the command to re-run), of the
 engine that runs the job: the smallest of RAMS (128x128, 224x224) that
 holds the map (the cell's widths, hence its clock, follow the RAM's map
 size).  224x224 is the largest: with 256x256 the engine needs 210 of the part's 208 EBRs
@@ -52,6 +54,7 @@ it); `comparison()` returns (its tables, rows as a list of dicts).
 """
 
 import argparse
+import functools
 import json
 import os
 import re
@@ -66,6 +69,7 @@ import numpy as np  # noqa: E402
 import fmax  # noqa: E402
 import kept  # noqa: E402
 import software  # noqa: E402
+import toolchain  # noqa: E402
 from navcores.models.edt_bfs_tiled import (EBR_BITS, LFE5U_85F_EBR, largest_map, plan_path_tiled,  # noqa: E402
                                   ram_blocks, state_bits)
 from navcores.hdl.catalog import PAPER_JOBS  # noqa: E402
@@ -110,11 +114,45 @@ def engine_ram(h, w):
 
 def fit_result(array, ram=RAM, part=PART, top="edt_tile_engine", store="bram"):
     """The fit flow's JSON for ``top`` (the tile engine, or its cell alone: ``edt_tile_cell``, from
-    scripts/tile_engine_size.py --cell-fit) with ``array``, ``ram`` and ``store`` on ``part``, or None."""
+    scripts/tile_engine_size.py --cell-fit) with ``array``, ``ram`` and ``store`` on ``part``, or None:
+    None too when it is stale, its verilog_sha256 (absent: stale) not the hash of the top's Verilog
+    emitted now (one line on stderr says so, with the command that places it again)."""
     params = {"t_r": array[0], "t_c": array[1], "max_h": ram[0], "max_w": ram[1],
               **({"store": store} if store != "bram" else {})}
     path = ROOT / "build" / "fit" / f"{top_name(top, params)}--{part}.json"
-    return json.loads(path.read_text()) if path.exists() else None
+    if not path.exists():
+        return None
+    fit = json.loads(path.read_text())
+    if fit.get("verilog_sha256") != verilog_sha256(top, tuple(sorted(params.items())), part):
+        again = fit.get("generator") or (
+            f"python scripts/tile_engine_size.py --cell-fit {array[0]}x{array[1]}:{ram[0]}x{ram[1]}"
+            if top == "edt_tile_cell" else
+            " ".join(["python scripts/fit.py", top, *(f"{k}={v}" for k, v in sorted(params.items())), "--part", part]))
+        why = (f"its verilog_sha256 is not that of {top}'s Verilog now" if "verilog_sha256" in fit else
+               "it records no verilog_sha256 to check against the Verilog now")
+        warning = f"bench_edt_tiled: stale fit {os.path.relpath(path, ROOT)} ({why}), not used; re-run `{again}`"
+        if warning not in _WARNED:          # once a run (fit_result is asked again for each map)
+            _WARNED.add(warning)
+            print(warning, file=sys.stderr, flush=True)
+        return None
+    return fit
+
+
+_WARNED = set()
+
+
+@functools.lru_cache(maxsize=None)
+def verilog_sha256(top, params, part):
+    """The toolchain.digest of ``top``'s Verilog at ``params`` (sorted (name, value) pairs) emitted now
+    as the fit flow emits it (fmax.emitted; the cell alone: tile_engine_size.cell_verilog): what a
+    current fit JSON records.  Once a run: an engine takes seconds to elaborate."""
+    prt = fmax.part(part)
+    if top == "edt_tile_cell":
+        import tile_engine_size
+        source = tile_engine_size.cell_verilog(dict(params), prt)
+    else:
+        source = fmax.emitted(top, dict(params), prt)
+    return toolchain.digest(source)
 
 
 def cell_bound(arrays):

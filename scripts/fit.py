@@ -9,6 +9,8 @@ and routes it with nextpnr once per seed (both from PyPI, scripts/toolchain.py;
 results cached under build/cache), and writes ``build/fit/<module>--<part>.json``:
 
   module, top, params, part, family, package, speed_grade, board
+  verilog_sha256  SHA-256 of the top's emitted Verilog that was placed (fmax.emitted):
+                  a reader checks the JSON is of the Verilog it emits now
   fits            bool; when false, overflow lists what the part lacks, or
                   is empty and unplaceable holds nextpnr's error (every
                   resource within the part, but the cells do not place)

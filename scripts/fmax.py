@@ -50,7 +50,7 @@ from navcores.hdl.params import parse  # noqa: E402,F401
 ROOT = toolchain.ROOT
 
 __all__ = ["Part", "PARTS", "part", "ports", "harness", "RESOURCES", "resources", "synthesize", "FlowError",
-           "utilisation", "critical_path", "place", "pack_ecp5", "fit",
+           "utilisation", "critical_path", "place", "pack_ecp5", "emitted", "fit",
            # the project's code, for fit.py, synth.py and bench.py
            "TOPS", "emit", "manifest", "params_of", "parse", "top_name"]
 
@@ -339,12 +339,26 @@ def _took(run):
     return " (cached)" if cached else f" ({seconds:.0f} s)"
 
 
-def counts(name, params, prt, progress=None):
+def _work(name, params, prt):
+    return ROOT / "build" / "fit" / "work" / f"{top_name(name, params)}--{prt.name}"
+
+
+def emitted(name, params, prt):
+    """The Verilog file of ``name`` at ``params`` that :func:`fit` synthesizes
+    for Part ``prt``, emitted now (rewritten only when its text changed).  A
+    fit's ``verilog_sha256`` is this file's toolchain.digest: a fit JSON
+    whose hash differs from it is of other Verilog (scripts/bench_edt_tiled.py
+    refuses it)."""
+    return emit(name, params, _work(name, params, prt), with_manifest=False)
+
+
+def counts(name, params, prt, progress=None, source=None):
     """The synthesis that :func:`fit` places: (toolchain.Run, the netlist to
-    place, read registers packed, the core's cells, {lut4, ff, bram, dsp})."""
+    place, read registers packed, the core's cells, {lut4, ff, bram, dsp}).
+    ``source``: the top's Verilog when already emitted (:func:`emitted`)."""
     module = top_name(name, params)
-    work = ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
-    _, syn, cells = synthesize(name, params, prt.synth, work, progress)
+    work = _work(name, params, prt)
+    _, syn, cells = synthesize(name, params, prt.synth, work, progress, source=source or emitted(name, params, prt))
     netlist = syn.dir / "netlist.json"
     packed = 0
     if prt.family == "ecp5":
@@ -365,7 +379,9 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
     (see scripts/fit.py).  Raises FlowError when a tool fails otherwise than
     by the design's size, toolchain.ToolError when a tool is missing."""
     module = top_name(name, params)
-    syn, netlist, packed, cells, res = counts(name, params, prt, progress)
+    source = emitted(name, params, prt)
+    verilog_sha256 = toolchain.digest(source)      # what the figures are of, hashed before the tools read it
+    syn, netlist, packed, cells, res = counts(name, params, prt, progress, source)
     if progress:
         progress(f"{module}: nextpnr on {prt.name}, seed{'s' * (len(seeds) > 1)} {', '.join(map(str, seeds))}")
 
@@ -388,6 +404,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
     median_run = next((r for r in runs if r.get("fmax_mhz") == fmax), None)
     return {
         "module": module, "top": name, "params": params,
+        "verilog_sha256": verilog_sha256,
         "part": prt.name, "family": prt.family, "package": prt.package, "speed_grade": prt.speed_grade,
         "board": prt.board,
         "fits": fits,

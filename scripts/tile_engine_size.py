@@ -145,6 +145,24 @@ def synth(spec):
     return res
 
 
+def cell_verilog(p, prt):
+    """The Verilog file :func:`cell_fit` synthesizes: one TileCell at the
+    widths of the engine of parameters ``p``, as module edt_tile_cell_<params>,
+    emitted now for Part ``prt`` (rewritten only when its text changed).  Its
+    toolchain.digest is the JSON's verilog_sha256 (scripts/bench_edt_tiled.py
+    refuses a JSON whose hash is not this file's)."""
+    import fmax
+    module = fmax.top_name("edt_tile_cell", p)
+    work = ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
+    work.mkdir(parents=True, exist_ok=True)
+    src = work / f"{module}.v"
+    text = verilog.convert(TileCell(tile_widths(p["t_r"], p["t_c"], p["max_h"], p["max_w"])), name=module,
+                           emit_src=False)
+    if not src.exists() or src.read_text() != text:
+        src.write_text(text)
+    return src
+
+
 def cell_fit(spec, part="lfe5u-85f", progress=None):
     """One TileCell (the widths of ``spec``'s engine) alone in the fit flow's
     registered harness (scripts/fmax.py: every input from a register, every
@@ -154,19 +172,16 @@ def cell_fit(spec, part="lfe5u-85f", progress=None):
     halo and the array-wide OR of ``upd``; the critical path names the cell's
     own logic that bounds it."""
     import fmax
+    import toolchain
     p = parse(spec)
     prt = fmax.part(part)
     module = fmax.top_name("edt_tile_cell", p)
-    work = ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
-    work.mkdir(parents=True, exist_ok=True)
-    src = work / f"{module}.v"
-    text = verilog.convert(TileCell(tile_widths(p["t_r"], p["t_c"], p["max_h"], p["max_w"])), name=module,
-                           emit_src=False)
-    if not src.exists() or src.read_text() != text:
-        src.write_text(text)
-    _, syn, cells = fmax.synthesize("edt_tile_cell", p, prt.synth, work, progress, source=src)
+    src = cell_verilog(p, prt)
+    verilog_sha256 = toolchain.digest(src)
+    _, syn, cells = fmax.synthesize("edt_tile_cell", p, prt.synth, src.parent, progress, source=src)
     r = fmax.place(syn.dir / "netlist.json", prt, 1, progress)
-    out = {"module": module, "params": p, "part": prt.name, "resources": fmax.resources(prt.family, cells), **r,
+    out = {"module": module, "params": p, "part": prt.name, "verilog_sha256": verilog_sha256,
+           "resources": fmax.resources(prt.family, cells), **r,
            "generator": f"python scripts/tile_engine_size.py --cell-fit {spec}",
            "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())}
     # beside the fit flow's results (scripts/bench_edt_tiled.py reads it)

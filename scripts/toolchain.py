@@ -88,8 +88,8 @@ def _compiled_path(tool):
     package, _, _, wasm, _ = _tool(tool)
     spec = importlib.util.find_spec(package)
     binary = Path(spec.origin).parent / wasm
-    digest = hashlib.sha1(binary.read_bytes()).hexdigest()
-    return Path(environment()["YOWASP_CACHE_DIR"]) / package / wasm / digest
+    sha1 = hashlib.sha1(binary.read_bytes()).hexdigest()
+    return Path(environment()["YOWASP_CACHE_DIR"]) / package / wasm / sha1
 
 
 @contextmanager
@@ -140,7 +140,9 @@ def _short_version(tool, line):
     return f"{tool} {line.rsplit('nextpnr-', 1)[-1].rstrip(')')}" if "nextpnr-" in line else line
 
 
-def _digest(path):
+def digest(path):
+    """The SHA-256 (hex) of a file's content: the cache's key of an input file, and the
+    Verilog hash a fit JSON records (scripts/fmax.py: verilog_sha256)."""
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for chunk in iter(lambda: fh.read(1 << 20), b""):
@@ -183,7 +185,7 @@ def run(tool, args, inputs=None, progress=None, result_failure=None):
     inputs = {k: Path(v).resolve() for k, v in (inputs or {}).items()}
     version = prepare(tool, progress)
     key_text = json.dumps({"tool": tool, "version": version, "args": list(map(str, args)),
-                           "inputs": {k: _digest(p) for k, p in sorted(inputs.items())}}, sort_keys=True)
+                           "inputs": {k: digest(p) for k, p in sorted(inputs.items())}}, sort_keys=True)
     key = hashlib.sha256(key_text.encode()).hexdigest()[:32]
     final = RESULTS / tool / key
     meta = final / "run.json"
