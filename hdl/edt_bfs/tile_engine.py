@@ -9,6 +9,7 @@ from navcores.models.edt_bfs_tiled import Timing
 
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
+from .dram_store import DramStore, NativePortSignature, dram_layout
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
 from ..arith import divmod_const, times
@@ -26,7 +27,8 @@ MAX_CELLS = 256         # T_r * T_c: a 16 x 16 array of the paper's cells is ~12
 MAX_SIDE = 4096         # a map side (issue 18: real maps are 200 .. 4000 cells a side)
 MAX_PIXELS = 1 << 20    # on-chip state of a 1024 x 1024 map is ~50 Mbit: more than any FPGA's block RAM today
 MAX_EXT_PIXELS = 1 << 22    # an external store: 2048 x 2048 pixels of ~60 bits fill a ULX3S's 32 MB SDRAM
-STORES = ("bram", "external")
+STORES = ("bram", "external", "dram")
+DRAM_WIDTH = 128        # store="dram": a native word of LiteDRAM's 1:2-rate PHY on a 32-bit DDR3 (2 x16 chips)
 
 
 def command_layout(w):
@@ -101,12 +103,14 @@ class TileEngine(wiring.Component):
         way, up to 4096 a side and 2^20 pixels, 2^22 with an external
         store).  The widths follow it
         (:func:`~hdl.edt_bfs.tile_layouts.tile_widths`).
-    store : "bram" or "external"
+    store : "bram", "external" or "dram"
         Where the per-pixel state lives: the engine's own block RAM
         (:class:`~hdl.edt_bfs.state_ram.StateRam`), or a store outside the
         engine behind the ``state`` port (an SDRAM controller, say), for
         maps whose state exceeds the part's block RAM (maze512-1-0: 13.9
-        Mbit against the LFE5U-85F's 3.7).
+        Mbit against the LFE5U-85F's 3.7), or a DRAM controller's native
+        port behind :class:`~hdl.edt_bfs.dram_store.DramStore` (the
+        ``dram`` port, 128-bit words: LiteDRAM's for a 32-bit DDR3).
 
     Ports
     -----
@@ -156,6 +160,13 @@ class TileEngine(wiring.Component):
         below hold for a store with StateRam's timing (always ready,
         answers two cycles after the command); a slower store adds cycles
         and changes no result.
+    dram : Out(NativePortSignature) (``store="dram"`` only)
+        A DRAM controller's native user port (``cmd``, ``wdata``,
+        ``rdata``: :func:`~hdl.edt_bfs.dram_store.NativePortSignature`,
+        128-bit words, ``addr_width`` from
+        :func:`~hdl.edt_bfs.dram_store.dram_layout`); the engine runs in
+        the controller's clock domain.  Cycle counts: those of the
+        controller's timing (more than the figures below), results the same.
 
     Timing (:mod:`models.edt_bfs_tiled`'s cycle model, ``Timing()``: sched
     2, latency 2, level 1, goal 3, stop 1; source always valid, sink always ready;
@@ -190,7 +201,8 @@ class TileEngine(wiring.Component):
         Param("max_w", int, lo=3, hi=MAX_SIDE, doc="largest map width (the RAM)",
               message="largest map width max_w {value!r}: must be an integer in {lo}..{hi}"),
         Param("store", str, "bram", choices=STORES,
-              doc="the state store: the engine's block RAM, or an external one on the state port",
+              doc="the state store: the engine's block RAM, an external one on the state port, or a DRAM's "
+                  "native port",
               message="state store {value!r}: must be {allowed}"),
     )
     CONSTRAINTS = (
@@ -226,6 +238,8 @@ class TileEngine(wiring.Component):
             "path_found": Out(1), "levels": Out(w["k"]), "tile_visits": Out(32),
             "visit": Out(visit_layout(w)),
             **({"state": In(StateSignature(w, t_c))} if store == "external" else {}),
+            **({"dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH))}
+               if store == "dram" else {}),
         })
 
     def timing(self):
@@ -238,7 +252,8 @@ class TileEngine(wiring.Component):
                 "path_cycles": f"1 + {t.latency} * len(path)", "readout_cycles": f"{t.latency} + H * W",
                 "note": "source always valid, sink always ready; back-pressure adds cycles"
                         + ("; the external store with StateRam's timing (always ready, answers 2 cycles after "
-                           "the command); a slower store adds cycles" if self.store == "external" else "")}
+                           "the command); a slower store adds cycles" if self.store == "external" else "")
+                        + ("; the DRAM's timing adds cycles (results the same)" if self.store == "dram" else "")}
 
     def elaborate(self, platform):
         m = Module()
@@ -247,6 +262,9 @@ class TileEngine(wiring.Component):
         nonehop = (1 << w["hop"]) - 1
         if self.store == "bram":
             m.submodules.ram = mem = StateRam(w, t_c, self.max_h)     # the store's ports (StateSignature)
+        elif self.store == "dram":
+            m.submodules.store = mem = DramStore(w, t_c, self.max_h, DRAM_WIDTH)
+            wiring.connect(m, mem.dram, wiring.flipped(self.dram))
         else:
             mem = self.state
         m.submodules.work = work = Worklist(w)

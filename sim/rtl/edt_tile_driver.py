@@ -27,12 +27,15 @@ from cocotb.clock import Clock
 from cocotb.triggers import (ClockCycles, FallingEdge, First, ReadOnly, RisingEdge, Timer,
                               current_gpi_trigger)
 
-from navcores.hdl.edt_bfs.tile_engine import command_layout, goal_layout, map_layout, result_layout, visit_layout
+from navcores.hdl.edt_bfs.dram_store import dram_layout
+from navcores.hdl.edt_bfs.tile_engine import (DRAM_WIDTH, command_layout, goal_layout, map_layout, result_layout,
+                                              visit_layout)
 from navcores.hdl.edt_bfs.tile_layouts import tile_widths
 from navcores.models.edt_bfs_tiled import EdtBfsTiledResult
 
 from .clock import PERIOD_NS
 from .edt_bfs_driver import compare_fields
+from .native_dram import NativeDram
 from .state_store import StateStore
 from .stream import Streams, pauses, unpack
 
@@ -55,7 +58,8 @@ class TileEngineDriver:
     ``c_stream`` / ``m_stream`` / ``g_stream``; ``res``: the
     :class:`.stream.StreamSink` on ``o_stream``; ``store``: with an external
     store (``store="external"``), the :class:`.state_store.StateStore` on
-    its ``state`` port (``seed``: its random bits and timing), else None.  ``on_visit`` (if set) is
+    its ``state`` port, with ``store="dram"`` the :class:`.native_dram.NativeDram`
+    on its ``dram`` port (``seed``: its random bits and timing), else None.  ``on_visit`` (if set) is
     called with the count of visits so far at each visit (progress)."""
 
     def __init__(self, dut, t_r, t_c, max_h, max_w, seed=0):
@@ -70,6 +74,10 @@ class TileEngineDriver:
         # an engine built with store="external": the store on its state port, StateRam's timing
         self.store = (StateStore(self.streams, w, t_c, random.Random(seed))
                       if hasattr(dut, "state__rd__valid") else None)
+        # store="dram": the DRAM on its native port (not reset with the engine)
+        if hasattr(dut, "dram__cmd__valid"):
+            lay = dram_layout(w, t_c, max_h, DRAM_WIDTH)
+            self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed))
         self.on_visit = None
 
     def set_stalls(self, rng=None, idle=0.0, back_pressure=0.0):

@@ -45,6 +45,7 @@ MID = tuple(int(v) for v in os.environ.get("TILE_MID", f"{MAX_H}x{MAX_W}").split
 BUNDLED = [n for n in os.environ.get("TILE_MAPS", "").split(",") if n]
 LARGE = os.environ.get("TILE_LARGE") == "1"
 EXTERNAL = os.environ.get("TILE_STORE") == "external"
+DRAM = os.environ.get("TILE_STORE") == "dram"
 MAPS = Path(__file__).resolve().parents[2] / "maps"
 
 
@@ -279,6 +280,49 @@ async def external_store(dut):
     dut._log.info(f"{jobs + 1} jobs compared, {st.reads} reads, {st.writes} writes, {st.late} late answers")
 
 
+@cocotb.test(skip=not DRAM)
+async def dram_store(dut):
+    """The engine with its state in a DRAM (store="dram": hdl/edt_bfs/dram_store.py)
+    on sim/rtl/native_dram.py: the same results and visit trace as the model
+    in more cycles, at a fast DRAM and at a slow one (random latency, stalls)
+    with idle input and back-pressure; resets in mid-job while the DRAM still
+    owes answers (and a write its data beat), each followed by an exact job."""
+    drv, rng = await _setup(dut)
+    st = drv.store
+    assert st is not None and hasattr(st, "rdata"), "the top has no dram port"
+
+    jobs = 0
+    for shape in (MID, (_partial(2, MAX_H, T_R), _partial(2, MAX_W, T_C))):
+        img, start, goals = _case(rng, shape)
+        _, model, raw = await _check(drv, img, goals, start, 0, cycles=False)
+        assert raw["cycles"] > model.cycles, (raw["cycles"], model.cycles)
+        jobs += 1
+    st.set_timing(latency=6, extra=0.5, stall=0.3)
+    drv.set_stalls(rng, 0.2, 0.3)
+    for n in range(2):
+        img, start, goals = _case(rng, MID, "rooms" if n else "random")
+        late, paused = st.late, st.cmd.paused + st.wdata.paused
+        await _check(drv, img, goals, start, n % 2, cycles=False)
+        assert st.late > late and st.cmd.paused + st.wdata.paused > paused     # the DRAM's delays happened
+        jobs += 1
+    drv.set_stalls()
+    img, start, goals = _case(rng, MID, "rooms")
+    _, _, raw = await _check(drv, img, goals, start, 0, cycles=False)      # the job's length at this DRAM
+    owed_reads = owed_data = resets = 0
+    while resets < 16 and (owed_reads < 2 or owed_data < 1):       # resets at random points, until both hit
+        resets += 1
+        assert await drv.job(img, goals, start, 0, abort_after=int(rng.integers(raw["cycles"] // 8,
+                                                                                 raw["cycles"]))) is None
+        owed_reads += st.reads > len(st.rdata.beats)
+        owed_data += bool(st._awaiting)
+        await _idle_after_reset(drv)
+        await _check(drv, img, goals, start, 0, cycles=False)
+        jobs += 1
+    dut._log.info(f"{jobs} jobs compared, {st.reads} reads, {st.writes} writes, {st.late} late answers; "
+                  f"{resets} resets: with answers owed {owed_reads}, with a write's data owed {owed_data}")
+    assert owed_reads >= 2 and owed_data >= 1 and st.reads > 1000 and st.writes > 100
+
+
 def _params(p):
     return dict(zip(("t_r", "t_c", "max_h", "max_w", "store"), p))
 
@@ -312,8 +356,8 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
     if only:
         env["COCOTB_TEST_FILTER"] = only
     ran = run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env)
-    # without a filter: the six, and external_store (skipped: a block-RAM top has no state port)
-    assert ran == (len(only.split("|")) if only else 7), f"{ran} cocotb tests ran"
+    # without a filter: the six, external_store and dram_store (skipped: a block-RAM top has neither port)
+    assert ran == (len(only.split("|")) if only else 8), f"{ran} cocotb tests ran"
 
 
 # The external store: a 4x8 array (a power-of-two word) over maps up to 21x35 (partial tiles).
@@ -322,4 +366,13 @@ def test_edt_tile_engine_external(sim):
     params = (4, 8, 21, 35, "external")
     env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": "external",
            "COCOTB_TEST_FILTER": "external_store"}
+    assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1
+
+
+# The DRAM store: the same 4x8 array over the same maps, its state in a DRAM behind a native port.
+@pytest.mark.parametrize("sim", ["icarus", "verilator"])
+def test_edt_tile_engine_dram(sim):
+    params = (4, 8, 21, 35, "dram")
+    env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": "dram",
+           "COCOTB_TEST_FILTER": "dram_store"}
     assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1

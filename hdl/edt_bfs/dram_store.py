@@ -1,0 +1,295 @@
+"""The tile engine's per-pixel state in a DRAM, behind a LiteDRAM-style native port.
+
+:class:`DramStore` serves :class:`~hdl.edt_bfs.state_ram.StateSignature`
+(the engine's window-row reads and word writes) from a DRAM controller's
+native user port (:class:`NativePortSignature`: LiteDRAM's ``cmd`` /
+``wdata`` / ``rdata``), for maps whose state exceeds the part's block RAM
+(issue 18: maze512-1-0's 13.9 Mbit against the LFE5U-85F's 3.7).
+"""
+
+from amaranth.hdl import Cat, Const, Module, Mux, Signal
+from amaranth.lib import data, stream, wiring
+from amaranth.lib.fifo import SyncFIFOBuffered
+from amaranth.lib.wiring import In, Out
+
+from .state_ram import StateSignature
+from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, pixel_layout
+
+__all__ = ["DramStore", "NativePortSignature", "dram_layout"]
+
+DESCRIPTORS = 4         # reads in flight between the command side and the answer side
+
+
+def NativePortSignature(addr_width, data_width):
+    """A DRAM controller's native user port, seen from the user (LiteDRAM's
+    ``user_port_native``): ``cmd`` (out: ``addr`` in words of ``data_width``
+    bits, ``we``), ``wdata`` (out: ``data``, ``we`` one bit a byte; one beat
+    per write command, in command order), ``rdata`` (in: one beat per read
+    command, in command order).  A read returns every write whose command
+    was accepted before it."""
+    return wiring.Signature({
+        "cmd": Out(stream.Signature(data.StructLayout({"addr": addr_width, "we": 1}))),
+        "wdata": Out(stream.Signature(data.StructLayout({"data": data_width, "we": data_width // 8}))),
+        "rdata": In(stream.Signature(data.StructLayout({"data": data_width}))),
+    })
+
+
+def _bytes(bits):
+    return -(-bits // 8)
+
+
+def dram_layout(w, p, max_h, data_width=128):
+    """Where :class:`DramStore` keeps word (``row``, ``wcol``): a block of
+    ``2**kb`` native words at address ``((row << wb) | wcol) << kb``:
+
+    * ``a`` words (from offset 0): the EDT field group (di, dx, dy) of the
+      word's ``p`` pixels, packed (``p * edt`` bits);
+    * ``b`` words (from offset ``a``): the BFS group (hop, parent), packed;
+    * ``e`` words (from offset ``a + b``): the *edge slots*, copies of the
+      last pixel of word ``wcol - 1`` (slot 0, ``left``) and the first of
+      word ``wcol + 1`` (slot 1, ``right``), each slot the EDT group then the
+      BFS group, each group from a byte boundary (a write of one group is a
+      byte-masked write).  Both slots in one native word when they fit
+      (``e = 1``), else one each.
+
+    So a window row (the word and one pixel either side) is ``a`` + ``e``
+    reads for an EDT visit, ``a + b + e`` for the rest, all in one block (one
+    DRAM row); a write of one group is its ``a`` (or ``b``) words plus one
+    byte-masked write into each neighbour's edge word.  Returns a dict of
+    those numbers, ``slot`` (the slot's size in bytes), ``edt_byte`` /
+    ``bfs_byte`` (each group's first byte in a slot), ``slot_at(s)`` ->
+    (edge word, first byte) and ``addr_width``.
+    """
+    e_bits, b_bits = edt_layout(w).size, bfs_layout(w).size
+    assert data_width % 8 == 0 and data_width >= 32, data_width
+    a, b = -(-p * e_bits // data_width), -(-p * b_bits // data_width)
+    slot = _bytes(e_bits) + _bytes(b_bits)
+    if slot > data_width // 8:
+        raise ValueError(f"a pixel's state ({slot} bytes) is wider than a native word ({data_width} bits)")
+    e = 1 if 2 * slot <= data_width // 8 else 2
+    kb = max(0, (a + b + e - 1).bit_length())
+    wb = max(1, (w["words"] - 1).bit_length())
+    rb = max(1, (max_h - 1).bit_length())
+    return {"a": a, "b": b, "e": e, "kb": kb, "wb": wb, "rb": rb, "addr_width": rb + wb + kb,
+            "slot": slot, "edt_byte": 0, "bfs_byte": _bytes(e_bits), "data_width": data_width,
+            "slot_at": (lambda s: (s, 0) if e == 2 else (0, s * slot))}
+
+
+def _slot_write(wd, wbe, src, byte, lay, px, groups):
+    """A neighbour's edge slot at ``byte`` of native word ``wd`` <- pixel ``src``: the EDT group's
+    bytes enabled if ``groups[0]``, the BFS group's if ``groups[1]``."""
+    cut = px["dy"].offset + px["dy"].width          # the EDT group is the pixel's low bits
+    eb, bb = byte + lay["edt_byte"], byte + lay["bfs_byte"]
+    e_mask = ((1 << _bytes(cut)) - 1) << eb
+    b_mask = ((1 << _bytes(px.size - cut)) - 1) << bb
+    return [wd[eb * 8:eb * 8 + cut].eq(src[:cut]), wd[bb * 8:bb * 8 + px.size - cut].eq(src[cut:]),
+            wbe.eq(Mux(groups[0], e_mask, 0) | Mux(groups[1], b_mask, 0))]
+
+
+def _lowest(m, mask, n, name):
+    """One-hot of the lowest set bit of ``mask`` (``n`` bits) and its index."""
+    hot = Signal(n, name=f"{name}_hot")
+    idx = Signal(range(max(n, 2)), name=f"{name}_idx")
+    m.d.comb += hot.eq(mask & -mask)
+    for i in reversed(range(n)):
+        with m.If(mask[i]):
+            m.d.comb += idx.eq(i)
+    return hot, idx
+
+
+class DramStore(wiring.Component):
+    """Every pixel's state in a DRAM behind a native port (:func:`dram_layout`).
+
+    Parameters
+    ----------
+    w : dict
+        :func:`~hdl.edt_bfs.tile_layouts.tile_widths` (``words``: word
+        columns of the widest map).
+    p : int
+        Pixels per word (T_c).
+    max_h : int
+        Rows of the largest map.
+    data_width : int
+        The native port's word (LiteDRAM: 128 for a 32-bit DDR3 at 1:2 rate,
+        64 for a 16-bit DDR3); a pixel's two groups must fit one word.
+
+    Ports
+    -----
+    :class:`~hdl.edt_bfs.state_ram.StateSignature` (``rd``, ``rd_data``,
+    ``wr``): the engine's side; ``dram`` : Out(:class:`NativePortSignature`)
+    the controller's port (``addr_width`` = ``dram_layout(...)["addr_width"]``:
+    the DRAM must hold ``2**addr_width`` native words).
+
+    Operation: one engine command at a time becomes its native commands,
+    lowest offset first (a read: the groups it asks for, then the edge
+    words; a write: its group's words, then the right neighbour's left slot
+    and the left neighbour's right slot, byte-masked; a neighbour outside
+    the widest map is skipped), one a cycle while the port is ready; the
+    next engine command is accepted in the cycle its predecessor's last
+    native command goes.  A write's command and data beat are presented
+    together (each held until taken).  Reads in flight are counted in a
+    FIFO of ``DESCRIPTORS`` (which words each brings); the answer side
+    collects them into one window row and holds it until taken.  Order:
+    the controller's (a read after a write to the same word sees it), so
+    StateSignature's contract holds.  Timing: an EDT read takes ``a + e``
+    port cycles, a BFS read ``a + b + e``, a write ``a`` (or ``b``) + 2, at
+    best; answers follow the controller's latency.
+    """
+
+    def __init__(self, w, p, max_h, data_width=128):
+        self.w, self.p, self.max_h = w, p, max_h
+        self.lay = dram_layout(w, p, max_h, data_width)
+        super().__init__({
+            **StateSignature(w, p).members,
+            "dram": Out(NativePortSignature(self.lay["addr_width"], data_width)),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        w, p, lay = self.w, self.p, self.lay
+        dw, a, b, e = lay["data_width"], lay["a"], lay["b"], lay["e"]
+        nb = dw // 8
+        px = pixel_layout(w)
+        n_rd = a + b + e            # a read's steps: A words, B words, edge words
+        n_wr = a + b + 2            # a write's: A words, B words, the two neighbours' slots
+        n = max(n_rd, n_wr)
+        e_lay, b_lay = edt_layout(w), bfs_layout(w)
+
+        # -- the command side: the engine command being issued
+        busy_mask = Signal(n)           # its native commands still to go (bit = step)
+        is_wr = Signal()
+        row = Signal(w["row"])
+        wcol = Signal(range(w["words"]))
+        wmask = Signal(2)               # a write's groups: bit 0 EDT, bit 1 BFS
+        word = Signal(px.size * p)      # a write's pixels
+        hot, step = _lowest(m, busy_mask, n, "step")
+
+        cmd, wdata = self.dram.cmd, self.dram.wdata
+        # The port's side is registers that no reset clears: a command presented is held until
+        # taken and a write's data beat follows its command, reset or not (a controller is not
+        # reset with the engine: it would hang on a write without its data, and a stream's valid
+        # may not drop).  A step *loads* the command register; a write's data beat goes after
+        # its command (``owe``), and no step loads while a write is in the register or owes
+        # its beat (one write in flight).
+        c_valid = Signal(reset_less=True)
+        c_cmd = Signal(cmd.payload.shape().size, reset_less=True)
+        owe = Signal(reset_less=True)
+        held = Signal(wdata.payload.shape().size, reset_less=True)
+        c_we = cmd.payload.we
+        active = busy_mask != 0
+        step_done = Signal()            # the step loads the command register
+        m.d.comb += [cmd.valid.eq(c_valid), cmd.payload.eq(c_cmd), wdata.valid.eq(owe), wdata.payload.eq(held),
+                     step_done.eq(active & (~c_valid | cmd.ready) & ~owe & ~(c_valid & c_we))]
+        wd = Signal(lay["data_width"])              # the step's command, data and byte enables
+        wbe = Signal(nb)
+        addr = Signal(lay["addr_width"])
+        # (each written by one expression, not under If: Icarus leaves a conditional process
+        # unevaluated at time 0, and these registers, without a reset, would keep its X)
+        cmd_go = cmd.valid & cmd.ready
+        m.d.sync += [c_valid.eq(step_done | (c_valid & ~cmd_go)),
+                     c_cmd.eq(Mux(step_done, Cat(addr, is_wr), c_cmd)),
+                     owe.eq((cmd_go & c_we) | (owe & ~(wdata.valid & wdata.ready))),
+                     held.eq(Mux(step_done & is_wr, Cat(wd, wbe), held))]
+        rest = Signal(n)
+        m.d.comb += rest.eq(Mux(step_done, busy_mask & ~hot, busy_mask))
+
+        # reads in flight: which of the n_rd steps each one issued
+        m.submodules.desc = desc = SyncFIFOBuffered(width=n_rd, depth=DESCRIPTORS)
+        free = rest == 0
+        take_wr = self.wr.valid & free
+        take_rd = self.rd.valid & free & ~self.wr.valid & desc.w_rdy
+        m.d.comb += [self.wr.ready.eq(free), self.rd.ready.eq(free & ~self.wr.valid & desc.w_rdy)]
+        rcmd, wcmd = self.rd.payload, self.wr.payload
+        need_a = rcmd.di | rcmd.nnt
+        rd_steps = Cat(*([need_a] * a), *([rcmd.bfs] * b), *([Const(1)] * e))
+        right_ok = wcmd.wcol != w["words"] - 1
+        left_ok = wcmd.wcol != 0
+        wr_steps = Cat(*([wcmd.edt] * a), *([wcmd.bfs] * b), right_ok, left_ok)
+        m.d.comb += [desc.w_data.eq(rd_steps), desc.w_en.eq(take_rd)]
+        m.d.sync += busy_mask.eq(rest)
+        with m.If(take_wr):
+            m.d.sync += [busy_mask.eq(wr_steps), is_wr.eq(1), row.eq(wcmd.row), wcol.eq(wcmd.wcol),
+                         wmask.eq(Cat(wcmd.edt, wcmd.bfs)), word.eq(wcmd.word.as_value())]
+        with m.Elif(take_rd):
+            m.d.sync += [busy_mask.eq(rd_steps), is_wr.eq(0), row.eq(rcmd.row), wcol.eq(rcmd.wcol)]
+
+        # the step's native word: block (row, wcol or a neighbour), offset
+        kb, wb = lay["kb"], lay["wb"]
+        col = Signal(range(w["words"] + 1))
+        off = Signal(max(kb, 1))
+        pix = data.ArrayLayout(px, p)(word)
+        edt_bits = Cat(*[pix[j].as_value()[px["di"].offset:px["dy"].offset + px["dy"].width] for j in range(p)])
+        bfs_bits = Cat(*[pix[j].as_value()[px["hop"].offset:] for j in range(p)])
+        assert px["di"].offset == 0 and px["hop"].offset == px["dy"].offset + px["dy"].width
+        m.d.comb += col.eq(wcol)
+        with m.Switch(step):
+            for s in range(n):
+                with m.Case(s):
+                    if s < a:                                   # A word s
+                        m.d.comb += [off.eq(s), wd.eq(edt_bits[s * dw:(s + 1) * dw]), wbe.eq((1 << nb) - 1)]
+                    elif s < a + b:                             # B word s - a
+                        k = s - a
+                        m.d.comb += [off.eq(s), wd.eq(bfs_bits[k * dw:(k + 1) * dw]), wbe.eq((1 << nb) - 1)]
+                    else:
+                        k = s - a - b
+                        if k < e:                               # a read's edge word k
+                            m.d.comb += off.eq(a + b + k)
+                        if k < 2:                               # a write's neighbour slot
+                            # step a+b: the right neighbour's left slot (slot 0) <- our last pixel;
+                            # step a+b+1: the left neighbour's right slot (slot 1) <- our first pixel
+                            slot = k
+                            src = pix[p - 1 if slot == 0 else 0].as_value()
+                            ew, byte = lay["slot_at"](slot)
+                            with m.If(is_wr):
+                                m.d.comb += [col.eq(wcol + 1 if slot == 0 else wcol - 1), off.eq(a + b + ew)]
+                                m.d.comb += _slot_write(wd, wbe, src, byte, lay, px, wmask)
+        m.d.comb += addr.eq(Cat(off[:kb] if kb else Const(0, 0), col[:wb], row))
+
+        # -- the answer side: collect one read's words, then present the window row
+        rdata, out = self.dram.rdata, self.rd_data
+        amask = Signal(n_rd)            # the words of the read being collected, still to come
+        ahot, astep = _lowest(m, amask, n_rd, "ans")
+        buf = [Signal(dw, name=f"buf{s}") for s in range(n_rd)]
+        collecting = amask != 0
+        # Answers still coming when a reset struck are the controller's to deliver and ours to
+        # drop: ``in_flight`` (no reset) counts every read loaded into the command register and
+        # not answered (a loaded read goes out, reset or not), ``owned`` those loaded since the
+        # reset; answers come in order, so the first in_flight - owned are the old ones.
+        bound = 2 * (DESCRIPTORS + 2) * n_rd + 1
+        in_flight = Signal(range(bound), reset_less=True)
+        owned = Signal(range(bound))
+        discard = in_flight != owned
+        issued = step_done & ~is_wr
+        got = rdata.valid & rdata.ready
+        m.d.sync += [in_flight.eq(in_flight + issued - got), owned.eq(owned + issued - (got & ~discard))]
+        word_go = got & ~discard
+        last = collecting & (amask & ~ahot == 0)
+        m.d.comb += [rdata.ready.eq(discard | (collecting & (~out.valid | out.ready))), desc.r_en.eq(~collecting)]
+        with m.If(~collecting & desc.r_rdy & desc.r_en):
+            m.d.sync += amask.eq(desc.r_data)
+        with m.If(word_go):
+            m.d.sync += amask.eq(amask & ~ahot)
+            with m.Switch(astep):
+                for s in range(n_rd):
+                    with m.Case(s):
+                        m.d.sync += buf[s].eq(rdata.payload.data)
+        with m.If(out.ready):
+            m.d.sync += out.valid.eq(0)
+        with m.If(word_go & last):
+            m.d.sync += out.valid.eq(1)
+        # the window row from the buffers (fields not asked for: whatever the buffer holds)
+        a_bits, b_bits, e_bits = Cat(*buf[:a]), Cat(*buf[a:a + b]), Cat(*buf[a + b:])
+        ans = out.payload
+        for j in range(p):
+            g = e_lay(a_bits[j * e_lay.size:(j + 1) * e_lay.size])
+            h = b_lay(b_bits[j * b_lay.size:(j + 1) * b_lay.size])
+            m.d.comb += [getattr(ans.word[j], f).eq(getattr(g, f)) for f in EDT_FIELDS]
+            m.d.comb += [getattr(ans.word[j], f).eq(getattr(h, f)) for f in BFS_FIELDS]
+        for slot, dst in ((0, ans.left), (1, ans.right)):
+            ew, byte = lay["slot_at"](slot)
+            base = ew * dw + byte * 8
+            g = e_lay(e_bits[base + lay["edt_byte"] * 8:][:e_lay.size])
+            h = b_lay(e_bits[base + lay["bfs_byte"] * 8:][:b_lay.size])
+            m.d.comb += [getattr(dst, f).eq(getattr(g, f)) for f in EDT_FIELDS]
+            m.d.comb += [getattr(dst, f).eq(getattr(h, f)) for f in BFS_FIELDS]
+        return m
