@@ -1,6 +1,6 @@
 """The EDT/BFS tile engine (issue 18): paper 004's cells as a T_r x T_c array over a map in block RAM."""
 
-from amaranth.hdl import Cat, Const, Module, Mux, Signal, signed
+from amaranth.hdl import Cat, ClockDomain, ClockSignal, Const, Module, Mux, ResetSignal, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -10,6 +10,7 @@ from navcores.models.edt_bfs_tiled import Timing
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
 from .dram_store import DramStore, NativePortSignature, dram_layout
+from .native_cdc import NativeCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
 from ..arith import divmod_const, times
@@ -164,9 +165,13 @@ class TileEngine(wiring.Component):
         A DRAM controller's native user port (``cmd``, ``wdata``,
         ``rdata``: :func:`~hdl.edt_bfs.dram_store.NativePortSignature`,
         128-bit words, ``addr_width`` from
-        :func:`~hdl.edt_bfs.dram_store.dram_layout`); the engine runs in
-        the controller's clock domain.  Cycle counts: those of the
-        controller's timing (more than the figures below), results the same.
+        :func:`~hdl.edt_bfs.dram_store.dram_layout`), in the controller's
+        clock domain: ``dram_clk``, ``dram_rst`` (its reset, which also
+        empties the answer FIFO; the engine's ``rst`` does not reach the
+        controller's side); :class:`~hdl.edt_bfs.native_cdc.NativeCdc`
+        crosses from ``clk``.  Cycle counts: those of the controller's
+        timing and the crossing (more than the figures below); results the
+        same.
 
     Timing (:mod:`models.edt_bfs_tiled`'s cycle model, ``Timing()``: sched
     2, latency 2, level 1, goal 3, stop 1; source always valid, sink always ready;
@@ -238,8 +243,8 @@ class TileEngine(wiring.Component):
             "path_found": Out(1), "levels": Out(w["k"]), "tile_visits": Out(32),
             "visit": Out(visit_layout(w)),
             **({"state": In(StateSignature(w, t_c))} if store == "external" else {}),
-            **({"dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH))}
-               if store == "dram" else {}),
+            **({"dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH)),
+                "dram_clk": In(1), "dram_rst": In(1)} if store == "dram" else {}),
         })
 
     def timing(self):
@@ -263,8 +268,17 @@ class TileEngine(wiring.Component):
         if self.store == "bram":
             m.submodules.ram = mem = StateRam(w, t_c, self.max_h)     # the store's ports (StateSignature)
         elif self.store == "dram":
+            # the store in the engine's domain; its native port crosses to the controller's clock
+            # (dram_clk) from a domain on the engine's clock that no reset clears (the store's
+            # port-side registers have none either: a command given is carried out)
+            m.domains.port = ClockDomain("port", reset_less=True)
+            m.domains.dram = ClockDomain("dram")
+            m.d.comb += [ClockSignal("port").eq(ClockSignal("sync")),
+                         ClockSignal("dram").eq(self.dram_clk), ResetSignal("dram").eq(self.dram_rst)]
             m.submodules.store = mem = DramStore(w, t_c, self.max_h, DRAM_WIDTH)
-            wiring.connect(m, mem.dram, wiring.flipped(self.dram))
+            m.submodules.cdc = cdc = NativeCdc(mem.lay["addr_width"], DRAM_WIDTH, "port", "dram")
+            wiring.connect(m, mem.dram, cdc.user)
+            wiring.connect(m, cdc.ctrl, wiring.flipped(self.dram))
         else:
             mem = self.state
         m.submodules.work = work = Worklist(w)

@@ -39,7 +39,9 @@ from .native_dram import NativeDram
 from .state_store import StateStore
 from .stream import Streams, pauses, unpack
 
-__all__ = ["TileEngineDriver", "compare", "FIELDS"]
+__all__ = ["TileEngineDriver", "compare", "FIELDS", "DRAM_PERIOD_NS"]
+
+DRAM_PERIOD_NS = 3.4        # store="dram": the controller's clock, about 3x the engine's (75 against 22 MHz)
 
 FIELDS = ("distance", "nearest", "vector", "sqdist", "done", "cfr", "visited", "parent", "hop")
 FLAGS = ("cmd_err", "start_err", "goal_err", "path_found", "levels", "tile_visits")
@@ -77,7 +79,7 @@ class TileEngineDriver:
         # store="dram": the DRAM on its native port (not reset with the engine)
         if hasattr(dut, "dram__cmd__valid"):
             lay = dram_layout(w, t_c, max_h, DRAM_WIDTH)
-            self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed))
+            self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed), clock=dut.dram_clk)
         self.on_visit = None
 
     def set_stalls(self, rng=None, idle=0.0, back_pressure=0.0):
@@ -90,6 +92,13 @@ class TileEngineDriver:
 
     async def start(self):
         cocotb.start_soon(Clock(self.dut.clk, PERIOD_NS, unit="ns").start())
+        if self.store is not None and hasattr(self.dut, "dram_clk"):
+            # the controller's clock: DRAM_PERIOD_NS, not a multiple of the engine's (the
+            # crossing sees every phase); its reset once, at power-up
+            self.dut.dram_rst.value = 1
+            cocotb.start_soon(Clock(self.dut.dram_clk, DRAM_PERIOD_NS, unit="ns").start())
+            await ClockCycles(self.dut.dram_clk, 3)
+            self.dut.dram_rst.value = 0
         await self.reset()
 
     async def reset(self, cycles=2):

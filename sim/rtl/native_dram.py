@@ -29,7 +29,8 @@ __all__ = ["NativeDram"]
 
 
 class NativeDram:
-    """The DRAM on ``dut``'s ``dram`` port: ``data_width`` bits a word, ``addr_width`` address bits.
+    """The DRAM on ``dut``'s ``dram`` port: ``data_width`` bits a word, ``addr_width`` address bits,
+    clocked by ``clock`` (default ``dut.clk``).
 
     ``rng``: a ``random.Random``.  ``reads`` / ``writes`` count the commands
     served, ``late`` the answers that waited beyond ``latency``.  Its
@@ -37,9 +38,9 @@ class NativeDram:
     the controller and the DRAM are not reset with the engine (the answers
     in flight still come, a write's data beat is still taken)."""
 
-    def __init__(self, dut, data_width, addr_width, rng):
+    def __init__(self, dut, data_width, addr_width, rng, clock=None):
         self.dw, self.rng = data_width, rng
-        self.streams = streams = Streams(dut, reset=None)
+        self.streams = streams = Streams(dut, clock=clock, reset=None)
         self.words = {}
         self.reads = self.writes = self.late = 0
         self.latency, self.extra, self.stall = 4, 0.0, 0.0

@@ -282,11 +282,14 @@ async def external_store(dut):
 
 @cocotb.test(skip=not DRAM)
 async def dram_store(dut):
-    """The engine with its state in a DRAM (store="dram": hdl/edt_bfs/dram_store.py)
-    on sim/rtl/native_dram.py: the same results and visit trace as the model
-    in more cycles, at a fast DRAM and at a slow one (random latency, stalls)
-    with idle input and back-pressure; resets in mid-job while the DRAM still
-    owes answers (and a write its data beat), each followed by an exact job."""
+    """The engine with its state in a DRAM (store="dram": hdl/edt_bfs/dram_store.py,
+    the native port crossing to the controller's clock in hdl/edt_bfs/native_cdc.py)
+    on sim/rtl/native_dram.py clocked by dram_clk (DRAM_PERIOD_NS against the
+    engine's 10 ns): the same results and visit trace as the model in more
+    cycles, at a fast DRAM and at a slow one (random latency, stalls) with
+    idle input and back-pressure; resets of the engine alone in mid-job while
+    the DRAM still owes answers (and a write its data beat), each followed
+    by an exact job."""
     drv, rng = await _setup(dut)
     st = drv.store
     assert st is not None and hasattr(st, "rdata"), "the top has no dram port"
@@ -369,7 +372,8 @@ def test_edt_tile_engine_external(sim):
     assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1
 
 
-# The DRAM store: the same 4x8 array over the same maps, its state in a DRAM behind a native port.
+# The DRAM store: the same 4x8 array over the same maps, its state in a DRAM behind a native port
+# on a clock of its own.
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
 def test_edt_tile_engine_dram(sim):
     params = (4, 8, 21, 35, "dram")
