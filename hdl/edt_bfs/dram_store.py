@@ -112,6 +112,10 @@ class DramStore(wiring.Component):
     data_width : int
         The native port's word (LiteDRAM: 128 for a 32-bit DDR3 at 1:2 rate,
         64 for a 16-bit DDR3); a pixel's two groups must fit one word.
+    max_reads : int
+        Native reads unanswered at most (the answers the path to the
+        controller can hold: the crossing's FIFO depth); LiteDRAM's native
+        port does not wait for ``rdata.ready``, so more would lose words.
 
     Ports
     -----
@@ -127,17 +131,21 @@ class DramStore(wiring.Component):
     the widest map is skipped), one a cycle while the port is ready; the
     next engine command is accepted in the cycle its predecessor's last
     native command goes.  A write's command and data beat are presented
-    together (each held until taken).  Reads in flight are counted in a
+    together, each held until taken (the controller may take the beat
+    later: LiteDRAM asks for it after the command).  Reads in flight are counted in a
     FIFO of ``DESCRIPTORS`` (which words each brings); the answer side
     collects them into one window row and holds it until taken.  Order:
     the controller's (a read after a write to the same word sees it), so
     StateSignature's contract holds.  Timing: an EDT read takes ``a + e``
     port cycles, a BFS read ``a + b + e``, a write ``a`` (or ``b``) + 2, at
-    best; answers follow the controller's latency.
+    best (one native command a cycle); answers follow the controller's
+    latency.
     """
 
-    def __init__(self, w, p, max_h, data_width=128):
-        self.w, self.p, self.max_h = w, p, max_h
+    def __init__(self, w, p, max_h, data_width=128, max_reads=16):
+        if not 1 <= max_reads <= 256:
+            raise ValueError(f"max_reads {max_reads}: must be 1..256")
+        self.w, self.p, self.max_h, self.max_reads = w, p, max_h, max_reads
         self.lay = dram_layout(w, p, max_h, data_width)
         super().__init__({
             **StateSignature(w, p).members,
@@ -166,30 +174,36 @@ class DramStore(wiring.Component):
 
         cmd, wdata = self.dram.cmd, self.dram.wdata
         # The port's side is registers that no reset clears: a command presented is held until
-        # taken and a write's data beat follows its command, reset or not (a controller is not
-        # reset with the engine: it would hang on a write without its data, and a stream's valid
-        # may not drop).  A step *loads* the command register; a write's data beat goes after
-        # its command (``owe``), and no step loads while a write is in the register or owes
-        # its beat (one write in flight).
+        # taken, and so is a write's data beat, reset or not (a controller is not reset with the
+        # engine: it would hang on a write without its data, and a stream's valid may not drop).
+        # A step loads the command register and, for a write, the data register in the same
+        # cycle; each goes when its side is ready, and the next step loads when both are free:
+        # one native command a cycle.
         c_valid = Signal(reset_less=True)
         c_cmd = Signal(cmd.payload.shape().size, reset_less=True)
-        owe = Signal(reset_less=True)
-        held = Signal(wdata.payload.shape().size, reset_less=True)
-        c_we = cmd.payload.we
+        d_valid = Signal(reset_less=True)
+        d_data = Signal(wdata.payload.shape().size, reset_less=True)
         active = busy_mask != 0
-        step_done = Signal()            # the step loads the command register
-        m.d.comb += [cmd.valid.eq(c_valid), cmd.payload.eq(c_cmd), wdata.valid.eq(owe), wdata.payload.eq(held),
-                     step_done.eq(active & (~c_valid | cmd.ready) & ~owe & ~(c_valid & c_we))]
+        cmd_go = cmd.valid & cmd.ready
+        dat_go = wdata.valid & wdata.ready
+        step_done = Signal()            # the step loads the registers
+        # A controller may not be able to hold its answers back (LiteDRAM's native port drops a
+        # word its user does not take): a read loads only while fewer than ``max_reads`` are
+        # unanswered, so whatever sits between (the crossing's answer FIFO) never fills.
+        in_flight = Signal(range(self.max_reads + 1), reset_less=True)
+        m.d.comb += [cmd.valid.eq(c_valid), cmd.payload.eq(c_cmd), wdata.valid.eq(d_valid),
+                     wdata.payload.eq(d_data),
+                     step_done.eq(active & (~c_valid | cmd_go) & (~d_valid | dat_go)
+                                  & (is_wr | (in_flight < self.max_reads)))]
         wd = Signal(lay["data_width"])              # the step's command, data and byte enables
         wbe = Signal(nb)
         addr = Signal(lay["addr_width"])
         # (each written by one expression, not under If: Icarus leaves a conditional process
         # unevaluated at time 0, and these registers, without a reset, would keep its X)
-        cmd_go = cmd.valid & cmd.ready
         m.d.sync += [c_valid.eq(step_done | (c_valid & ~cmd_go)),
                      c_cmd.eq(Mux(step_done, Cat(addr, is_wr), c_cmd)),
-                     owe.eq((cmd_go & c_we) | (owe & ~(wdata.valid & wdata.ready))),
-                     held.eq(Mux(step_done & is_wr, Cat(wd, wbe), held))]
+                     d_valid.eq((step_done & is_wr) | (d_valid & ~dat_go)),
+                     d_data.eq(Mux(step_done & is_wr, Cat(wd, wbe), d_data))]
         rest = Signal(n)
         m.d.comb += rest.eq(Mux(step_done, busy_mask & ~hot, busy_mask))
 
@@ -255,9 +269,7 @@ class DramStore(wiring.Component):
         # drop: ``in_flight`` (no reset) counts every read loaded into the command register and
         # not answered (a loaded read goes out, reset or not), ``owned`` those loaded since the
         # reset; answers come in order, so the first in_flight - owned are the old ones.
-        bound = 2 * (DESCRIPTORS + 2) * n_rd + 1
-        in_flight = Signal(range(bound), reset_less=True)
-        owned = Signal(range(bound))
+        owned = Signal.like(in_flight, reset_less=False)
         discard = in_flight != owned
         issued = step_done & ~is_wr
         got = rdata.valid & rdata.ready

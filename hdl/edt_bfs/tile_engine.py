@@ -30,6 +30,7 @@ MAX_PIXELS = 1 << 20    # on-chip state of a 1024 x 1024 map is ~50 Mbit: more t
 MAX_EXT_PIXELS = 1 << 22    # an external store: 2048 x 2048 pixels of ~60 bits fill a ULX3S's 32 MB SDRAM
 STORES = ("bram", "external", "dram")
 DRAM_WIDTH = 128        # store="dram": a native word of LiteDRAM's 1:2-rate PHY on a 32-bit DDR3 (2 x16 chips)
+DRAM_FIFO = 16          # store="dram": each crossing FIFO's depth, and so the native reads unanswered at most
 
 
 def command_layout(w):
@@ -275,8 +276,8 @@ class TileEngine(wiring.Component):
             m.domains.dram = ClockDomain("dram")
             m.d.comb += [ClockSignal("port").eq(ClockSignal("sync")),
                          ClockSignal("dram").eq(self.dram_clk), ResetSignal("dram").eq(self.dram_rst)]
-            m.submodules.store = mem = DramStore(w, t_c, self.max_h, DRAM_WIDTH)
-            m.submodules.cdc = cdc = NativeCdc(mem.lay["addr_width"], DRAM_WIDTH, "port", "dram")
+            m.submodules.store = mem = DramStore(w, t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO)
+            m.submodules.cdc = cdc = NativeCdc(mem.lay["addr_width"], DRAM_WIDTH, "port", "dram", depth=DRAM_FIFO)
             wiring.connect(m, mem.dram, cdc.user)
             wiring.connect(m, cdc.ctrl, wiring.flipped(self.dram))
         else:

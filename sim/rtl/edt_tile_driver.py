@@ -76,8 +76,9 @@ class TileEngineDriver:
         # an engine built with store="external": the store on its state port, StateRam's timing
         self.store = (StateStore(self.streams, w, t_c, random.Random(seed))
                       if hasattr(dut, "state__rd__valid") else None)
-        # store="dram": the DRAM on its native port (not reset with the engine)
-        if hasattr(dut, "dram__cmd__valid"):
+        # store="dram": the DRAM on its native port (not reset with the engine); not when the top
+        # holds its own controller (hdl/edt_bfs/tile_litedram.py, whose inner wires have those names)
+        if hasattr(dut, "dram__cmd__valid") and not hasattr(dut, "wb_ctrl_cyc"):
             lay = dram_layout(w, t_c, max_h, DRAM_WIDTH)
             self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed), clock=dut.dram_clk)
         self.on_visit = None
@@ -92,7 +93,7 @@ class TileEngineDriver:
 
     async def start(self):
         cocotb.start_soon(Clock(self.dut.clk, PERIOD_NS, unit="ns").start())
-        if self.store is not None and hasattr(self.dut, "dram_clk"):
+        if isinstance(self.store, NativeDram):
             # the controller's clock: DRAM_PERIOD_NS, not a multiple of the engine's (the
             # crossing sees every phase); its reset once, at power-up
             self.dut.dram_rst.value = 1

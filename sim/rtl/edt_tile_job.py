@@ -7,7 +7,12 @@ always ready: the model's cycle count) and writes the decoded results to
 $EDT_RESULT.  While it runs it rewrites $EDT_PROGRESS (if set) every 64 tile
 visits with ``visits cycle`` (the command shows them on a terminal).  It
 checks nothing itself: sim/edt.py compares the result with the golden
-model.
+model.  With the engine behind LiteDRAM (a top with ``wb_ctrl``) the job
+also names the controller's clock (``sys_period_ns``, against the engine's
+PERIOD_NS) and CSRs (``csrs``), and the controller starts first.  With
+``path_only_too`` the same job runs again without the map read-out (the
+whole job up to the path, as the benches time it): ``path_only`` in the
+result holds its cycles, path and trace.
 """
 
 import json
@@ -18,6 +23,7 @@ import cocotb
 import numpy as np
 
 from .edt_tile_driver import TileEngineDriver
+from .litedram import start_litedram
 
 
 @cocotb.test()
@@ -30,6 +36,8 @@ async def edt_tile_job(dut):
             if visits % 64 == 0:
                 Path(progress).write_text(f"{visits} {drv.streams.cycle}\n")
         drv.on_visit = show
+    if hasattr(dut, "wb_ctrl_cyc"):         # the engine with LiteDRAM (hdl/edt_bfs/tile_litedram.py)
+        await start_litedram(dut, job["sys_period_ns"], job["csrs"])
     await drv.start()
     start = tuple(job["start"]) if job["start"] is not None else None
     res = await drv.plan(np.array(job["obstacle"], dtype=bool), [tuple(g) for g in job["goals"]], start,
@@ -39,4 +47,10 @@ async def edt_tile_job(dut):
     out = {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in out.items()}
     out["path"] = [list(p) for p in res.path]
     out["trace"] = [list(t) for t in res.trace]
+    if job.get("path_only_too"):            # the same job again without the map read-out: its cycles and path
+        img = np.array(job["obstacle"], dtype=bool)
+        raw = await drv.job(img, [tuple(g) for g in job["goals"]], start, job["dfar"], readout=False)
+        got = drv.decode(raw, img.shape, readout=False)
+        out["path_only"] = {"cycles": got["cycles"], "path": [list(p) for p in got["path"]],
+                            "trace": [list(t) for t in got["trace"]]}
     Path(os.environ["EDT_RESULT"]).write_text(json.dumps(out))

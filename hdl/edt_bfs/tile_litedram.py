@@ -1,0 +1,72 @@
+"""The tile engine with its state in a DDR3 through LiteDRAM's controller (an instance of its generated core)."""
+
+from amaranth.hdl import Cat, Const, Instance, Module
+from amaranth.lib import wiring
+from amaranth.lib.wiring import In, Out
+
+from .tile_engine import TileEngine
+
+__all__ = ["TileLiteDram", "WISHBONE"]
+
+# LiteDRAM's control bus (wb_ctrl_*: a 32-bit Wishbone of word addresses), from the controller's side
+WISHBONE = {"adr": (30, "i"), "dat_w": (32, "i"), "sel": (4, "i"), "cyc": (1, "i"), "stb": (1, "i"),
+            "we": (1, "i"), "cti": (3, "i"), "bte": (2, "i"), "dat_r": (32, "o"), "ack": (1, "o"),
+            "err": (1, "o")}
+
+
+class TileLiteDram(wiring.Component):
+    """:class:`~hdl.edt_bfs.tile_engine.TileEngine` with ``store="dram"``
+    and an instance of ``litedram_core`` (scripts/litedram_core.py: a
+    32-bit DDR3 on ECP5DDRPHY, one 128-bit native user port) on its
+    ``dram`` port.
+
+    Parameters: the engine's ``t_r``, ``t_c``, ``max_h``, ``max_w``;
+    ``addr_width``: the core's native address (25 for the 1 GB of two
+    MT41K256M16 in 128-bit words: scripts/litedram_core.py's).
+
+    Ports: the engine's (``c_stream``, ``m_stream``, ``g_stream``,
+    ``o_stream``, ``busy``, ... ``visit``; in ``clk``'s domain, the
+    engine's clock), and the controller's: ``sys_clk`` (its system clock;
+    the native port and the crossing's far side run on its ``user_clk``),
+    ``wb_ctrl_*`` (its control bus: start-up writes the DFII control
+    register and ``init_done``, sim/rtl/litedram.py), ``init_done``,
+    ``init_error``.  The DRAM's own pins are the generated core's: in
+    simulation (``litedram_gen --sim``) the core holds LiteDRAM's model
+    of the DRAM and has none.
+    """
+
+    def __init__(self, t_r, t_c, max_h, max_w, addr_width=25):
+        self.engine = TileEngine(t_r, t_c, max_h, max_w, store="dram")
+        used = len(self.engine.dram.cmd.payload.addr)
+        if used > addr_width:
+            raise ValueError(f"the store's {used} address bits exceed the controller's {addr_width}")
+        self.addr_width = addr_width
+        members = {k: v for k, v in self.engine.signature.members.items() if k not in ("dram", "dram_clk", "dram_rst")}
+        members.update({"sys_clk": In(1), "init_done": Out(1), "init_error": Out(1)})
+        members.update({f"wb_ctrl_{k}": (In if d == "i" else Out)(w) for k, (w, d) in WISHBONE.items()})
+        super().__init__(members)
+
+    def elaborate(self, platform):
+        m = Module()
+        m.submodules.engine = e = self.engine
+        for name, member in self.signature.members.items():
+            if not hasattr(e, name):
+                continue
+            ours, theirs = getattr(self, name), getattr(e, name)
+            if member.is_port:
+                m.d.comb += (theirs.eq(ours) if member.flow == In else ours.eq(theirs))
+            else:
+                wiring.connect(m, wiring.flipped(ours), theirs)
+        d = e.dram
+        ports = {"i_clk": self.sys_clk, "i_sim_trace": 0, "o_user_clk": e.dram_clk, "o_user_rst": e.dram_rst,
+                 "o_init_done": self.init_done, "o_init_error": self.init_error,
+                 "i_user_port_native_0_cmd_valid": d.cmd.valid, "o_user_port_native_0_cmd_ready": d.cmd.ready,
+                 "i_user_port_native_0_cmd_we": d.cmd.payload.we, "i_user_port_native_0_cmd_addr": Cat(d.cmd.payload.addr, Const(0, self.addr_width - len(d.cmd.payload.addr))),
+                 "i_user_port_native_0_wdata_valid": d.wdata.valid, "o_user_port_native_0_wdata_ready": d.wdata.ready,
+                 "i_user_port_native_0_wdata_data": d.wdata.payload.data,
+                 "i_user_port_native_0_wdata_we": d.wdata.payload.we,
+                 "o_user_port_native_0_rdata_valid": d.rdata.valid, "i_user_port_native_0_rdata_ready": d.rdata.ready,
+                 "o_user_port_native_0_rdata_data": d.rdata.payload.data}
+        ports.update({f"{dir_}_wb_ctrl_{k}": getattr(self, f"wb_ctrl_{k}") for k, (_, dir_) in WISHBONE.items()})
+        m.submodules.dram = Instance("litedram_core", **ports)
+        return m

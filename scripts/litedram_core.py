@@ -1,0 +1,98 @@
+"""LiteDRAM's controller for the tile engine's DRAM store: generated, cached, with its CSR map.
+
+``python scripts/litedram_core.py [--sim]`` writes
+``build/litedram/<key>/gateware/litedram_core.v`` (and ``csr.csv``) with
+``litedram_gen`` from PyPI's litedram (``pip install -e .[dram]``): a
+32-bit DDR3 of two MT41K256M16 (the ECPIX-5's) on ECP5DDRPHY, no CPU, one
+128-bit native user port, the system clock SYS_CLK_HZ.  ``--sim``
+replaces the PHY and the chips by LiteDRAM's SDRAMPHYModel (the DRAM
+timing in the controller is the same: the module's tRCD, tRP, CL, refresh
+at the system clock; the PHY's own I/O latency is the model's): what
+scripts/bench_dram.py simulates.  The key hashes the configuration and
+litedram's version, so a second run reads the cache.  Exit 2 with one
+line when litedram is not installed.
+"""
+
+import argparse
+import hashlib
+import json
+import shutil
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SYS_CLK_HZ = 75e6       # the ECPIX-5's LiteX system clock: DDR3 at 300 MHz (ECP5DDRPHY is 1:2 rate, sys x 4)
+
+# litedram_gen's configuration (its YAML: JSON is YAML)
+CONFIG = {
+    "speedgrade": 8, "cpu": "None", "memtype": "DDR3", "uart": "rs232", "cmd_latency": 0,
+    "sdram_module": "MT41K256M16", "sdram_module_nb": 2, "sdram_rank_nb": 1, "sdram_phy": "ECP5DDRPHY",
+    "rtt_nom": "60ohm", "rtt_wr": "60ohm", "ron": "34ohm",
+    "input_clk_freq": 100e6, "sys_clk_freq": SYS_CLK_HZ, "init_clk_freq": 25e6, "cmd_buffer_depth": 16,
+    "user_ports": {"native_0": {"type": "native"}},
+}
+
+# The controller's CSRs the start-up writes (byte addresses from the generated csr.csv).
+CSRS = ("sdram_dfii_control", "ddrctrl_init_done")
+
+
+class NotInstalled(RuntimeError):
+    pass
+
+
+def _generator():
+    exe = shutil.which("litedram_gen", path=str(Path(sys.executable).parent)) or shutil.which("litedram_gen")
+    try:
+        version = metadata.version("litedram")
+    except metadata.PackageNotFoundError:
+        version = None
+    if exe is None or version is None:
+        raise NotInstalled("litedram is not installed: pip install -e '.[dram]' (litedram, litex, migen)")
+    return exe, version
+
+
+def generate(sim=True):
+    """The generated core: (path of litedram_core.v, {csr name: byte address})."""
+    exe, version = _generator()
+    what = json.dumps({"config": CONFIG, "sim": sim, "litedram": version}, sort_keys=True)
+    out = ROOT / "build" / "litedram" / hashlib.sha256(what.encode()).hexdigest()[:16]
+    core, csv = out / "gateware" / "litedram_core.v", out / "csr.csv"
+    if not (core.exists() and csv.exists()):
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "config.yml").write_text(json.dumps(CONFIG, indent=1) + "\n")
+        cmd = [exe, str(out / "config.yml"), "--output-dir", str(out), "--no-compile", "--soc-csv", str(csv)]
+        if sim:
+            cmd.append("--sim")
+        done = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
+        if done.returncode != 0 or not core.exists():
+            (out / "litedram_gen.log").write_text(done.stdout + done.stderr)
+            raise RuntimeError(f"litedram_gen failed (exit {done.returncode}): {out / 'litedram_gen.log'}")
+    csrs = {}
+    for line in csv.read_text().splitlines():
+        f = line.split(",")
+        if len(f) >= 3 and f[0] == "csr_register" and f[1] in CSRS:
+            csrs[f[1]] = int(f[2], 16)
+    missing = [c for c in CSRS if c not in csrs]
+    if missing:
+        raise RuntimeError(f"{csv}: no CSR {', '.join(missing)}")
+    return core, csrs
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--sim", action="store_true", help="with LiteDRAM's DRAM model (for simulation)")
+    args = ap.parse_args(argv)
+    try:
+        core, csrs = generate(args.sim)
+    except NotInstalled as e:
+        print(f"litedram_core: {e}", file=sys.stderr)
+        return 2
+    print(core)
+    print(", ".join(f"{k} at {v:#x}" for k, v in csrs.items()))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
