@@ -113,9 +113,9 @@ class DramStore(wiring.Component):
         The native port's word (LiteDRAM: 128 for a 32-bit DDR3 at 1:2 rate,
         64 for a 16-bit DDR3); a pixel's two groups must fit one word.
     max_reads : int
-        Native reads unanswered at most (the answers the path to the
-        controller can hold: the crossing's FIFO depth); LiteDRAM's native
-        port does not wait for ``rdata.ready``, so more would lose words.
+        Native reads unanswered at most: the depth of the FIFO that takes
+        the answers (always ready: LiteDRAM's native port does not wait for
+        ``rdata.ready``, a word not taken is lost).
 
     Ports
     -----
@@ -132,9 +132,13 @@ class DramStore(wiring.Component):
     next engine command is accepted in the cycle its predecessor's last
     native command goes.  A write's command and data beat are presented
     together, each held until taken (the controller may take the beat
-    later: LiteDRAM asks for it after the command).  Reads in flight are counted in a
-    FIFO of ``DESCRIPTORS`` (which words each brings); the answer side
-    collects them into one window row and holds it until taken.  Order:
+    later: LiteDRAM asks for it after the command).  Reads in flight are
+    described in a FIFO of ``DESCRIPTORS`` (which words each brings); the
+    answers enter a FIFO of ``max_reads`` words, and the answer side
+    collects them into one window row and holds it until taken.  The whole
+    store is reset with its controller (it runs on the controller's clock;
+    :class:`~hdl.edt_bfs.state_cdc.StateCdc` keeps the engine's reset from
+    it).  Order:
     the controller's (a read after a write to the same word sees it), so
     StateSignature's contract holds.  Timing: an EDT read takes ``a + e``
     port cycles, a BFS read ``a + b + e``, a write ``a`` (or ``b``) + 2, at
@@ -173,24 +177,21 @@ class DramStore(wiring.Component):
         hot, step = _lowest(m, busy_mask, n, "step")
 
         cmd, wdata = self.dram.cmd, self.dram.wdata
-        # The port's side is registers that no reset clears: a command presented is held until
-        # taken, and so is a write's data beat, reset or not (a controller is not reset with the
-        # engine: it would hang on a write without its data, and a stream's valid may not drop).
         # A step loads the command register and, for a write, the data register in the same
-        # cycle; each goes when its side is ready, and the next step loads when both are free:
-        # one native command a cycle.
-        c_valid = Signal(reset_less=True)
-        c_cmd = Signal(cmd.payload.shape().size, reset_less=True)
-        d_valid = Signal(reset_less=True)
-        d_data = Signal(wdata.payload.shape().size, reset_less=True)
+        # cycle; each goes when its side is ready (the controller may take the beat later), and
+        # the next step loads when both are free: one native command a cycle.
+        c_valid, d_valid = Signal(), Signal()
+        c_cmd = Signal(cmd.payload.shape().size)
+        d_data = Signal(wdata.payload.shape().size)
         active = busy_mask != 0
         cmd_go = cmd.valid & cmd.ready
         dat_go = wdata.valid & wdata.ready
         step_done = Signal()            # the step loads the registers
-        # A controller may not be able to hold its answers back (LiteDRAM's native port drops a
-        # word its user does not take): a read loads only while fewer than ``max_reads`` are
-        # unanswered, so whatever sits between (the crossing's answer FIFO) never fills.
-        in_flight = Signal(range(self.max_reads + 1), reset_less=True)
+        # A controller may not hold its answers back (LiteDRAM's native port drops a word its
+        # user does not take): they go into a FIFO of ``max_reads`` words, always ready, since
+        # a read loads only while fewer than ``max_reads`` are unanswered (``in_flight``: loaded
+        # and not yet taken out of that FIFO).
+        in_flight = Signal(range(self.max_reads + 1))
         m.d.comb += [cmd.valid.eq(c_valid), cmd.payload.eq(c_cmd), wdata.valid.eq(d_valid),
                      wdata.payload.eq(d_data),
                      step_done.eq(active & (~c_valid | cmd_go) & (~d_valid | dat_go)
@@ -198,8 +199,6 @@ class DramStore(wiring.Component):
         wd = Signal(lay["data_width"])              # the step's command, data and byte enables
         wbe = Signal(nb)
         addr = Signal(lay["addr_width"])
-        # (each written by one expression, not under If: Icarus leaves a conditional process
-        # unevaluated at time 0, and these registers, without a reset, would keep its X)
         m.d.sync += [c_valid.eq(step_done | (c_valid & ~cmd_go)),
                      c_cmd.eq(Mux(step_done, Cat(addr, is_wr), c_cmd)),
                      d_valid.eq((step_done & is_wr) | (d_valid & ~dat_go)),
@@ -265,18 +264,13 @@ class DramStore(wiring.Component):
         ahot, astep = _lowest(m, amask, n_rd, "ans")
         buf = [Signal(dw, name=f"buf{s}") for s in range(n_rd)]
         collecting = amask != 0
-        # Answers still coming when a reset struck are the controller's to deliver and ours to
-        # drop: ``in_flight`` (no reset) counts every read loaded into the command register and
-        # not answered (a loaded read goes out, reset or not), ``owned`` those loaded since the
-        # reset; answers come in order, so the first in_flight - owned are the old ones.
-        owned = Signal.like(in_flight, reset_less=False)
-        discard = in_flight != owned
+        m.submodules.answers = rf = SyncFIFOBuffered(width=dw, depth=self.max_reads)
+        m.d.comb += [rf.w_data.eq(rdata.payload.data), rf.w_en.eq(rdata.valid), rdata.ready.eq(rf.w_rdy)]
         issued = step_done & ~is_wr
-        got = rdata.valid & rdata.ready
-        m.d.sync += [in_flight.eq(in_flight + issued - got), owned.eq(owned + issued - (got & ~discard))]
-        word_go = got & ~discard
+        word_go = rf.r_rdy & rf.r_en
+        m.d.sync += in_flight.eq(in_flight + issued - word_go)
         last = collecting & (amask & ~ahot == 0)
-        m.d.comb += [rdata.ready.eq(discard | (collecting & (~out.valid | out.ready))), desc.r_en.eq(~collecting)]
+        m.d.comb += [rf.r_en.eq(collecting & (~out.valid | out.ready)), desc.r_en.eq(~collecting)]
         with m.If(~collecting & desc.r_rdy & desc.r_en):
             m.d.sync += amask.eq(desc.r_data)
         with m.If(word_go):
@@ -284,7 +278,7 @@ class DramStore(wiring.Component):
             with m.Switch(astep):
                 for s in range(n_rd):
                     with m.Case(s):
-                        m.d.sync += buf[s].eq(rdata.payload.data)
+                        m.d.sync += buf[s].eq(rf.r_data)
         with m.If(out.ready):
             m.d.sync += out.valid.eq(0)
         with m.If(word_go & last):

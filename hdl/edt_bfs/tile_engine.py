@@ -1,6 +1,6 @@
 """The EDT/BFS tile engine (issue 18): paper 004's cells as a T_r x T_c array over a map in block RAM."""
 
-from amaranth.hdl import Cat, ClockDomain, ClockSignal, Const, Module, Mux, ResetSignal, Signal, signed
+from amaranth.hdl import Cat, ClockDomain, ClockSignal, Const, DomainRenamer, Module, Mux, ResetSignal, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -10,7 +10,7 @@ from navcores.models.edt_bfs_tiled import Timing
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
 from .dram_store import DramStore, NativePortSignature, dram_layout
-from .native_cdc import NativeCdc
+from .state_cdc import StateCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
 from ..arith import divmod_const, times
@@ -30,7 +30,8 @@ MAX_PIXELS = 1 << 20    # on-chip state of a 1024 x 1024 map is ~50 Mbit: more t
 MAX_EXT_PIXELS = 1 << 22    # an external store: 2048 x 2048 pixels of ~60 bits fill a ULX3S's 32 MB SDRAM
 STORES = ("bram", "external", "dram")
 DRAM_WIDTH = 128        # store="dram": a native word of LiteDRAM's 1:2-rate PHY on a 32-bit DDR3 (2 x16 chips)
-DRAM_FIFO = 16          # store="dram": each crossing FIFO's depth, and so the native reads unanswered at most
+DRAM_FIFO = 16          # store="dram": each crossing FIFO's depth (engine reads unanswered at most), and the store's
+                        # answer FIFO's (native reads unanswered at most)
 
 
 def command_layout(w):
@@ -167,10 +168,10 @@ class TileEngine(wiring.Component):
         ``rdata``: :func:`~hdl.edt_bfs.dram_store.NativePortSignature`,
         128-bit words, ``addr_width`` from
         :func:`~hdl.edt_bfs.dram_store.dram_layout`), in the controller's
-        clock domain: ``dram_clk``, ``dram_rst`` (its reset, which also
-        empties the answer FIFO; the engine's ``rst`` does not reach the
-        controller's side); :class:`~hdl.edt_bfs.native_cdc.NativeCdc`
-        crosses from ``clk``.  Cycle counts: those of the controller's
+        clock domain: ``dram_clk``, ``dram_rst`` (its reset, the store's
+        too; the engine's ``rst`` does not reach the store's side), where
+        the store runs; :class:`~hdl.edt_bfs.state_cdc.StateCdc` crosses
+        from ``clk``.  Cycle counts: those of the controller's
         timing and the crossing (more than the figures below); results the
         same.
 
@@ -269,17 +270,20 @@ class TileEngine(wiring.Component):
         if self.store == "bram":
             m.submodules.ram = mem = StateRam(w, t_c, self.max_h)     # the store's ports (StateSignature)
         elif self.store == "dram":
-            # the store in the engine's domain; its native port crosses to the controller's clock
-            # (dram_clk) from a domain on the engine's clock that no reset clears (the store's
-            # port-side registers have none either: a command given is carried out)
+            # The store on the controller's clock (dram_clk: it issues several native commands
+            # per engine cycle), reset with the controller; the engine's side of StateSignature
+            # crosses to it from a domain on the engine's clock that the engine's reset does not
+            # clear (StateCdc drops the answers to reads made before a reset).
             m.domains.port = ClockDomain("port", reset_less=True)
             m.domains.dram = ClockDomain("dram")
             m.d.comb += [ClockSignal("port").eq(ClockSignal("sync")),
                          ClockSignal("dram").eq(self.dram_clk), ResetSignal("dram").eq(self.dram_rst)]
-            m.submodules.store = mem = DramStore(w, t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO)
-            m.submodules.cdc = cdc = NativeCdc(mem.lay["addr_width"], DRAM_WIDTH, "port", "dram", depth=DRAM_FIFO)
-            wiring.connect(m, mem.dram, cdc.user)
-            wiring.connect(m, cdc.ctrl, wiring.flipped(self.dram))
+            m.submodules.cdc = mem = StateCdc(w, t_c, "port", "sync", "dram", depth=DRAM_FIFO)
+            m.submodules.store = store = DomainRenamer("dram")(DramStore(w, t_c, self.max_h, DRAM_WIDTH,
+                                                                         max_reads=DRAM_FIFO))
+            for name in ("rd", "rd_data", "wr"):
+                wiring.connect(m, getattr(mem.store, name), getattr(store, name))
+            wiring.connect(m, store.dram, wiring.flipped(self.dram))
         else:
             mem = self.state
         m.submodules.work = work = Worklist(w)

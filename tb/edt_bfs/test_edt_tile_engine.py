@@ -282,14 +282,14 @@ async def external_store(dut):
 
 @cocotb.test(skip=not DRAM)
 async def dram_store(dut):
-    """The engine with its state in a DRAM (store="dram": hdl/edt_bfs/dram_store.py,
-    the native port crossing to the controller's clock in hdl/edt_bfs/native_cdc.py)
-    on sim/rtl/native_dram.py clocked by dram_clk (DRAM_PERIOD_NS against the
+    """The engine with its state in a DRAM (store="dram": hdl/edt_bfs/dram_store.py
+    on the controller's clock, hdl/edt_bfs/state_cdc.py crossing to it) on
+    sim/rtl/native_dram.py clocked by dram_clk (DRAM_PERIOD_NS against the
     engine's 10 ns): the same results and visit trace as the model in more
     cycles, at a fast DRAM and at a slow one (random latency, stalls) with
     idle input and back-pressure; resets of the engine alone in mid-job while
-    the DRAM still owes answers (and a write its data beat), each followed
-    by an exact job."""
+    the DRAM still owes answers (which the crossing must drop), each
+    followed by an exact job; no answer ever held back at the DRAM."""
     drv, rng = await _setup(dut)
     st = drv.store
     assert st is not None and hasattr(st, "rdata"), "the top has no dram port"
@@ -311,19 +311,18 @@ async def dram_store(dut):
     drv.set_stalls()
     img, start, goals = _case(rng, MID, "rooms")
     _, _, raw = await _check(drv, img, goals, start, 0, cycles=False)      # the job's length at this DRAM
-    owed_reads = owed_data = resets = 0
-    while resets < 16 and (owed_reads < 2 or owed_data < 1):       # resets at random points, until both hit
+    owed_reads = resets = 0
+    while resets < 3 or (resets < 16 and owed_reads < 2):           # resets at random points, two with answers owed
         resets += 1
         assert await drv.job(img, goals, start, 0, abort_after=int(rng.integers(raw["cycles"] // 8,
                                                                                  raw["cycles"]))) is None
         owed_reads += st.reads > len(st.rdata.beats)
-        owed_data += bool(st._awaiting)
         await _idle_after_reset(drv)
         await _check(drv, img, goals, start, 0, cycles=False)
         jobs += 1
     dut._log.info(f"{jobs} jobs compared, {st.reads} reads, {st.writes} writes, {st.late} late answers; "
-                  f"{resets} resets: with answers owed {owed_reads}, with a write's data owed {owed_data}")
-    assert owed_reads >= 2 and owed_data >= 1 and st.reads > 1000 and st.writes > 100
+                  f"{resets} resets, {owed_reads} with answers owed")
+    assert owed_reads >= 2 and st.reads > 1000 and st.writes > 100
     # LiteDRAM's native port does not wait for rdata.ready: an answer held back would be lost
     assert st.rdata.stalls == 0, f"{st.rdata.stalls} cycles an answer was held back"
 
