@@ -1,21 +1,25 @@
 """The tile engine with its state in a DDR3 through LiteDRAM, simulated on Verilator: whole jobs timed (issue 18).
 
-``python scripts/bench_dram.py [MAP ...] [--json FILE]`` runs each map's job
+``python scripts/bench_dram.py [MAP ...] [--md FILE]`` runs each map's job
 (scripts/bench_edt_tiled.job: the map's longest scenario) on
 :class:`~hdl.edt_bfs.tile_litedram.TileLiteDram` (the 4x8 engine over maps
 up to 512x512 with ``store="dram"``, and LiteDRAM's generated controller
 with its DRAM model: scripts/litedram_core.py) in Verilator, checks the
 results against models.edt_bfs_tiled (distances, vectors, cfr, parents,
 hop counts, path, tile visits and their trace: the same; cycles: more), and
-reports the job's engine cycles and its time at the engine's clock
-ENGINE_MHZ with the controller at litedram_core.SYS_CLK_HZ (the two clocks
-in that ratio in the simulation), against scipy on the same machine in the
-same run.  Needs ``pip install -e .[dram]``; exit 2 without it.
+reports the job's engine cycles and its time at the engine's clock (the
+4x8 / 512x512 engine with store=external placed: :func:`engine_mhz`) with
+the controller at litedram_core.SYS_CLK_HZ (the two clocks in that ratio
+in the simulation), against scipy on the same machine in the same run.
+``--md FILE`` writes the rows as BENCHMARKS.md's section (scripts/bench.py
+``--only dram`` does that within make bench).  Needs ``pip install -e
+.[dram]``; exit 2 without it.
 """
 
 import argparse
 import json
 import os
+import re
 import sys
 import time
 from pathlib import Path
@@ -36,25 +40,27 @@ from navcores.sim.rtl.runner import run  # noqa: E402
 WORK = B.ROOT / "build" / "bench_dram"
 ARRAY = (4, 8)
 RAM = B.EXT_RAM
-# The engine's clock: the 4x8 engine over 512x512 with an external store placed on the LFE5U-85F
-# (BENCHMARKS.md's tile-engine section); the DramStore and the crossing FIFOs in front of the
-# controller are not placed with it.
-ENGINE_MHZ = 22.1
+# The clocks' ratio in the simulation when the engine has not been placed (engine_mhz() is None):
+# about what the 4x8 engines reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
+RATIO_MHZ = 22.0
+MAPS = ("room-64-64-8", "maze512-1-0")
+SECTION = "EDT/BFS tile engine through LiteDRAM's DDR3 controller, simulated (issue 18)"
 KEYS = ("distance", "nearest", "cfr", "parent", "visited", "path", "iterations_edt", "iterations_bfs",
         "tile_visits", "trace")
 
 
-def sys_period_ns():
-    """The controller's period in the simulation, where the engine's is PERIOD_NS: their real ratio (even ps)."""
-    ps = PERIOD_NS * 1000 * ENGINE_MHZ * 1e6 / litedram_core.SYS_CLK_HZ
+def sys_period_ns(mhz):
+    """The controller's period in the simulation, where the engine's (at ``mhz``) is PERIOD_NS: their real
+    ratio (even ps)."""
+    ps = PERIOD_NS * 1000 * mhz * 1e6 / litedram_core.SYS_CLK_HZ
     return 2 * round(ps / 2) / 1000
 
 
-def rtl_job(obstacle, goal, start, core, csrs, work):
+def rtl_job(obstacle, goal, start, core, csrs, work, mhz):
     params = {"t_r": ARRAY[0], "t_c": ARRAY[1], "max_h": RAM[0], "max_w": RAM[1]}
     job, result = work / "job.json", work / "result.json"
     job.write_text(json.dumps({"obstacle": obstacle.tolist(), "goals": [list(goal)], "start": list(start),
-                               "dfar": B.DFAR, "sys_period_ns": sys_period_ns(), "csrs": csrs,
+                               "dfar": B.DFAR, "sys_period_ns": sys_period_ns(mhz), "csrs": csrs,
                                "path_only_too": True, **params}))
     run("edt_tile_litedram", params, "verilator", "navcores.sim.rtl.edt_tile_job",
         env={"EDT_JOB": job, "EDT_RESULT": result}, log_file=work / "sim.log",
@@ -64,12 +70,12 @@ def rtl_job(obstacle, goal, start, core, csrs, work):
     return json.loads(result.read_text())
 
 
-def measure(name, core, csrs, work):
+def measure(name, core, csrs, work, mhz):
     obstacle, goal, start = B.job(name)
     model = plan_path_tiled(obstacle, [goal], start, B.DFAR, array=ARRAY)
     sw = software.edt_bfs(obstacle, [goal], B.DFAR, bfs=("csgraph",), repeats=3)
     t0 = time.perf_counter()
-    rtl = rtl_job(obstacle, goal, start, core, csrs, work)
+    rtl = rtl_job(obstacle, goal, start, core, csrs, work, mhz or RATIO_MHZ)
     wall = time.perf_counter() - t0
     same = {k: (np.array_equal(np.asarray(rtl[k]), np.asarray(getattr(model, k))) if k not in ("path", "trace")
                 else [tuple(p) for p in rtl[k]] == list(getattr(model, k))) for k in KEYS}
@@ -77,38 +83,90 @@ def measure(name, core, csrs, work):
     if [tuple(p) for p in po["path"]] != model.path or [tuple(t) for t in po["trace"]] != list(model.trace):
         same["path_only"] = False
     bad = [k for k, ok in same.items() if not ok]
-    ms = po["cycles"] / ENGINE_MHZ / 1e3
+    ms = po["cycles"] / mhz / 1e3 if mhz else None
     return {"map": name, "shape": list(obstacle.shape), "tile_visits": model.tile_visits,
             "cycles_dram": po["cycles"], "cycles_bram_timing": model.cycles,
             "cycles_dram_with_readout": rtl["cycles"], "ms_dram": ms,
-            "ms_bram_timing": model.cycles / ENGINE_MHZ / 1e3, "scipy_ms": sw["sw_seconds"] * 1e3,
-            "speedup": sw["sw_seconds"] * 1e3 / ms,
-            "engine_mhz": ENGINE_MHZ, "sys_mhz": litedram_core.SYS_CLK_HZ / 1e6, "same_as_model": not bad,
+            "scipy_ms": sw["sw_seconds"] * 1e3, "speedup": sw["sw_seconds"] * 1e3 / ms if ms else None,
+            "engine_mhz": mhz, "sys_mhz": litedram_core.SYS_CLK_HZ / 1e6, "same_as_model": not bad,
             "differs": bad, "sim_seconds": round(wall, 1)}
+
+
+def engine_mhz():
+    """The engine's clock: the 4x8 engine over 512x512 with store=external placed on the part (its fit
+    JSON's median of seeds; the engine's logic is the same, the DramStore and StateCdc run on the
+    controller's clock), or None if it has not been placed (for its current Verilog)."""
+    fit = B.fit_result(ARRAY, RAM, store="external")
+    return fit["fmax_mhz"] if fit and fit["fits"] else None
+
+
+def section(maps=MAPS):
+    """The BENCHMARKS.md section (what ran, then a row per map: :func:`measure`) and the rows."""
+    stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    try:
+        core, csrs = litedram_core.generate(sim=True)
+    except litedram_core.NotInstalled as e:
+        return f"Not run on {stamp}: {e}.", []
+    mhz = engine_mhz()
+    rows = []
+    for name in maps:
+        work = WORK / name
+        work.mkdir(parents=True, exist_ok=True)
+        rows.append(measure(name, core, csrs, work, mhz))
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
+    clock = (f"the engine at {mhz:.1f} MHz (the 4x8 / 512x512 engine with store=external placed on the "
+             f"{B.PART}: make fit; the DramStore and its crossing run on the controller's clock and were not "
+             "placed)" if mhz else "no engine clock (the 4x8 / 512x512 engine is not placed for its current "
+             "Verilog: no job times)")
+    text = (f"Measured by `python scripts/bench_dram.py` on {stamp}, load average {load} on {os.cpu_count()} "
+            "cores. The 4x8 tile engine over maps up to 512x512 with store=dram (hdl/edt_bfs/dram_store.py, "
+            "state_cdc.py) and LiteDRAM's generated controller (scripts/litedram_core.py: a 32-bit DDR3 of two "
+            "MT41K256M16 on ECP5DDRPHY, the ECPIX-5's, system clock "
+            f"{litedram_core.SYS_CLK_HZ / 1e6:.0f} MHz), simulated together on Verilator with LiteDRAM's model "
+            "of the DRAM (`litedram_gen --sim`: the controller's timing, the model's PHY latency); "
+            f"{clock}; the two clocks in that ratio in the simulation. The job is the map's longest scenario "
+            "(load, EDT, cfr, BFS, path read-out; no map read-out); its results (distances, vectors, cfr, hop "
+            "counts, parents, path, the visit trace, with the map read-out in a first run) equal the tiled "
+            "model's. Cycles are the engine's; StateRam's timing is the model's cycle count (a store that "
+            "answers in 2 cycles and takes a command every cycle: what the block-RAM engine does).\n\n"
+            "| map | tile visits | cycles, StateRam's timing | cycles through LiteDRAM | ratio | job (ms) | "
+            "scipy (ms) | speed-up | same as model |\n|---|---:|---:|---:|---:|---:|---:|---:|---|\n")
+    for r in rows:
+        ms = f"{r['ms_dram']:.1f}" if r["ms_dram"] is not None else "-"
+        sp = f"{r['speedup']:.2f}x" if r["speedup"] is not None else "-"
+        text += (f"| {r['map']} ({r['shape'][0]}x{r['shape'][1]}) | {r['tile_visits']:,} | "
+                 f"{r['cycles_bram_timing']:,} | {r['cycles_dram']:,} | "
+                 f"{r['cycles_dram'] / r['cycles_bram_timing']:.2f} | {ms} | {r['scipy_ms']:.1f} | {sp} | "
+                 f"{'yes' if r['same_as_model'] else 'NO: ' + ', '.join(r['differs'])} |\n")
+    return text, rows
 
 
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("maps", nargs="*", default=["room-64-64-8", "maze512-1-0"], help="maps/NAME.map (default: %(default)s)")
-    ap.add_argument("--json", type=Path, help="write the rows here")
+    ap.add_argument("maps", nargs="*", default=list(MAPS), help="maps/NAME.map (default: %(default)s)")
+    ap.add_argument("--md", type=Path, help=f"replace the section '{SECTION}' of this markdown file")
     args = ap.parse_args(argv)
-    if args.json is not None and not args.json.parent.is_dir():
-        print(f"bench_dram: {args.json.parent}: no such folder", file=sys.stderr)
+    if args.md is not None and not args.md.is_file():
+        print(f"bench_dram: {args.md}: no such file", file=sys.stderr)
         return 2
+    for name in args.maps:
+        base = re.sub(r"x\d+$", "", name)            # NAMExF: the map drawn F x F (bench_edt_tiled.job)
+        if not (B.ROOT / "maps" / f"{base}.map").is_file():
+            print(f"bench_dram: no map maps/{name}.map", file=sys.stderr)
+            return 2
     try:
-        core, csrs = litedram_core.generate(sim=True)
+        litedram_core.generate(sim=True)
     except litedram_core.NotInstalled as e:
         print(f"bench_dram: {e}", file=sys.stderr)
         return 2
-    rows = []
-    for name in args.maps:
-        work = WORK / name                  # the job, its result and the simulator's log, kept
-        work.mkdir(parents=True, exist_ok=True)
-        row = measure(name, core, csrs, work)
-        rows.append(row)
-        print(json.dumps(row), flush=True)
-    if args.json is not None:
-        args.json.write_text(json.dumps(rows, indent=1) + "\n")
+    text, rows = section(args.maps)
+    print(text)
+    if args.md is not None:
+        old = args.md.read_text()
+        new = f"## {SECTION}\n\n{text}\n"
+        pattern = re.compile(rf"^## {re.escape(SECTION)}\n.*?(?=^## |\Z)", re.S | re.M)
+        args.md.write_text(pattern.sub(lambda _: new + "\n", old) if pattern.search(old)
+                           else old.rstrip("\n") + "\n\n" + new)
     return 0 if all(r["same_as_model"] for r in rows) else 1
 
 

@@ -18,6 +18,7 @@ from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, pixel_
 __all__ = ["DramStore", "NativePortSignature", "dram_layout"]
 
 DESCRIPTORS = 4         # reads in flight between the command side and the answer side
+BEATS = 16              # write data beats given and not yet taken by the controller
 
 
 def NativePortSignature(addr_width, data_width):
@@ -130,9 +131,9 @@ class DramStore(wiring.Component):
     and the left neighbour's right slot, byte-masked; a neighbour outside
     the widest map is skipped), one a cycle while the port is ready; the
     next engine command is accepted in the cycle its predecessor's last
-    native command goes.  A write's command and data beat are presented
-    together, each held until taken (the controller may take the beat
-    later: LiteDRAM asks for it after the command).  Reads in flight are
+    native command goes.  A write's data beat waits in a FIFO of ``BEATS``
+    until the controller asks for it (LiteDRAM: some cycles after the
+    command), so writes go one a cycle too.  Reads in flight are
     described in a FIFO of ``DESCRIPTORS`` (which words each brings); the
     answers enter a FIFO of ``max_reads`` words, and the answer side
     collects them into one window row and holds it until taken.  The whole
@@ -177,32 +178,30 @@ class DramStore(wiring.Component):
         hot, step = _lowest(m, busy_mask, n, "step")
 
         cmd, wdata = self.dram.cmd, self.dram.wdata
-        # A step loads the command register and, for a write, the data register in the same
-        # cycle; each goes when its side is ready (the controller may take the beat later), and
-        # the next step loads when both are free: one native command a cycle.
-        c_valid, d_valid = Signal(), Signal()
+        # A step loads the command register and, for a write, puts its data beat in a FIFO (the
+        # controller asks for the beat some cycles after taking the command: LiteDRAM's write
+        # latency); the next step loads when the register is free: one native command a cycle.
+        c_valid = Signal()
         c_cmd = Signal(cmd.payload.shape().size)
-        d_data = Signal(wdata.payload.shape().size)
+        m.submodules.beats = beats = SyncFIFOBuffered(width=wdata.payload.shape().size, depth=BEATS)
         active = busy_mask != 0
         cmd_go = cmd.valid & cmd.ready
-        dat_go = wdata.valid & wdata.ready
         step_done = Signal()            # the step loads the registers
         # A controller may not hold its answers back (LiteDRAM's native port drops a word its
         # user does not take): they go into a FIFO of ``max_reads`` words, always ready, since
         # a read loads only while fewer than ``max_reads`` are unanswered (``in_flight``: loaded
         # and not yet taken out of that FIFO).
         in_flight = Signal(range(self.max_reads + 1))
-        m.d.comb += [cmd.valid.eq(c_valid), cmd.payload.eq(c_cmd), wdata.valid.eq(d_valid),
-                     wdata.payload.eq(d_data),
-                     step_done.eq(active & (~c_valid | cmd_go) & (~d_valid | dat_go)
-                                  & (is_wr | (in_flight < self.max_reads)))]
+        m.d.comb += [cmd.valid.eq(c_valid), cmd.payload.eq(c_cmd),
+                     wdata.valid.eq(beats.r_rdy), wdata.payload.eq(beats.r_data), beats.r_en.eq(wdata.ready),
+                     step_done.eq(active & (~c_valid | cmd_go)
+                                  & Mux(is_wr, beats.w_rdy, in_flight < self.max_reads))]
         wd = Signal(lay["data_width"])              # the step's command, data and byte enables
         wbe = Signal(nb)
         addr = Signal(lay["addr_width"])
         m.d.sync += [c_valid.eq(step_done | (c_valid & ~cmd_go)),
-                     c_cmd.eq(Mux(step_done, Cat(addr, is_wr), c_cmd)),
-                     d_valid.eq((step_done & is_wr) | (d_valid & ~dat_go)),
-                     d_data.eq(Mux(step_done & is_wr, Cat(wd, wbe), d_data))]
+                     c_cmd.eq(Mux(step_done, Cat(addr, is_wr), c_cmd))]
+        m.d.comb += [beats.w_en.eq(step_done & is_wr), beats.w_data.eq(Cat(wd, wbe))]
         rest = Signal(n)
         m.d.comb += rest.eq(Mux(step_done, busy_mask & ~hot, busy_mask))
 
