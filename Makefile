@@ -2,7 +2,7 @@
 # (editable, with the `ip` extra: FuseSoC for tb/ip, and `dev`: pyflakes for
 # tb/test_pyflakes.py; the targets that
 # synthesize or place and route add the `fpga` extra: yosys and nextpnr from
-# PyPI), and Icarus Verilog / g++ through apt-get when missing and running as
+# PyPI; make bench also the `dram` extra: LiteDRAM's generator), and Icarus Verilog / g++ through apt-get when missing and running as
 # root (otherwise a message says what to install).
 
 PYTHON   ?= python3
@@ -10,6 +10,7 @@ VENV     := .venv
 BIN      := $(VENV)/bin
 STAMP    := $(VENV)/.installed
 FPGA     := $(VENV)/.installed-fpga
+DRAM     := $(VENV)/.installed-dram
 SIM      ?= icarus
 MODULE   ?= node
 JOBS     ?= 2
@@ -30,6 +31,9 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 $(FPGA): $(STAMP)
 	$(BIN)/python -m pip install -q -e '.[ip,fpga]'
+	touch $@
+$(DRAM): $(FPGA)	# LiteDRAM's generator: make bench's DRAM section (scripts/bench_dram.py)
+	$(BIN)/python -m pip install -q -e '.[ip,fpga,dram]'
 	touch $@
 
 define need_deb # command, Debian package
@@ -88,7 +92,7 @@ fit: $(FPGA)
 
 ## make bench: the performance report of every core (BENCHMARKS.md, build/bench/results.json):
 ## resources, iCE40 clock, cycles and time per job beside the software a user would pick, simulation speed
-bench: $(FPGA) icarus cxx
+bench: $(DRAM) icarus cxx
 	$(BIN)/python scripts/bench.py --md BENCHMARKS.md --json build/bench/results.json
 
 clean:

@@ -52,7 +52,7 @@ the options (a re-run only redoes what changed).
     python scripts/bench.py [--md BENCHMARKS.md] [--json build/bench/results.json]
                             [--skip study,simspeed,...]
     python scripts/bench.py --only study    # redo the study sections of BENCHMARKS.md in place
-    python scripts/bench.py --only why      # ... or some of them (schedule,why,bits,exponents,edt_tiled,float)
+    python scripts/bench.py --only why      # ... or some of them (schedule,why,bits,exponents,edt_tiled,dram,float)
 
 A run that skips some parts (``--skip``) rewrites the report with the parts
 it ran; the job rows of the cores it skipped and the hardware table, when
@@ -747,7 +747,13 @@ def _float():
     return bench_float.section()[0]
 
 
+def _dram():
+    import bench_dram
+    return bench_dram.section()[0]
+
+
 def _titles():
+    import bench_dram
     import bench_edt_tiled
     import bench_float
     import bench_harmonic
@@ -755,12 +761,12 @@ def _titles():
             "why": bench_harmonic.WHY_TITLE,
             "bits": "Harmonic planner: bits of precision against the longest distance (paper 3.2.2)",
             "exponents": "Harmonic planner: fixed point against block exponents",
-            "edt_tiled": bench_edt_tiled.SECTION, "float": bench_float.TITLE}
+            "edt_tiled": bench_edt_tiled.SECTION, "dram": bench_dram.SECTION, "float": bench_float.TITLE}
 
 
 # The study sections, in the report's order: key -> the function that writes its body.
 STUDIES = {"schedule": _schedule_study, "why": _why, "bits": _bits, "exponents": _exponents,
-           "edt_tiled": _edt_tiled, "float": _float}
+           "edt_tiled": _edt_tiled, "dram": _dram, "float": _float}
 
 
 def study_sections(keys=None):
@@ -848,7 +854,7 @@ def main(argv=None):
     ap.add_argument("--json", default=str(OUT / "results.json"))
     ap.add_argument("--skip", default="", help=f"comma-separated parts to leave out: {','.join(PARTS)}")
     ap.add_argument("--only", metavar="study|" + "|".join(STUDIES),
-                    help="study: rerun only the study sections (6 above) and replace them in --md, each with "
+                    help="study: rerun only the study sections (7 above) and replace them in --md, each with "
                          "this run's time; or a comma-separated list of them (why: where the harmonic "
                          "planner's cycles go); the other sections stay as their run wrote them")
     args = ap.parse_args(argv)
