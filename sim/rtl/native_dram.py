@@ -23,6 +23,7 @@ keeps the port's contract and nothing more:
 
 import itertools
 
+from .state_store import AnswerTiming
 from .stream import Streams, pauses
 
 __all__ = ["NativeDram"]
@@ -42,15 +43,15 @@ class NativeDram:
         self.dw, self.rng = data_width, rng
         self.streams = streams = Streams(dut, clock=clock, reset=None)
         self.words = {}
-        self.reads = self.writes = self.late = 0
-        self.latency, self.extra, self.stall = 4, 0.0, 0.0
+        self.timing = AnswerTiming(streams, rng, 4)
+        self.reads = self.writes = 0
+        self.stall = 0.0
         self._awaiting = []             # addresses of accepted writes whose beat has not come
-        self._due = []
         self._addr_mask = (1 << addr_width) - 1
         self._stall_cmd = self._stall_data = itertools.repeat(False)
         self.cmd = streams.sink("dram__cmd", pause=self._cmd_pause())
         self.wdata = streams.sink("dram__wdata", pause=self._data_pause())
-        self.rdata = streams.source("dram__rdata", pause=self._wait())
+        self.rdata = streams.source("dram__rdata", pause=self.timing.pause())
         self.cmd.callback = self._on_cmd
         self.wdata.callback = self._on_data
 
@@ -58,8 +59,8 @@ class NativeDram:
         """Answers ``latency`` cycles after the command (at least 1), plus with
         probability ``extra`` per cycle one more; ``cmd`` and ``wdata`` not ready
         with probability ``stall`` each cycle."""
-        assert latency >= 1
-        self.latency, self.extra, self.stall = latency, extra, stall
+        self.timing.set(latency, extra)
+        self.stall = stall
         self._stall_cmd = pauses(self.rng, stall) or itertools.repeat(False)
         self._stall_data = pauses(self.rng, stall) or itertools.repeat(False)
 
@@ -71,14 +72,9 @@ class NativeDram:
         while True:
             yield (not self._awaiting) | next(self._stall_data)
 
-    def _wait(self):
-        while True:
-            if self._due and self.streams.cycle < self._due[0]:
-                yield True
-            else:
-                if self._due:
-                    self._due.pop(0)
-                yield False
+    @property
+    def late(self):
+        return self.timing.late
 
     def _word(self, addr):
         if addr not in self.words:
@@ -91,11 +87,7 @@ class NativeDram:
             self.writes += 1
             self._awaiting.append(addr)
             return
-        delay = self.latency
-        while self.extra and self.rng.random() < self.extra:
-            delay += 1
-        self.late += delay > self.latency
-        self._due.append(max(cycle + delay, self._due[-1] if self._due else 0))
+        self.timing.schedule(cycle)
         self.rdata.put(self._word(addr))
         self.reads += 1
 

@@ -33,7 +33,45 @@ from navcores.hdl.edt_bfs.tile_layouts import EDT_FIELDS, BFS_FIELDS, pixel_layo
 
 from .stream import pauses
 
-__all__ = ["StateStore"]
+__all__ = ["StateStore", "AnswerTiming"]
+
+
+class AnswerTiming:
+    """When a simulated store's answers may go (this store's, and
+    sim/rtl/native_dram.py's): in command order, each ``latency`` cycles
+    after its command at least, plus with probability ``extra`` per cycle
+    one more (geometric); ``late`` counts the answers that waited beyond
+    ``latency``.  :meth:`pause` is the answer source's pause generator
+    (asked only when the source is about to present its next answer)."""
+
+    def __init__(self, streams, rng, latency):
+        self.streams, self.rng = streams, rng
+        self.latency, self.extra, self.late = latency, 0.0, 0
+        self._due = []                          # cycle each queued answer may be presented from
+
+    def set(self, latency, extra):
+        assert latency >= 1
+        self.latency, self.extra = latency, extra
+
+    def schedule(self, cycle):
+        """An answer to a command of ``cycle``, queued behind the others."""
+        delay = self.latency
+        while self.extra and self.rng.random() < self.extra:
+            delay += 1
+        self.late += delay > self.latency
+        self._due.append(max(cycle + delay, self._due[-1] if self._due else 0))
+
+    def pause(self):
+        while True:
+            if self._due and self.streams.cycle < self._due[0]:
+                yield True
+            else:
+                if self._due:
+                    self._due.pop(0)
+                yield False
+
+    def clear(self):
+        self._due.clear()
 
 
 class StateStore:
@@ -65,12 +103,12 @@ class StateStore:
                            for g, fields in (("di", ("di",)), ("nnt", ("dx", "dy")), ("bfs", BFS_FIELDS))}
         self.words = {}
         self._pending_writes = []               # (cycle, row, wcol, edt, bfs, word) not applied yet
-        self._due = []                          # cycle each queued answer may be presented from
-        self.reads = self.writes = self.late = 0
-        self.latency, self.extra, self.stall = 2, 0.0, 0.0
+        self.timing = AnswerTiming(streams, rng, 2)
+        self.reads = self.writes = 0
+        self.stall = 0.0
         self.rd = streams.sink("state__rd")
         self.wr = streams.sink("state__wr")
-        self.rd_data = streams.source("state__rd_data", pause=self._wait())
+        self.rd_data = streams.source("state__rd_data", pause=self.timing.pause())
         self.rd.callback = self._on_read
         self.wr.callback = self._on_write
 
@@ -78,21 +116,14 @@ class StateStore:
         """Answers ``latency`` cycles after the command (at least 1), plus
         with probability ``extra`` per cycle one more (geometric); ``rd``
         and ``wr`` not ready with probability ``stall`` each cycle."""
-        assert latency >= 1
-        self.latency, self.extra, self.stall = latency, extra, stall
+        self.timing.set(latency, extra)
+        self.stall = stall
         self.rd.set_pause(pauses(self.rng, stall))
         self.wr.set_pause(pauses(self.rng, stall))
 
-    def _wait(self):
-        """The answers' pause generator (asked only when the source is about
-        to present its next answer): hold it until its due cycle."""
-        while True:
-            if self._due and self.streams.cycle < self._due[0]:
-                yield True
-            else:
-                if self._due:
-                    self._due.pop(0)
-                yield False
+    @property
+    def late(self):
+        return self.timing.late
 
     def _field(self, word, where):
         off, width = where
@@ -129,16 +160,11 @@ class StateStore:
         # the fields the command does not ask for are don't-care: random, so the engine's use of one fails
         asked = sum(m for g, m in self._read_mask.items() if self._field(value, self._rf[g]))
         answer = (answer & asked) | (self.rng.getrandbits(self.px * (self.p + 2)) & ~asked)
-        delay = self.latency
-        while self.extra and self.rng.random() < self.extra:
-            delay += 1
-        self.late += delay > self.latency
-        # in order: an answer is never presented before the one ahead of it
-        self._due.append(max(cycle + delay, self._due[-1] if self._due else 0))
+        self.timing.schedule(cycle)
         self.rd_data.put(answer)
         self.reads += 1
 
     def reset(self):
         """The engine was reset: the answers in flight are dropped (the source's queue is cleared by
         the stream driver); accepted writes stay written."""
-        self._due.clear()
+        self.timing.clear()

@@ -364,20 +364,13 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
     assert ran == (len(only.split("|")) if only else 8), f"{ran} cocotb tests ran"
 
 
-# The external store: a 4x8 array (a power-of-two word) over maps up to 21x35 (partial tiles).
+# The stores outside the engine: a 4x8 array (a power-of-two word) over maps up to 21x35 (partial
+# tiles), its state on the state port (external: sim/rtl/state_store.py) or in a DRAM behind a native
+# port on a clock of its own (dram: sim/rtl/native_dram.py).
+@pytest.mark.parametrize("store", ["external", "dram"])
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
-def test_edt_tile_engine_external(sim):
-    params = (4, 8, 21, 35, "external")
-    env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": "external",
-           "COCOTB_TEST_FILTER": "external_store"}
-    assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1
-
-
-# The DRAM store: the same 4x8 array over the same maps, its state in a DRAM behind a native port
-# on a clock of its own.
-@pytest.mark.parametrize("sim", ["icarus", "verilator"])
-def test_edt_tile_engine_dram(sim):
-    params = (4, 8, 21, 35, "dram")
-    env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": "dram",
-           "COCOTB_TEST_FILTER": "dram_store"}
+def test_edt_tile_engine_store(sim, store):
+    params = (4, 8, 21, 35, store)
+    env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": store,
+           "COCOTB_TEST_FILTER": f"{store}_store"}
     assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1
