@@ -29,6 +29,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_edt_tiled as B  # noqa: E402
+import kept  # noqa: E402
 import litedram_core  # noqa: E402
 import software  # noqa: E402
 
@@ -162,11 +163,7 @@ def main(argv=None):
     text, rows = section(args.maps)
     print(text)
     if args.md is not None:
-        old = args.md.read_text()
-        new = f"## {SECTION}\n\n{text}\n"
-        pattern = re.compile(rf"^## {re.escape(SECTION)}\n.*?(?=^## |\Z)", re.S | re.M)
-        args.md.write_text(pattern.sub(lambda _: new + "\n", old) if pattern.search(old)
-                           else old.rstrip("\n") + "\n\n" + new)
+        kept.replace_section(args.md, SECTION, text)
     return 0 if all(r["same_as_model"] for r in rows) else 1
 
 

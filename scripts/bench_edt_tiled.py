@@ -379,12 +379,7 @@ def main(argv=None):
     out.write_text(text + "\n")
     print(text)
     if args.md:
-        md = Path(args.md)
-        old = md.read_text()
-        new = f"## {SECTION}\n\n{text}\n"
-        pattern = re.compile(rf"^## {re.escape(SECTION)}\n.*?(?=^## |\Z)", re.S | re.M)
-        md.write_text(kept.carry(pattern.sub(lambda _: new + "\n", old) if pattern.search(old)
-                                 else old.rstrip("\n") + "\n\n" + new, old))
+        kept.replace_section(Path(args.md), SECTION, text)
     return 0
 
 

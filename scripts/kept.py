@@ -49,3 +49,14 @@ def carry(new, old):
         head = new[:at].rstrip("\n") + "\n\n"
         new = head + block + ("\n" + new[at:].lstrip("\n") if new[at:].strip() else "")
     return new
+
+
+def replace_section(md, title, text):
+    """Write markdown file ``md`` with its section ``## title`` (up to the next
+    ``## ``) replaced by ``text``, or ``text`` added at its end if it has no
+    such section; the kept blocks it held are carried (:func:`carry`)."""
+    old = md.read_text()
+    new = f"## {title}\n\n{text}\n"
+    pattern = re.compile(rf"^## {re.escape(title)}\n.*?(?=^## |\Z)", re.S | re.M)
+    md.write_text(carry(pattern.sub(lambda _: new + "\n", old) if pattern.search(old)
+                        else old.rstrip("\n") + "\n\n" + new, old))
