@@ -40,6 +40,7 @@ from navcores.sim.rtl.runner import run  # noqa: E402
 
 WORK = B.ROOT / "build" / "bench_dram"
 ARRAY = (4, 8)
+PORTS = 4               # the controller's native ports the store uses (TileEngine's dram_ports)
 RAM = B.EXT_RAM
 # The clocks' ratio in the simulation when the engine has not been placed (engine_mhz() is None):
 # about what the 4x8 engines reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
@@ -58,7 +59,7 @@ def sys_period_ns(mhz):
 
 
 def rtl_job(obstacle, goal, start, core, csrs, work, mhz):
-    params = {"t_r": ARRAY[0], "t_c": ARRAY[1], "max_h": RAM[0], "max_w": RAM[1]}
+    params = {"t_r": ARRAY[0], "t_c": ARRAY[1], "max_h": RAM[0], "max_w": RAM[1], "dram_ports": PORTS}
     job, result = work / "job.json", work / "result.json"
     job.write_text(json.dumps({"obstacle": obstacle.tolist(), "goals": [list(goal)], "start": list(start),
                                "dfar": B.DFAR, "sys_period_ns": sys_period_ns(mhz), "csrs": csrs,
@@ -105,7 +106,7 @@ def section(maps=MAPS):
     """The BENCHMARKS.md section (what ran, then a row per map: :func:`measure`) and the rows."""
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     try:
-        core, csrs = litedram_core.generate(sim=True)
+        core, csrs = litedram_core.generate(sim=True, ports=PORTS)
     except litedram_core.NotInstalled as e:
         return f"Not run on {stamp}: {e}.", []
     mhz = engine_mhz()

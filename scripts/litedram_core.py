@@ -1,10 +1,10 @@
 """LiteDRAM's controller for the tile engine's DRAM store: generated, cached, with its CSR map.
 
-``python scripts/litedram_core.py [--sim]`` writes
+``python scripts/litedram_core.py [--sim] [--ports N]`` writes
 ``build/litedram/<key>/gateware/litedram_core.v`` (and ``csr.csv``) with
 ``litedram_gen`` from PyPI's litedram (``pip install -e .[dram]``): a
-32-bit DDR3 of two MT41K256M16 (the ECPIX-5's) on ECP5DDRPHY, no CPU, one
-128-bit native user port, the system clock SYS_CLK_HZ.  ``--sim``
+32-bit DDR3 of two MT41K256M16 (the ECPIX-5's) on ECP5DDRPHY, no CPU,
+``--ports`` 128-bit native user ports, the system clock SYS_CLK_HZ.  ``--sim``
 replaces the PHY and the chips by LiteDRAM's SDRAMPHYModel (the DRAM
 timing in the controller is the same: the module's tRCD, tRP, CL, refresh
 at the system clock; the PHY's own I/O latency is the model's): what
@@ -31,7 +31,6 @@ CONFIG = {
     "sdram_module": "MT41K256M16", "sdram_module_nb": 2, "sdram_rank_nb": 1, "sdram_phy": "ECP5DDRPHY",
     "rtt_nom": "60ohm", "rtt_wr": "60ohm", "ron": "34ohm",
     "input_clk_freq": 100e6, "sys_clk_freq": SYS_CLK_HZ, "init_clk_freq": 25e6, "cmd_buffer_depth": 16,
-    "user_ports": {"native_0": {"type": "native"}},
 }
 
 # The controller's CSRs the start-up writes (byte addresses from the generated csr.csv).
@@ -53,15 +52,22 @@ def _generator():
     return exe, version
 
 
-def generate(sim=True):
-    """The generated core: (path of litedram_core.v, {csr name: byte address})."""
+def config(ports=1):
+    """litedram_gen's configuration with ``ports`` native user ports (native_0 ...)."""
+    return {**CONFIG, "user_ports": {f"native_{i}": {"type": "native"} for i in range(ports)}}
+
+
+def generate(sim=True, ports=1):
+    """The generated core with ``ports`` native user ports: (path of litedram_core.v, {csr name: byte
+    address})."""
     exe, version = _generator()
-    what = json.dumps({"config": CONFIG, "sim": sim, "litedram": version}, sort_keys=True)
+    cfg = config(ports)
+    what = json.dumps({"config": cfg, "sim": sim, "litedram": version}, sort_keys=True)
     out = ROOT / "build" / "litedram" / hashlib.sha256(what.encode()).hexdigest()[:16]
     core, csv = out / "gateware" / "litedram_core.v", out / "csr.csv"
     if not (core.exists() and csv.exists()):
         out.mkdir(parents=True, exist_ok=True)
-        (out / "config.yml").write_text(json.dumps(CONFIG, indent=1) + "\n")
+        (out / "config.yml").write_text(json.dumps(cfg, indent=1) + "\n")
         cmd = [exe, str(out / "config.yml"), "--output-dir", str(out), "--no-compile", "--soc-csv", str(csv)]
         if sim:
             cmd.append("--sim")
@@ -83,9 +89,10 @@ def generate(sim=True):
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sim", action="store_true", help="with LiteDRAM's DRAM model (for simulation)")
+    ap.add_argument("--ports", type=int, default=1, choices=(1, 2, 4, 8), help="native user ports (default 1)")
     args = ap.parse_args(argv)
     try:
-        core, csrs = generate(args.sim)
+        core, csrs = generate(args.sim, args.ports)
     except NotInstalled as e:
         print(f"litedram_core: {e}", file=sys.stderr)
         return 2

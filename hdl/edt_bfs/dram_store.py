@@ -15,7 +15,7 @@ from amaranth.lib.wiring import In, Out
 from .state_ram import StateSignature
 from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, pixel_layout
 
-__all__ = ["DramStore", "NativePortSignature", "dram_layout"]
+__all__ = ["DramStore", "NativePortSignature", "dram_layout", "port_of_row", "BANK_AT", "PORTS"]
 
 DESCRIPTORS = 4         # reads in flight between the command side and the answer side
 BEATS = 16              # write data beats given and not yet taken by the controller
@@ -25,6 +25,22 @@ BEATS = 16              # write data beats given and not yet taken by the contro
 # whose rows stay open.  Measured on room-64-64-8 through LiteDRAM (engine cycles, bits 4..9):
 # 26,800 / 24,511 / 23,756 / 25,924 / 29,299 / 34,081 (9: the plain row-major order).
 ROW_BITS_AT = 6
+# LiteDRAM's bank is native address bits 7..9 for this DDR3 (its ROW_BANK_COL mapping: 10 column
+# bits less the 3 of the 1:2-rate PHY's burst of 8).  Its crossbar locks a native port to one bank
+# while the bank has commands queued (litedram/core/crossbar.py: a port's answers stay in order), and
+# one store issues one native command a cycle: with several ports, a store on each (RowRouter), port
+# i serves the rows whose words are in banks with low bits i (port_of_row: ROW_BITS_AT makes those
+# bank bits row bits), so a window's rows are read, and a tile's rows written, by several at once.
+BANK_AT = 7
+PORTS = (1, 2, 4)
+
+
+def port_of_row(row, ports):
+    """The native port whose store holds map row ``row`` (an Amaranth value) with ``ports`` ports: the
+    low bits of its words' bank (``BANK_AT``), which are row bits (``ROW_BITS_AT``)."""
+    lo, bits = BANK_AT - ROW_BITS_AT, (ports - 1).bit_length()
+    assert ports in PORTS and 0 <= lo and lo + bits <= 3, (ports, lo)
+    return row[lo:lo + bits] if bits else 0
 
 
 def NativePortSignature(addr_width, data_width):
@@ -79,7 +95,8 @@ def dram_layout(w, p, max_h, data_width=128):
     kb = max(0, (a + b + e - 1).bit_length())
     wb = max(1, (w["words"] - 1).bit_length())
     rb = max(1, (max_h - 1).bit_length())
-    return {"a": a, "b": b, "e": e, "kb": kb, "wb": wb, "rb": rb, "addr_width": rb + wb + kb,
+    # the row's low bits at ROW_BITS_AT even when a row's blocks take fewer address bits (a small map)
+    return {"a": a, "b": b, "e": e, "kb": kb, "wb": wb, "rb": rb, "addr_width": rb + max(wb + kb, ROW_BITS_AT),
             "slot": slot, "edt_byte": 0, "bfs_byte": _bytes(e_bits), "data_width": data_width,
             "slot_at": (lambda s: (s, 0) if e == 2 else (0, s * slot))}
 
@@ -265,7 +282,7 @@ class DramStore(wiring.Component):
                                 m.d.comb += _slot_write(wd, wbe, src, byte, lay, px, wmask)
         # the block's address ((row << wb) | wcol) << kb | off with the map row's 3 low bits moved
         # down to bit ROW_BITS_AT (dram_layout)
-        lin = Cat(off[:kb] if kb else Const(0, 0), col[:wb])
+        lin = Cat(off[:kb] if kb else Const(0, 0), col[:wb], Const(0, max(0, ROW_BITS_AT - kb - wb)))
         m.d.comb += addr.eq(Cat(lin[:ROW_BITS_AT], row[:3], lin[ROW_BITS_AT:], row[3:]))
 
         # -- the answer side: collect one read's words, then present the window row

@@ -9,7 +9,8 @@ from navcores.models.edt_bfs_tiled import Timing
 
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
-from .dram_store import DramStore, NativePortSignature, dram_layout
+from .row_router import RowRouter
+from .dram_store import PORTS, DramStore, NativePortSignature, dram_layout, port_of_row
 from .state_cdc import StateCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
@@ -114,6 +115,15 @@ class TileEngine(wiring.Component):
         Mbit against the LFE5U-85F's 3.7), or a DRAM controller's native
         port behind :class:`~hdl.edt_bfs.dram_store.DramStore` (the
         ``dram`` port, 128-bit words: LiteDRAM's for a 32-bit DDR3).
+    dram_ports : 1, 2 or 4
+        With ``store="dram"``: how many of the controller's native ports the
+        engine uses, a :class:`~hdl.edt_bfs.dram_store.DramStore` on each
+        and :class:`~hdl.edt_bfs.row_router.RowRouter` spreading the map
+        rows over them (:func:`~hdl.edt_bfs.dram_store.port_of_row`: a
+        word's port is its bank's low bits), so the stores issue and collect
+        a window's rows at once (one store issues one native command a
+        cycle, and LiteDRAM locks a port to one bank while the bank has
+        commands queued).
 
     Ports
     -----
@@ -163,8 +173,8 @@ class TileEngine(wiring.Component):
         below hold for a store with StateRam's timing (always ready,
         answers two cycles after the command); a slower store adds cycles
         and changes no result.
-    dram : Out(NativePortSignature) (``store="dram"`` only)
-        A DRAM controller's native user port (``cmd``, ``wdata``,
+    dram : Out(NativePortSignature).array(dram_ports) (``store="dram"`` only)
+        A DRAM controller's native user ports (``cmd``, ``wdata``,
         ``rdata``: :func:`~hdl.edt_bfs.dram_store.NativePortSignature`,
         128-bit words, ``addr_width`` from
         :func:`~hdl.edt_bfs.dram_store.dram_layout`), in the controller's
@@ -211,6 +221,9 @@ class TileEngine(wiring.Component):
               doc="the state store: the engine's block RAM, an external one on the state port, or a DRAM's "
                   "native port",
               message="state store {value!r}: must be {allowed}"),
+        Param("dram_ports", int, 1, choices=PORTS,
+              doc="store=dram: the controller's native ports the store uses (a word's port: its bank's low bits)",
+              message="native ports dram_ports {value!r}: must be {allowed}"),
     )
     CONSTRAINTS = (
         Constraint("max_h > t_r and max_w > t_c", lambda p: p["max_h"] > p["t_r"] and p["max_w"] > p["t_c"],
@@ -232,9 +245,11 @@ class TileEngine(wiring.Component):
     )
 
     @checked_init
-    def __init__(self, t_r, t_c, max_h, max_w, store="bram"):
-        check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, store=store)
+    def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1):
+        check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, store=store,
+              dram_ports=dram_ports)
         self.t_r, self.t_c, self.max_h, self.max_w, self.store = t_r, t_c, max_h, max_w, store
+        self.dram_ports = dram_ports
         w = self.w = tile_widths(t_r, t_c, max_h, max_w)
         super().__init__({
             "c_stream": In(stream.Signature(command_layout(w))),
@@ -245,8 +260,8 @@ class TileEngine(wiring.Component):
             "path_found": Out(1), "levels": Out(w["k"]), "tile_visits": Out(32),
             "visit": Out(visit_layout(w)),
             **({"state": In(StateSignature(w, t_c))} if store == "external" else {}),
-            **({"dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH)),
-                "dram_clk": In(1), "dram_rst": In(1)} if store == "dram" else {}),
+            **({"dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH))
+                .array(dram_ports), "dram_clk": In(1), "dram_rst": In(1)} if store == "dram" else {}),
         })
 
     def timing(self):
@@ -279,11 +294,22 @@ class TileEngine(wiring.Component):
             m.d.comb += [ClockSignal("port").eq(ClockSignal("sync")),
                          ClockSignal("dram").eq(self.dram_clk), ResetSignal("dram").eq(self.dram_rst)]
             m.submodules.cdc = mem = StateCdc(w, t_c, "port", "sync", "dram", depth=DRAM_FIFO)
-            m.submodules.store = store = DomainRenamer("dram")(DramStore(w, t_c, self.max_h, DRAM_WIDTH,
-                                                                         max_reads=DRAM_FIFO))
-            for name in ("rd", "rd_data", "wr"):
-                wiring.connect(m, getattr(mem.store, name), getattr(store, name))
-            wiring.connect(m, store.dram, wiring.flipped(self.dram))
+            stores = [DomainRenamer("dram")(DramStore(w, t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO))
+                      for _ in range(self.dram_ports)]
+            if self.dram_ports == 1:
+                sides = [mem.store]
+            else:       # a store on each native port, the rows spread over them (dram_store.port_of_row)
+                m.submodules.rows = rows = DomainRenamer("dram")(
+                    RowRouter(w, t_c, self.dram_ports, lambda row: port_of_row(row, self.dram_ports),
+                              depth=DRAM_FIFO))
+                for name in ("rd", "rd_data", "wr"):
+                    wiring.connect(m, getattr(mem.store, name), getattr(rows, name))
+                sides = list(rows.stores)
+            for i, (store, side, port) in enumerate(zip(stores, sides, self.dram)):
+                m.submodules[f"store{i}"] = store
+                for name in ("rd", "rd_data", "wr"):
+                    wiring.connect(m, getattr(side, name), getattr(store, name))
+                wiring.connect(m, store.dram, wiring.flipped(port))
         else:
             mem = self.state
         m.submodules.work = work = Worklist(w)

@@ -17,10 +17,10 @@ WISHBONE = {"adr": (30, "i"), "dat_w": (32, "i"), "sel": (4, "i"), "cyc": (1, "i
 class TileLiteDram(wiring.Component):
     """:class:`~hdl.edt_bfs.tile_engine.TileEngine` with ``store="dram"``
     and an instance of ``litedram_core`` (scripts/litedram_core.py: a
-    32-bit DDR3 on ECP5DDRPHY, one 128-bit native user port) on its
-    ``dram`` port.
+    32-bit DDR3 on ECP5DDRPHY, ``dram_ports`` 128-bit native user ports) on
+    its ``dram`` ports.
 
-    Parameters: the engine's ``t_r``, ``t_c``, ``max_h``, ``max_w``;
+    Parameters: the engine's ``t_r``, ``t_c``, ``max_h``, ``max_w``, ``dram_ports``;
     ``addr_width``: the core's native address (25 for the 1 GB of two
     MT41K256M16 in 128-bit words: scripts/litedram_core.py's).
 
@@ -35,9 +35,9 @@ class TileLiteDram(wiring.Component):
     of the DRAM and has none.
     """
 
-    def __init__(self, t_r, t_c, max_h, max_w, addr_width=25):
-        self.engine = TileEngine(t_r, t_c, max_h, max_w, store="dram")
-        used = len(self.engine.dram.cmd.payload.addr)
+    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, addr_width=25):
+        self.engine = TileEngine(t_r, t_c, max_h, max_w, store="dram", dram_ports=dram_ports)
+        used = len(self.engine.dram[0].cmd.payload.addr)
         if used > addr_width:
             raise ValueError(f"the store's {used} address bits exceed the controller's {addr_width}")
         self.addr_width = addr_width
@@ -57,16 +57,18 @@ class TileLiteDram(wiring.Component):
                 m.d.comb += (theirs.eq(ours) if member.flow == In else ours.eq(theirs))
             else:
                 wiring.connect(m, wiring.flipped(ours), theirs)
-        d = e.dram
         ports = {"i_clk": self.sys_clk, "i_sim_trace": 0, "o_user_clk": e.dram_clk, "o_user_rst": e.dram_rst,
-                 "o_init_done": self.init_done, "o_init_error": self.init_error,
-                 "i_user_port_native_0_cmd_valid": d.cmd.valid, "o_user_port_native_0_cmd_ready": d.cmd.ready,
-                 "i_user_port_native_0_cmd_we": d.cmd.payload.we, "i_user_port_native_0_cmd_addr": Cat(d.cmd.payload.addr, Const(0, self.addr_width - len(d.cmd.payload.addr))),
-                 "i_user_port_native_0_wdata_valid": d.wdata.valid, "o_user_port_native_0_wdata_ready": d.wdata.ready,
-                 "i_user_port_native_0_wdata_data": d.wdata.payload.data,
-                 "i_user_port_native_0_wdata_we": d.wdata.payload.we,
-                 "o_user_port_native_0_rdata_valid": d.rdata.valid, "i_user_port_native_0_rdata_ready": d.rdata.ready,
-                 "o_user_port_native_0_rdata_data": d.rdata.payload.data}
+                 "o_init_done": self.init_done, "o_init_error": self.init_error}
+        pad = self.addr_width - len(e.dram[0].cmd.payload.addr)
+        for i, d in enumerate(e.dram):
+            u = f"user_port_native_{i}"
+            ports.update({
+                f"i_{u}_cmd_valid": d.cmd.valid, f"o_{u}_cmd_ready": d.cmd.ready, f"i_{u}_cmd_we": d.cmd.payload.we,
+                f"i_{u}_cmd_addr": Cat(d.cmd.payload.addr, Const(0, pad)),
+                f"i_{u}_wdata_valid": d.wdata.valid, f"o_{u}_wdata_ready": d.wdata.ready,
+                f"i_{u}_wdata_data": d.wdata.payload.data, f"i_{u}_wdata_we": d.wdata.payload.we,
+                f"o_{u}_rdata_valid": d.rdata.valid, f"i_{u}_rdata_ready": d.rdata.ready,
+                f"o_{u}_rdata_data": d.rdata.payload.data})
         ports.update({f"{dir_}_wb_ctrl_{k}": getattr(self, f"wb_ctrl_{k}") for k, (_, dir_) in WISHBONE.items()})
         m.submodules.dram = Instance("litedram_core", **ports)
         return m

@@ -19,6 +19,7 @@ decodes the results into the fields of
 start and d_far in; the model's result object out.
 """
 
+import itertools
 import random
 
 import cocotb
@@ -61,7 +62,7 @@ class TileEngineDriver:
     :class:`.stream.StreamSink` on ``o_stream``; ``store``: with an external
     store (``store="external"``), the :class:`.state_store.StateStore` on
     its ``state`` port, with ``store="dram"`` the :class:`.native_dram.NativeDram`
-    on its ``dram`` port (``seed``: its random bits and timing), else None.  ``on_visit`` (if set) is
+    on its ``dram`` ports (``seed``: its random bits and timing), else None.  ``on_visit`` (if set) is
     called with the count of visits so far at each visit (progress)."""
 
     def __init__(self, dut, t_r, t_c, max_h, max_w, seed=0):
@@ -78,9 +79,11 @@ class TileEngineDriver:
                       if hasattr(dut, "state__rd__valid") else None)
         # store="dram": the DRAM on its native port (not reset with the engine); not when the top
         # holds its own controller (hdl/edt_bfs/tile_litedram.py, whose inner wires have those names)
-        if hasattr(dut, "dram__cmd__valid") and not hasattr(dut, "wb_ctrl_cyc"):
+        if hasattr(dut, "dram__0__cmd__valid") and not hasattr(dut, "wb_ctrl_cyc"):
             lay = dram_layout(w, t_c, max_h, DRAM_WIDTH)
-            self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed), clock=dut.dram_clk)
+            ports = next(i for i in itertools.count() if not hasattr(dut, f"dram__{i}__cmd__valid"))
+            self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed), clock=dut.dram_clk,
+                                    ports=ports)
         self.on_visit = None
 
     def set_stalls(self, rng=None, idle=0.0, back_pressure=0.0):

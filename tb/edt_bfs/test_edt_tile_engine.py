@@ -46,6 +46,7 @@ BUNDLED = [n for n in os.environ.get("TILE_MAPS", "").split(",") if n]
 LARGE = os.environ.get("TILE_LARGE") == "1"
 EXTERNAL = os.environ.get("TILE_STORE") == "external"
 DRAM = os.environ.get("TILE_STORE") == "dram"
+DRAM_PORTS = 4          # the DRAM test's native ports: rows of a window on different ports (BANK_AT)
 MAPS = Path(__file__).resolve().parents[2] / "maps"
 
 
@@ -292,7 +293,7 @@ async def dram_store(dut):
     followed by an exact job; no answer ever held back at the DRAM."""
     drv, rng = await _setup(dut)
     st = drv.store
-    assert st is not None and hasattr(st, "rdata"), "the top has no dram port"
+    assert st is not None and hasattr(st, "ports"), "the top has no dram port"
 
     jobs = 0
     for shape in (MID, (_partial(2, MAX_H, T_R), _partial(2, MAX_W, T_C))):
@@ -304,9 +305,9 @@ async def dram_store(dut):
     drv.set_stalls(rng, 0.2, 0.3)
     for n in range(2):
         img, start, goals = _case(rng, MID, "rooms" if n else "random")
-        late, paused = st.late, st.cmd.paused + st.wdata.paused
+        late, paused = st.late, st.paused
         await _check(drv, img, goals, start, n % 2, cycles=False)
-        assert st.late > late and st.cmd.paused + st.wdata.paused > paused     # the DRAM's delays happened
+        assert st.late > late and st.paused > paused        # the DRAM's delays happened
         jobs += 1
     drv.set_stalls()
     img, start, goals = _case(rng, MID, "rooms")
@@ -316,19 +317,21 @@ async def dram_store(dut):
         resets += 1
         assert await drv.job(img, goals, start, 0, abort_after=int(rng.integers(raw["cycles"] // 8,
                                                                                  raw["cycles"]))) is None
-        owed_reads += st.reads > len(st.rdata.beats)
+        owed_reads += st.reads > st.answered
         await _idle_after_reset(drv)
         await _check(drv, img, goals, start, 0, cycles=False)
         jobs += 1
     dut._log.info(f"{jobs} jobs compared, {st.reads} reads, {st.writes} writes, {st.late} late answers; "
                   f"{resets} resets, {owed_reads} with answers owed")
     assert owed_reads >= 2 and st.reads > 1000 and st.writes > 100
+    used = [len(p.cmd.beats) for p in st.ports]
+    assert len(used) == DRAM_PORTS and min(used) > 100, f"commands per native port: {used}"
     # LiteDRAM's native port does not wait for rdata.ready: an answer held back would be lost
-    assert st.rdata.stalls == 0, f"{st.rdata.stalls} cycles an answer was held back"
+    assert st.held_back == 0, f"{st.held_back} cycles an answer was held back"
 
 
 def _params(p):
-    return dict(zip(("t_r", "t_c", "max_h", "max_w", "store"), p))
+    return dict(zip(("t_r", "t_c", "max_h", "max_w", "store", "dram_ports"), p))
 
 
 # One build per simulator and parameter set.  An 8x8 array on a 64x64 RAM on
@@ -365,12 +368,12 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
 
 
 # The stores outside the engine: a 4x8 array (a power-of-two word) over maps up to 21x35 (partial
-# tiles), its state on the state port (external: sim/rtl/state_store.py) or in a DRAM behind a native
-# port on a clock of its own (dram: sim/rtl/native_dram.py).
+# tiles), its state on the state port (external: sim/rtl/state_store.py) or in a DRAM behind
+# DRAM_PORTS native ports on a clock of their own (dram: sim/rtl/native_dram.py).
 @pytest.mark.parametrize("store", ["external", "dram"])
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
 def test_edt_tile_engine_store(sim, store):
-    params = (4, 8, 21, 35, store)
+    params = (4, 8, 21, 35, store) + ((DRAM_PORTS,) if store == "dram" else ())
     env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": store,
            "COCOTB_TEST_FILTER": f"{store}_store"}
     assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1
