@@ -50,6 +50,7 @@ from .dflc.top import DflcStream, core_from_params  # noqa: E402
 from .edt_bfs.array import EdtArray  # noqa: E402
 from .edt_bfs.cell import EdtCell  # noqa: E402
 from .edt_bfs.edt_bfs import EdtBfs  # noqa: E402
+from .edt_bfs.dram_stores import DramStores  # noqa: E402
 from .edt_bfs.tile_engine import TileEngine  # noqa: E402
 from .harmonic.border import Border  # noqa: E402
 from .harmonic.cluster import Cluster  # noqa: E402
@@ -93,6 +94,8 @@ TOPS = {
     "edt_array": lambda height, width: EdtArray(height, width, cell_module=_cell_module("edt_array", height, width)),
     "edt_bfs": lambda height, width: EdtBfs(height, width, cell_module=_cell_module("edt_bfs", height, width)),
     "edt_tile_engine": TileEngine,
+    # the tile engine's DRAM side (store="dram"), on the controller's clock: its own top for the fit flow
+    "edt_dram_stores": DramStores,
 }
 
 # The class whose PARAMS / CONSTRAINTS a factory above takes (when it is not a class).

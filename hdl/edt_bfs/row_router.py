@@ -29,7 +29,7 @@ class RowRouter(wiring.Component):
         in one row, so one store holds every copy of a pixel).
     depth : int
         Reads unanswered at most (the FIFO of their stores; the engine's
-        crossing allows :data:`~hdl.edt_bfs.tile_engine.DRAM_FIFO`).
+        crossing allows :data:`~hdl.edt_bfs.dram_stores.DRAM_FIFO`).
 
     Ports
     -----

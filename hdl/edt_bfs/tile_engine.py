@@ -9,30 +9,24 @@ from navcores.models.edt_bfs_tiled import Timing
 
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
-from .row_router import RowRouter
-from .dram_store import PORTS, DramStore, NativePortSignature, dram_layout, port_of_row
+from .dram_store import NativePortSignature, dram_layout
+from .dram_stores import DRAM_FIFO, DRAM_PORTS_PARAM, DRAM_WIDTH, DramStores
 from .state_cdc import StateCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
 from ..arith import divmod_const, times
-from .tile_layouts import named, pixel_layout, tile_widths
+from .tile_layouts import MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout, pixels, tile_widths
 from .worklist import Worklist, tile_layout
 
 STATES = ("IDLE", "LOAD", "SCAN", "LEVEL", "SCHED0", "SCHED1", "READ", "ITER", "STORE",
           "GOAL0", "GOAL1", "PATH", "READOUT")
 
 __all__ = ["TileEngine", "command_layout", "map_layout", "goal_layout", "result_layout", "visit_layout",
-           "TIMING", "MAX_CELLS"]
+           "TIMING", "MAX_CELLS", "DRAM_WIDTH"]
 
 TIMING = Timing()       # the cycle constants this RTL implements (the model's defaults)
-MAX_CELLS = 256         # T_r * T_c: a 16 x 16 array of the paper's cells is ~120k LUT4, beyond the LFE5U-85F
-MAX_SIDE = 4096         # a map side (issue 18: real maps are 200 .. 4000 cells a side)
 MAX_PIXELS = 1 << 20    # on-chip state of a 1024 x 1024 map is ~50 Mbit: more than any FPGA's block RAM today
-MAX_EXT_PIXELS = 1 << 22    # an external store: 2048 x 2048 pixels of ~60 bits fill a ULX3S's 32 MB SDRAM
 STORES = ("bram", "external", "dram")
-DRAM_WIDTH = 128        # store="dram": a native word of LiteDRAM's 1:2-rate PHY on a 32-bit DDR3 (2 x16 chips)
-DRAM_FIFO = 16          # store="dram": each crossing FIFO's depth (engine reads unanswered at most), and the store's
-                        # answer FIFO's (native reads unanswered at most)
 
 
 def command_layout(w):
@@ -65,11 +59,6 @@ def visit_layout(w):
     """The visit monitor: one cycle of ``valid`` at the end of each tile visit."""
     return data.StructLayout({"valid": 1, "bfs": 1, "r": range(w["tile_rows"]), "c": range(w["tile_cols"]),
                               "iterations": w["iters"], "marks": 4})
-
-
-def _pixels(p):
-    """The largest map's pixel count, for the RAM-size constraints' messages."""
-    return {"n": p["max_h"] * p["max_w"]}
 
 
 def _above(value, limit):
@@ -117,9 +106,10 @@ class TileEngine(wiring.Component):
         ``dram`` port, 128-bit words: LiteDRAM's for a 32-bit DDR3).
     dram_ports : 1, 2 or 4
         With ``store="dram"``: how many of the controller's native ports the
-        engine uses, a :class:`~hdl.edt_bfs.dram_store.DramStore` on each
-        and :class:`~hdl.edt_bfs.row_router.RowRouter` spreading the map
-        rows over them (:func:`~hdl.edt_bfs.dram_store.port_of_row`: a
+        engine uses (:class:`~hdl.edt_bfs.dram_stores.DramStores`: a
+        :class:`~hdl.edt_bfs.dram_store.DramStore` on each and
+        :class:`~hdl.edt_bfs.row_router.RowRouter` spreading the map rows
+        over them (:func:`~hdl.edt_bfs.dram_store.port_of_row`: a
         word's port is its bank's low bits), so the stores issue and collect
         a window's rows at once (one store issues one native command a
         cycle, and LiteDRAM locks a port to one bank while the bank has
@@ -208,41 +198,20 @@ class TileEngine(wiring.Component):
     (the scan).
     """
 
-    PARAMS = (
-        Param("t_r", int, lo=2, hi=32, doc="array rows T_r",
-              message="array rows t_r {value!r}: must be an integer in {lo}..{hi}"),
-        Param("t_c", int, lo=2, hi=32, doc="array columns T_c (pixels per RAM word)",
-              message="array columns t_c {value!r}: must be an integer in {lo}..{hi}"),
-        Param("max_h", int, lo=3, hi=MAX_SIDE, doc="largest map height (the RAM)",
-              message="largest map height max_h {value!r}: must be an integer in {lo}..{hi}"),
-        Param("max_w", int, lo=3, hi=MAX_SIDE, doc="largest map width (the RAM)",
-              message="largest map width max_w {value!r}: must be an integer in {lo}..{hi}"),
+    PARAMS = TILE_PARAMS + (
         Param("store", str, "bram", choices=STORES,
               doc="the state store: the engine's block RAM, an external one on the state port, or a DRAM's "
                   "native port",
               message="state store {value!r}: must be {allowed}"),
-        Param("dram_ports", int, 1, choices=PORTS,
-              doc="store=dram: the controller's native ports the store uses (a word's port: its bank's low bits)",
-              message="native ports dram_ports {value!r}: must be {allowed}"),
+        DRAM_PORTS_PARAM,
     )
-    CONSTRAINTS = (
-        Constraint("max_h > t_r and max_w > t_c", lambda p: p["max_h"] > p["t_r"] and p["max_w"] > p["t_c"],
-                   "largest map {max_h}x{max_w} fits one {t_r}x{t_c} tile: the RAM must hold at least two "
-                   "tiles each way (a map of one tile is the untiled core's, edt_bfs)"),
-        Constraint(f"t_r * t_c <= {MAX_CELLS}", lambda p: p["t_r"] * p["t_c"] <= MAX_CELLS,
-                   "array {t_r}x{t_c} has {n} cells: at most " + str(MAX_CELLS) +
-                   " (16x16 is ~120k LUT4, more than the largest ECP5)", lambda p: {"n": p["t_r"] * p["t_c"]}),
+    CONSTRAINTS = TILE_CONSTRAINTS[:2] + (
         Constraint(f"max_h * max_w <= {MAX_PIXELS} (bram)",
                    lambda p: p["store"] != "bram" or p["max_h"] * p["max_w"] <= MAX_PIXELS,
                    "largest map {max_h}x{max_w} has {n} pixels: the on-chip state store holds at most "
                    + str(MAX_PIXELS) + " (about 50 Mbit); store=external takes more",
-                   _pixels),
-        Constraint(f"max_h * max_w <= {MAX_EXT_PIXELS} (external)",
-                   lambda p: p["max_h"] * p["max_w"] <= MAX_EXT_PIXELS,
-                   "largest map {max_h}x{max_w} has {n} pixels: an external store holds at most "
-                   + str(MAX_EXT_PIXELS) + " (2048 x 2048 pixels of ~60 bits fill a 32 MB SDRAM)",
-                   _pixels),
-    )
+                   pixels),
+    ) + TILE_CONSTRAINTS[2:]
 
     @checked_init
     def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1):
@@ -294,22 +263,12 @@ class TileEngine(wiring.Component):
             m.d.comb += [ClockSignal("port").eq(ClockSignal("sync")),
                          ClockSignal("dram").eq(self.dram_clk), ResetSignal("dram").eq(self.dram_rst)]
             m.submodules.cdc = mem = StateCdc(w, t_c, "port", "sync", "dram", depth=DRAM_FIFO)
-            stores = [DomainRenamer("dram")(DramStore(w, t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO))
-                      for _ in range(self.dram_ports)]
-            if self.dram_ports == 1:
-                sides = [mem.store]
-            else:       # a store on each native port, the rows spread over them (dram_store.port_of_row)
-                m.submodules.rows = rows = DomainRenamer("dram")(
-                    RowRouter(w, t_c, self.dram_ports, lambda row: port_of_row(row, self.dram_ports),
-                              depth=DRAM_FIFO))
-                for name in ("rd", "rd_data", "wr"):
-                    wiring.connect(m, getattr(mem.store, name), getattr(rows, name))
-                sides = list(rows.stores)
-            for i, (store, side, port) in enumerate(zip(stores, sides, self.dram)):
-                m.submodules[f"store{i}"] = store
-                for name in ("rd", "rd_data", "wr"):
-                    wiring.connect(m, getattr(side, name), getattr(store, name))
-                wiring.connect(m, store.dram, wiring.flipped(port))
+            m.submodules.stores = stores = DomainRenamer("dram")(
+                DramStores(t_r, t_c, self.max_h, self.max_w, self.dram_ports))
+            for name in ("rd", "rd_data", "wr"):
+                wiring.connect(m, getattr(mem.store, name), getattr(stores, name))
+            for ours, theirs in zip(self.dram, stores.dram):
+                wiring.connect(m, theirs, wiring.flipped(ours))
         else:
             mem = self.state
         m.submodules.work = work = Worklist(w)

@@ -17,8 +17,46 @@ from amaranth.lib import data
 from navcores.models.edt_bfs import widths
 from navcores.models.edt_bfs_tiled import state_bits
 
-__all__ = ["named", "flat", "tile_widths", "pixel_layout", "edt_layout", "bfs_layout", "cell_layout", "nb_layout",
+from ..params import Constraint, Param
+
+__all__ = ["TILE_PARAMS", "TILE_CONSTRAINTS", "MAX_CELLS", "MAX_SIDE", "MAX_EXT_PIXELS", "pixels",
+           "named", "flat", "tile_widths", "pixel_layout", "edt_layout", "bfs_layout", "cell_layout", "nb_layout",
            "EDT_FIELDS", "BFS_FIELDS"]
+
+MAX_CELLS = 256         # T_r * T_c: a 16 x 16 array of the paper's cells is ~120k LUT4, beyond the LFE5U-85F
+MAX_SIDE = 4096         # a map side (issue 18: real maps are 200 .. 4000 cells a side)
+MAX_EXT_PIXELS = 1 << 22    # a store outside: 2048 x 2048 pixels of ~60 bits fill a ULX3S's 32 MB SDRAM
+
+
+def pixels(p):
+    """The largest map's pixel count, for the RAM-size constraints' messages."""
+    return {"n": p["max_h"] * p["max_w"]}
+
+
+# The array and the largest map: the parameters of the tile engine and of its DRAM side, checked alike.
+TILE_PARAMS = (
+    Param("t_r", int, lo=2, hi=32, doc="array rows T_r",
+          message="array rows t_r {value!r}: must be an integer in {lo}..{hi}"),
+    Param("t_c", int, lo=2, hi=32, doc="array columns T_c (pixels per RAM word)",
+          message="array columns t_c {value!r}: must be an integer in {lo}..{hi}"),
+    Param("max_h", int, lo=3, hi=MAX_SIDE, doc="largest map height (the RAM)",
+          message="largest map height max_h {value!r}: must be an integer in {lo}..{hi}"),
+    Param("max_w", int, lo=3, hi=MAX_SIDE, doc="largest map width (the RAM)",
+          message="largest map width max_w {value!r}: must be an integer in {lo}..{hi}"),
+)
+TILE_CONSTRAINTS = (
+    Constraint("max_h > t_r and max_w > t_c", lambda p: p["max_h"] > p["t_r"] and p["max_w"] > p["t_c"],
+               "largest map {max_h}x{max_w} fits one {t_r}x{t_c} tile: the RAM must hold at least two "
+               "tiles each way (a map of one tile is the untiled core's, edt_bfs)"),
+    Constraint(f"t_r * t_c <= {MAX_CELLS}", lambda p: p["t_r"] * p["t_c"] <= MAX_CELLS,
+               "array {t_r}x{t_c} has {n} cells: at most " + str(MAX_CELLS) +
+               " (16x16 is ~120k LUT4, more than the largest ECP5)", lambda p: {"n": p["t_r"] * p["t_c"]}),
+    Constraint(f"max_h * max_w <= {MAX_EXT_PIXELS} (external)",
+               lambda p: p["max_h"] * p["max_w"] <= MAX_EXT_PIXELS,
+               "largest map {max_h}x{max_w} has {n} pixels: an external store holds at most "
+               + str(MAX_EXT_PIXELS) + " (2048 x 2048 pixels of ~60 bits fill a 32 MB SDRAM)",
+               pixels),
+)
 
 EDT_FIELDS = ("di", "dx", "dy")
 BFS_FIELDS = ("hop", "parent")

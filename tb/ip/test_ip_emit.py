@@ -35,6 +35,7 @@ BASE = {
     "dflc_stream": {"fll": "table1"},
     "dflc_core": {"fll": "table1"},
     "edt_cell": {"height": 5, "width": 7},
+    "edt_dram_stores": {"t_r": 2, "t_c": 4, "max_h": 9, "max_w": 13, "dram_ports": 4},
     "edt_array": {"height": 5, "width": 7},
     "edt_bfs": {"height": 5, "width": 7},
     "edt_tile_engine": {"t_r": 2, "t_c": 3, "max_h": 5, "max_w": 7},

@@ -1,0 +1,81 @@
+"""The tile engine's DRAM side: a DramStore on each of a controller's native ports, the map rows spread over them."""
+
+from amaranth.hdl import Module
+from amaranth.lib import wiring
+from amaranth.lib.wiring import Out
+
+from ..params import Param, check, checked_init
+from .dram_store import PORTS, DramStore, NativePortSignature, dram_layout, port_of_row
+from .row_router import RowRouter
+from .state_ram import StateSignature
+from .tile_layouts import TILE_CONSTRAINTS, TILE_PARAMS, tile_widths
+
+__all__ = ["DramStores", "DRAM_PORTS_PARAM", "DRAM_WIDTH", "DRAM_FIFO"]
+
+DRAM_WIDTH = 128        # a native word of LiteDRAM's 1:2-rate PHY on a 32-bit DDR3 (2 x16 chips)
+DRAM_FIFO = 16          # engine reads unanswered at most (the engine's crossing FIFOs' depth), each store's
+                        # native reads unanswered at most (its answer FIFO's depth), the reads the router orders
+DRAM_PORTS_PARAM = Param("dram_ports", int, 1, choices=PORTS,
+                         doc="store=dram: the controller's native ports used (a map row's port: its words' bank "
+                             "bits)",
+                         message="native ports dram_ports {value!r}: must be {allowed}")
+
+
+class DramStores(wiring.Component):
+    """What the tile engine with ``store="dram"`` puts on the controller's
+    clock, behind its crossing (:class:`~hdl.edt_bfs.state_cdc.StateCdc`):
+    a :class:`~hdl.edt_bfs.dram_store.DramStore` on each of ``dram_ports``
+    native ports and, with more than one,
+    :class:`~hdl.edt_bfs.row_router.RowRouter` giving map row r to the store
+    on port :func:`~hdl.edt_bfs.dram_store.port_of_row` (r) (the bank bits of
+    its words: each port in its own banks, the stores issuing and
+    collecting a window's rows at once).  Also a top of its own
+    (``edt_dram_stores``), so that the fit flow places it at its clock.
+
+    Parameters
+    ----------
+    t_r, t_c, max_h, max_w : the tile engine's (the widths:
+        :func:`~hdl.edt_bfs.tile_layouts.tile_widths`).
+    dram_ports : 1, 2 or 4
+
+    Ports
+    -----
+    ``rd``, ``rd_data``, ``wr``: :class:`~hdl.edt_bfs.state_ram.StateSignature`
+    (the engine's store); ``dram`` : Out(:func:`~hdl.edt_bfs.dram_store.NativePortSignature`)
+    .array(``dram_ports``): the controller's ports (128-bit words,
+    ``addr_width`` from :func:`~hdl.edt_bfs.dram_store.dram_layout`).
+    One clock (``sync``: the controller's), reset with the controller.
+    """
+
+    PARAMS = TILE_PARAMS + (DRAM_PORTS_PARAM,)
+    CONSTRAINTS = TILE_CONSTRAINTS
+
+    @checked_init
+    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1):
+        check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, dram_ports=dram_ports)
+        self.w = w = tile_widths(t_r, t_c, max_h, max_w)
+        self.t_c, self.max_h, self.ports = t_c, max_h, dram_ports
+        super().__init__({
+            **StateSignature(w, t_c).members,
+            "dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH)).array(dram_ports),
+        })
+
+    def elaborate(self, platform):
+        m = Module()
+        n = self.ports
+        stores = [DramStore(self.w, self.t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO) for _ in range(n)]
+        if n == 1:
+            sides = [self]
+        else:
+            m.submodules.rows = rows = RowRouter(self.w, self.t_c, n, lambda row: port_of_row(row, n),
+                                                 depth=DRAM_FIFO)
+            for name in ("rd", "rd_data", "wr"):
+                wiring.connect(m, wiring.flipped(getattr(self, name)), getattr(rows, name))
+            sides = list(rows.stores)
+        for i, (store, side, port) in enumerate(zip(stores, sides, self.dram)):
+            m.submodules[f"store{i}"] = store
+            for name in ("rd", "rd_data", "wr"):
+                ours = getattr(side, name)
+                wiring.connect(m, wiring.flipped(ours) if side is self else ours, getattr(store, name))
+            wiring.connect(m, store.dram, wiring.flipped(port))
+        return m
