@@ -112,13 +112,14 @@ def engine_ram(h, w):
     return next((r for r in RAMS if h <= r[0] and w <= r[1]), RAM)
 
 
-def fit_result(array, ram=RAM, part=PART, top="edt_tile_engine", store="bram"):
+def fit_result(array, ram=RAM, part=PART, top="edt_tile_engine", store="bram", extra=None):
     """The fit flow's JSON for ``top`` (the tile engine, or its cell alone: ``edt_tile_cell``, from
-    scripts/tile_engine_size.py --cell-fit) with ``array``, ``ram`` and ``store`` on ``part``, or None:
+    scripts/tile_engine_size.py --cell-fit, or its DRAM side: ``edt_dram_stores``) with ``array``,
+    ``ram``, ``store`` and the parameters ``extra`` on ``part``, or None:
     None too when it is stale, its verilog_sha256 (absent: stale) not the hash of the top's Verilog
     emitted now (one line on stderr says so, with the command that places it again)."""
     params = {"t_r": array[0], "t_c": array[1], "max_h": ram[0], "max_w": ram[1],
-              **({"store": store} if store != "bram" else {})}
+              **({"store": store} if store != "bram" else {}), **(extra or {})}
     path = ROOT / "build" / "fit" / f"{top_name(top, params)}--{part}.json"
     if not path.exists():
         return None
