@@ -102,8 +102,8 @@ class TileEngine(wiring.Component):
         engine behind the ``state`` port (an SDRAM controller, say), for
         maps whose state exceeds the part's block RAM (maze512-1-0: 13.9
         Mbit against the LFE5U-85F's 3.7), or a DRAM controller's native
-        port behind :class:`~hdl.edt_bfs.dram_store.DramStore` (the
-        ``dram`` port, 128-bit words: LiteDRAM's for a 32-bit DDR3).
+        ports behind :class:`~hdl.edt_bfs.dram_stores.DramStores` (the
+        ``dram`` ports, 128-bit words: LiteDRAM's for a 32-bit DDR3).
     dram_ports : 1, 2 or 4
         With ``store="dram"``: how many of the controller's native ports the
         engine uses (:class:`~hdl.edt_bfs.dram_stores.DramStores`: a
