@@ -9,7 +9,7 @@ native user port (:class:`NativePortSignature`: LiteDRAM's ``cmd`` /
 
 from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
-from amaranth.lib.fifo import SyncFIFOBuffered
+from amaranth.lib.fifo import SyncFIFO, SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out
 
 from .state_ram import StateSignature
@@ -291,7 +291,7 @@ class DramStore(wiring.Component):
         ahot, astep = _lowest(m, amask, n_rd, "ans")
         buf = [Signal(dw, name=f"buf{s}") for s in range(n_rd)]
         collecting = amask != 0
-        m.submodules.answers = rf = SyncFIFOBuffered(width=dw, depth=self.max_reads)
+        m.submodules.answers = rf = SyncFIFO(width=dw, depth=self.max_reads)
         m.d.comb += [rf.w_data.eq(rdata.payload.data), rf.w_en.eq(rdata.valid), rdata.ready.eq(rf.w_rdy)]
         issued = step_done & ~is_wr
         word_go = rf.r_rdy & rf.r_en
