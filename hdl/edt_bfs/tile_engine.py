@@ -211,7 +211,10 @@ class TileEngine(wiring.Component):
                    "largest map {max_h}x{max_w} has {n} pixels: the on-chip state store holds at most "
                    + str(MAX_PIXELS) + " (about 50 Mbit); store=external takes more",
                    pixels),
-    ) + TILE_CONSTRAINTS[2:]
+    ) + TILE_CONSTRAINTS[2:] + (
+        Constraint("dram_ports == 1 or store == 'dram'", lambda p: p["dram_ports"] == 1 or p["store"] == "dram",
+                   "dram_ports {dram_ports} with store={store}: only a DRAM store (store=dram) has native ports"),
+    )
 
     @checked_init
     def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1):

@@ -2,9 +2,11 @@
 
 The top is a RowRouter over ``N`` stores, rows to stores by
 hdl/edt_bfs/dram_store.port_of_row (as the tile engine with
-``dram_ports=N`` has it).  cocotb plays the engine (random reads and
-writes over a few rows and word columns, so reads often follow writes of
-the same word; random idle cycles; back-pressure on the answers) and the
+``dram_ports=N`` has it).  cocotb plays the engine (bursts of random
+writes then reads over a few rows and word columns, so reads often follow
+writes of the same word; the writes back to back, as the engine's
+crossing FIFO shows them, the reads with random idle cycles;
+back-pressure on the answers) and the
 stores (each a dict of words, applying a write when it takes it and
 answering a read from what it holds when it takes it, after a random
 latency; random back-pressure on commands, so one store holds the
