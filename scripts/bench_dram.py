@@ -140,7 +140,7 @@ def section(maps=MAPS):
             "(hdl/edt_bfs/dram_stores.py, dram_store.py, row_router.py, state_cdc.py) and LiteDRAM's generated "
             "controller (scripts/litedram_core.py: a 32-bit DDR3 of two "
             "MT41K256M16 on ECP5DDRPHY, the ECPIX-5's, system clock "
-            f"{litedram_core.SYS_CLK_HZ / 1e6:.0f} MHz), simulated together on Verilator with LiteDRAM's model "
+            f"{sys_mhz:.0f} MHz), simulated together on Verilator with LiteDRAM's model "
             "of the DRAM (`litedram_gen --sim`: the controller's timing, the model's PHY latency); "
             f"{clock}; the two clocks in that ratio in the simulation. The job is the map's longest scenario "
             "(load, EDT, cfr, BFS, path read-out; no map read-out); its results (distances, vectors, cfr, hop "
@@ -173,7 +173,7 @@ def main(argv=None):
             print(f"bench_dram: no map maps/{name}.map", file=sys.stderr)
             return 2
     try:
-        litedram_core.generate(sim=True)
+        litedram_core.generate(sim=True, ports=PORTS)
     except litedram_core.NotInstalled as e:
         print(f"bench_dram: {e}", file=sys.stderr)
         return 2
