@@ -1,6 +1,6 @@
 """The EDT/BFS tile engine (issue 18): paper 004's cells as a T_r x T_c array over a map in block RAM."""
 
-from amaranth.hdl import Cat, ClockDomain, ClockSignal, Const, DomainRenamer, Module, Mux, ResetSignal, Signal, signed
+from amaranth.hdl import Array, Cat, ClockDomain, ClockSignal, Const, DomainRenamer, Module, Mux, ResetSignal, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -15,7 +15,7 @@ from .state_cdc import StateCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
 from ..arith import divmod_const, times
-from .tile_layouts import MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout, pixels, tile_widths
+from .tile_layouts import BFS_FIELDS, EDT_FIELDS, MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout, pixels, tile_widths
 from .worklist import Worklist, tile_layout
 
 STATES = ("IDLE", "LOAD", "SCAN", "LEVEL", "SCHED0", "SCHED1", "READ", "ITER", "STORE",
@@ -204,6 +204,10 @@ class TileEngine(wiring.Component):
                   "native port",
               message="state store {value!r}: must be {allowed}"),
         DRAM_PORTS_PARAM,
+        Param("prefetch", bool, False,
+              doc="read the next visit's window while this visit loads, iterates and writes (a store "
+                  "outside: hides its latency; the cycle counts are then no longer the model's)",
+              message="prefetch {value!r}: must be 0 or 1"),
     )
     CONSTRAINTS = TILE_CONSTRAINTS[:2] + (
         Constraint(f"max_h * max_w <= {MAX_PIXELS} (bram)",
@@ -214,14 +218,17 @@ class TileEngine(wiring.Component):
     ) + TILE_CONSTRAINTS[2:] + (
         Constraint("dram_ports == 1 or store == 'dram'", lambda p: p["dram_ports"] == 1 or p["store"] == "dram",
                    "dram_ports {dram_ports} with store={store}: only a DRAM store (store=dram) has native ports"),
+        Constraint("not prefetch or store != 'bram'", lambda p: not p["prefetch"] or p["store"] != "bram",
+                   "prefetch with store=bram: the block-RAM engine runs the model's cycle counts (its 2-cycle "
+                   "latency leaves little to hide); prefetch is for a store outside (external, dram)"),
     )
 
     @checked_init
-    def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1):
+    def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1, prefetch=False):
         check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, store=store,
-              dram_ports=dram_ports)
+              dram_ports=dram_ports, prefetch=prefetch)
         self.t_r, self.t_c, self.max_h, self.max_w, self.store = t_r, t_c, max_h, max_w, store
-        self.dram_ports = dram_ports
+        self.dram_ports, self.prefetch = dram_ports, bool(prefetch)
         w = self.w = tile_widths(t_r, t_c, max_h, max_w)
         super().__init__({
             "c_stream": In(stream.Signature(command_layout(w))),
@@ -437,24 +444,47 @@ class TileEngine(wiring.Component):
         stepped = Signal()                        # BFS: ITER has stepped the array in this visit
         sj = Signal(range(t_r + 1))               # store: rows written
         pushed = Signal(9)
+        pf_n = Signal(range(t_r + 3))             # prefetch: rows of the next visit's window read
+        pf_go = Signal()                          # a prefetch read is offered
+        pf_hold = Signal()                        # one was offered and not taken: offered until taken
+        pf_taken = named(m, "pf_taken", pf_go & mem.rd.ready)
+        ld_map = Signal(w["row"])                 # the map row of the next answer to load
+        row_px = data.ArrayLayout(pixel_layout(w), t_c + 2)
+        raw_row = named(m, "raw_row", Cat(mem.rd_data.payload.left, mem.rd_data.payload.word,
+                                          mem.rd_data.payload.right), row_px)
+        loaded = Signal(row_px)                   # the answer as loaded (patched with the last visit's writes)
+        m.d.comb += loaded.eq(raw_row)
+        if self.prefetch:                         # the last visit's write-back (prefetch)
+            lt_word = Array(Signal(data.ArrayLayout(pixel_layout(w), t_c).size, name=f"lt_word{i}")
+                            for i in range(t_r))
+            lt_r0 = Signal(w["row"] + 1)
+            lt_own = Signal(range(t_r + 1))
+            lt_c = Signal(range(w["words"]))
+            lt_bfs = Signal()
+            lt_valid = Signal()
         with m.If(at["SCHED0"]):
             m.d.comb += work.pop.eq(1)
             with m.If(~bfs):
                 m.d.sync += rem.eq(rem - 1)
             goto("SCHED1")
 
+        def window(tile, pre):
+            """A tile's first map row, its window's first map row (the halo row above, if any) and
+            the window's rows inside the map."""
+            r0 = named(m, f"{pre}_r0", times(tile.r, t_r), w["row"] + 1)
+            first = named(m, f"{pre}_first", Mux(tile.r == 0, 0, r0 - 1), w["row"])
+            last = named(m, f"{pre}_last", Mux(r0 + t_r >= H, H - 1, r0 + t_r), w["row"])
+            return r0, first, named(m, f"{pre}_rows", last - first + 1, range(t_r + 3))
+
         head = work.head
-        h_r0 = named(m, "h_r0", times(head.r, t_r), w["row"] + 1)
+        h_r0, h_first, h_rows = window(head, "h")
         h_c0 = named(m, "h_c0", times(head.c, t_c), w["col"] + 1)
-        h_first = named(m, "h_first", Mux(head.r == 0, 0, h_r0 - 1), w["row"])
-        h_last = named(m, "h_last", Mux(h_r0 + t_r >= H, H - 1, h_r0 + t_r), w["row"])
-        h_rows = named(m, "h_rows", h_last - h_first + 1, range(t_r + 3))
         m.d.comb += [work.look_at.eq(Mux(at["SCHED1"], head, 0))]
         with m.If(at["SCHED1"]):
             m.d.comb += [work.look.eq(1), arr.clear.eq(1)]
             m.d.sync += [
                 vt.eq(head), r0.eq(h_r0), win_first.eq(h_first),
-                rows_left.eq(h_rows), recv_left.eq(h_rows),
+                rows_left.eq(h_rows - pf_n - pf_taken), recv_left.eq(h_rows), ld_map.eq(h_first),
                 ld_row.eq(Mux(head.r == 0, 1, 0)),
                 own.eq(Mux(h_r0 + t_r > H, H - h_r0, t_r)),
                 col_present.eq(Cat(head.c != 0, *[h_c0 + (b - 1) < W for b in range(1, t_c + 2)])),
@@ -462,21 +492,50 @@ class TileEngine(wiring.Component):
             ]
             goto("READ")
 
-        # READ: one window row per beat (the RAM answers one cycle later)
+        # READ: one window row per beat (the RAM answers one cycle later); the rows the
+        # prefetch read during the last visit are not read again
         rd_row = Signal(w["row"])
+        own_rd = named(m, "own_rd", rows_left != 0)
         with m.If(at["SCHED1"]):
-            m.d.sync += rd_row.eq(h_first)
+            m.d.sync += rd_row.eq(h_first + pf_n + pf_taken)
         with m.If(at["READ"]):
-            with m.If(mem.rd.valid & mem.rd.ready):
+            with m.If(own_rd & mem.rd.ready):
                 m.d.sync += [rd_row.eq(rd_row + 1), rows_left.eq(rows_left - 1)]
             with m.If(mem.rd_data.valid):
                 m.d.comb += arr.ld_en.eq(1)
-                m.d.sync += [ld_row.eq(ld_row + 1), recv_left.eq(recv_left - 1)]
+                m.d.sync += [ld_row.eq(ld_row + 1), recv_left.eq(recv_left - 1), ld_map.eq(ld_map + 1)]
                 with m.If(recv_left == 1):
                     goto("ITER")
-        m.d.comb += [arr.ld_row.eq(ld_row), arr.ld_present.eq(col_present),
-                     arr.ld_px.eq(Cat(mem.rd_data.payload.left, mem.rd_data.payload.word,
-                                      mem.rd_data.payload.right))]
+        m.d.comb += [arr.ld_row.eq(ld_row), arr.ld_present.eq(col_present), arr.ld_px.eq(loaded)]
+
+        # Prefetch: once this visit's own rows are read, the next visit's window (the worklist's
+        # next tile: a FIFO, so no later push changes it) is read while this visit loads,
+        # iterates and writes back; its answers wait in the store (rd_data not taken) until the
+        # next READ, which reads only the rest.  Those reads may leave the store before this
+        # visit's writes reach it, so a window row loads with the last visit's written words
+        # patched in (lt_*: the tile rows it wrote, the only writes a prefetched read can miss,
+        # since every earlier visit's writes were given before the read).
+        if self.prefetch:
+            _, n_first, n_rows = window(work.peek, "n")
+            # A read offered stays offered until taken (a stream's valid does not drop), through
+            # SCHED0 / SCHED1 / LEVEL if need be (the peeked tile is still the popped one there);
+            # one still waiting at SCHED1 becomes the visit's own first read (the same command).
+            m.d.comb += pf_go.eq(pf_hold | (((at["READ"] & ~own_rd) | at["ITER"] | at["STORE"])
+                                            & (work.count != 0) & (pf_n < n_rows)))
+            m.d.sync += pf_hold.eq(pf_go & ~mem.rd.ready & ~at["SCHED1"])
+            with m.If(at["SCHED1"]):
+                m.d.sync += pf_n.eq(0)
+            with m.Elif(pf_taken):
+                m.d.sync += pf_n.eq(pf_n + 1)
+            hit = named(m, "lt_hit", lt_valid & (lt_bfs == bfs) & (ld_map >= lt_r0) & (ld_map < lt_r0 + lt_own))
+            src = data.ArrayLayout(pixel_layout(w), t_c)(lt_word[(ld_map - lt_r0)[:max(1, (t_r - 1).bit_length())]])
+            sources = {0: (lt_c + 1 == vt.c, src[t_c - 1]), t_c + 1: (lt_c == vt.c + 1, src[0])}
+            sources.update({b: (lt_c == vt.c, src[b - 1]) for b in range(1, t_c + 1)})
+            for b, (where, spx) in sources.items():
+                for group, use in ((EDT_FIELDS, ~bfs), (BFS_FIELDS, bfs)):
+                    for f in group:
+                        m.d.comb += getattr(loaded[b], f).eq(Mux(hit & where & use, getattr(spx, f),
+                                                                 getattr(raw_row[b], f)))
 
         # ITER: EDT one iteration; BFS until one changes nothing (counted), then one cycle (no step)
         # that sees it in arr.upd (Timing.stop: the cells' change bits are flip-flops, so the
@@ -529,6 +588,13 @@ class TileEngine(wiring.Component):
                     after_edt()
         with m.If(~visit_end):
             m.d.sync += self.visit.valid.eq(0)
+        if self.prefetch:                         # what this visit writes, for the next one's load
+            with m.If(at["STORE"]):
+                m.d.sync += [lt_r0.eq(r0), lt_own.eq(own), lt_c.eq(vt.c), lt_bfs.eq(bfs), lt_valid.eq(1)]
+                with m.If(wr_fire):
+                    m.d.sync += lt_word[sj].eq(arr.wb.as_value())
+            with m.If(at["IDLE"]):
+                m.d.sync += lt_valid.eq(0)
         m.d.comb += arr.wb_row.eq(sj)
 
         # -- GOAL0 / GOAL1: read the goal's word; write hop 0 and push its tile if it is in the cfr
@@ -630,9 +696,14 @@ class TileEngine(wiring.Component):
 
         # -- the RAM's ports
         rd, wr = mem.rd.payload, mem.wr.payload
-        with m.If(at["READ"]):
-            m.d.comb += [mem.rd.valid.eq(rows_left != 0), rd.row.eq(rd_row), rd.wcol.eq(vt.c),
-                         rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs), mem.rd_data.ready.eq(1)]
+        with m.If(at["READ"] | pf_go):
+            m.d.comb += [mem.rd.valid.eq(own_rd | pf_go), rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs),
+                         mem.rd_data.ready.eq(at["READ"])]
+            with m.If(own_rd):
+                m.d.comb += [rd.row.eq(rd_row), rd.wcol.eq(vt.c)]
+            if self.prefetch:
+                with m.Else():
+                    m.d.comb += [rd.row.eq(n_first + pf_n), rd.wcol.eq(work.peek.c)]
         with m.Elif(at["GOAL0"]):
             m.d.comb += [mem.rd.valid.eq(self.g_stream.valid), rd.row.eq(gp.row), rd.wcol.eq(g_wcol),
                          rd.di.eq(1), rd.bfs.eq(1)]

@@ -40,6 +40,11 @@ class Worklist(wiring.Component):
     head : Out(tile_layout)
     count : Out
         Tiles queued.
+    peek : Out(tile_layout)
+        The tile the next pop takes (a second read port, always reading at
+        the head): valid while ``count`` is not 0, from the second cycle
+        after a pop and from the cycle after a push into an empty FIFO
+        (the engine's prefetch of the next visit's window).
     look : In(1), look_at : In(tile_layout)
         Read the queued bits around ``look_at``; ``near`` shows them the
         next cycle (held until the next look): bit 0 the tile itself, bit i
@@ -60,7 +65,7 @@ class Worklist(wiring.Component):
         self.depth = w["tile_rows"] * w["tile_cols"]
         tl = tile_layout(w)
         super().__init__({
-            "init": In(1), "pop": In(1), "head": Out(tl), "count": Out(range(self.depth + 1)),
+            "init": In(1), "pop": In(1), "head": Out(tl), "count": Out(range(self.depth + 1)), "peek": Out(tl),
             "look": In(1), "look_at": In(tl), "near": Out(9),
             "push": In(1), "push_tile": In(tl), "clear": In(1), "clear_tile": In(tl),
         })
@@ -72,7 +77,9 @@ class Worklist(wiring.Component):
 
         # FIFO
         m.submodules.fifo = fifo = Memory(shape=tl, depth=depth, init=[])
-        rp, wp = fifo.read_port(), fifo.write_port()
+        wp = fifo.write_port()
+        rp = fifo.read_port()
+        pp = fifo.read_port(transparent_for=(wp,))     # a push into an empty FIFO shows the next cycle
         head = Signal(range(depth))
         tail = Signal(range(depth))
 
@@ -80,6 +87,7 @@ class Worklist(wiring.Component):
             return Mux(p == depth - 1, 0, p + 1)
 
         m.d.comb += [rp.addr.eq(head), rp.en.eq(self.pop), self.head.eq(rp.data),
+                     pp.addr.eq(head), self.peek.eq(pp.data),
                      wp.addr.eq(tail), wp.data.eq(self.push_tile), wp.en.eq(self.push)]
         with m.If(self.init):
             m.d.sync += [head.eq(0), tail.eq(0), self.count.eq(0)]
