@@ -153,9 +153,10 @@ SETS = (
     # ... and a 4x8 array over maps up to 512x512 (maze512-1-0) whose state lives outside (an SDRAM controller).
     Set("edt_tile_ext", "edt_tile_engine", {"t_r": 4, "t_c": 8, "max_h": 512, "max_w": 512, "store": "external"},
         emit=True, beyond="the tile engine with its per-pixel state in an external store (maze512-1-0: 13.9 Mbit)"),
-    # ... and the same engine with that state in a DRAM behind four of a controller's native ports (LiteDRAM's).
+    # ... and the same engine with that state in a DRAM behind four of a controller's native ports (LiteDRAM's),
+    # reading the next visit's window during this one (prefetch: hides the DRAM's latency).
     Set("edt_tile_dram", "edt_tile_engine", {"t_r": 4, "t_c": 8, "max_h": 512, "max_w": 512, "store": "dram",
-                                              "dram_ports": 4},
+                                              "dram_ports": 4, "prefetch": 1},
         emit=True, beyond="the tile engine with its per-pixel state in a DRAM (a 32-bit DDR3 behind LiteDRAM)"),
 )
 

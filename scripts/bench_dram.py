@@ -8,7 +8,7 @@ with its DRAM model: scripts/litedram_core.py) in Verilator, checks the
 results against models.edt_bfs_tiled (distances, vectors, cfr, parents,
 hop counts, path, tile visits and their trace: the same; cycles: more), and
 reports the job's engine cycles and its time at the engine's clock (the
-4x8 / 512x512 engine with store=external placed: :func:`engine_mhz`) with
+4x8 / 512x512 engine with store=external and the prefetch placed: :func:`engine_mhz`) with
 the controller at litedram_core.SYS_CLK_HZ (the two clocks in that ratio
 in the simulation), against scipy on the same machine in the same run.
 ``--md FILE`` writes the rows as BENCHMARKS.md's section (scripts/bench.py
@@ -33,15 +33,19 @@ import kept  # noqa: E402
 import litedram_core  # noqa: E402
 import software  # noqa: E402
 
+from navcores.hdl import catalog  # noqa: E402
 from navcores.hdl.edt_bfs.tile_litedram import TileLiteDram  # noqa: E402
 from navcores.models.edt_bfs_tiled import plan_path_tiled  # noqa: E402
 from navcores.sim.rtl.clock import PERIOD_NS  # noqa: E402
 from navcores.sim.rtl.runner import run  # noqa: E402
 
 WORK = B.ROOT / "build" / "bench_dram"
-ARRAY = (4, 8)
-PORTS = 4               # the controller's native ports the store uses (TileEngine's dram_ports)
-RAM = B.EXT_RAM
+# The engine: the catalog's edt_tile_dram (a 4x8 array over maps up to 512x512, four native ports, the prefetch)
+PARAMS = dict(catalog.get("edt_tile_dram").params)
+ARRAY = (PARAMS["t_r"], PARAMS["t_c"])
+RAM = (PARAMS["max_h"], PARAMS["max_w"])
+PORTS = PARAMS["dram_ports"]
+ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", "dram_ports")}
 # The clocks' ratio in the simulation when the engine has not been placed (engine_mhz() is None):
 # about what the 4x8 engines reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
 RATIO_MHZ = 22.0
@@ -59,7 +63,7 @@ def sys_period_ns(mhz):
 
 
 def rtl_job(obstacle, goal, start, core, csrs, work, mhz):
-    params = {"t_r": ARRAY[0], "t_c": ARRAY[1], "max_h": RAM[0], "max_w": RAM[1], "dram_ports": PORTS}
+    params = {k: v for k, v in PARAMS.items() if k != "store"}
     job, result = work / "job.json", work / "result.json"
     job.write_text(json.dumps({"obstacle": obstacle.tolist(), "goals": [list(goal)], "start": list(start),
                                "dfar": B.DFAR, "sys_period_ns": sys_period_ns(mhz), "csrs": csrs,
@@ -95,10 +99,10 @@ def measure(name, core, csrs, work, mhz):
 
 
 def engine_mhz():
-    """The engine's clock: the 4x8 engine over 512x512 with store=external placed on the part (its fit
+    """The engine's clock: the 4x8 engine over 512x512 with store=external and the prefetch placed on the part (its fit
     JSON's median of seeds; the engine's logic is the same, the DramStore and StateCdc run on the
     controller's clock), or None if it has not been placed (for its current Verilog)."""
-    fit = B.fit_result(ARRAY, RAM, store="external")
+    fit = B.fit_result(ARRAY, RAM, store="external", extra=ENGINE)
     return fit["fmax_mhz"] if fit and fit["fits"] else None
 
 
@@ -124,7 +128,7 @@ def section(maps=MAPS):
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
     side = stores_fit()
     sys_mhz = litedram_core.SYS_CLK_HZ / 1e6
-    clock = (f"the engine at {mhz:.1f} MHz (the 4x8 / 512x512 engine with store=external placed on the "
+    clock = (f"the engine at {mhz:.1f} MHz (the 4x8 / 512x512 engine with store=external and the prefetch placed on the "
              f"{B.PART}: make fit; the same engine logic)" if mhz else
              "no engine clock (the 4x8 / 512x512 engine is not placed for its current Verilog: no job times)")
     if side and side["fits"]:

@@ -281,7 +281,7 @@ class TileEngine(wiring.Component):
                 wiring.connect(m, theirs, wiring.flipped(ours))
         else:
             mem = self.state
-        m.submodules.work = work = Worklist(w)
+        m.submodules.work = work = Worklist(w, peek=self.prefetch)
         m.submodules.front = front = FrontierFlags(w, t_c)
         m.submodules.array = arr = TileArray(t_r, t_c, w)
 
@@ -444,17 +444,19 @@ class TileEngine(wiring.Component):
         stepped = Signal()                        # BFS: ITER has stepped the array in this visit
         sj = Signal(range(t_r + 1))               # store: rows written
         pushed = Signal(9)
-        pf_n = Signal(range(t_r + 3))             # prefetch: rows of the next visit's window read
-        pf_go = Signal()                          # a prefetch read is offered
-        pf_hold = Signal()                        # one was offered and not taken: offered until taken
-        pf_taken = named(m, "pf_taken", pf_go & mem.rd.ready)
-        ld_map = Signal(w["row"])                 # the map row of the next answer to load
-        row_px = data.ArrayLayout(pixel_layout(w), t_c + 2)
-        raw_row = named(m, "raw_row", Cat(mem.rd_data.payload.left, mem.rd_data.payload.word,
-                                          mem.rd_data.payload.right), row_px)
-        loaded = Signal(row_px)                   # the answer as loaded (patched with the last visit's writes)
-        m.d.comb += loaded.eq(raw_row)
-        if self.prefetch:                         # the last visit's write-back (prefetch)
+        answer = Cat(mem.rd_data.payload.left, mem.rd_data.payload.word, mem.rd_data.payload.right)
+        if self.prefetch:                         # (without it, the engine's Verilog is as before it)
+            pf_n = Signal(range(t_r + 3))         # rows of the next visit's window read
+            pf_go = Signal()                      # a prefetch read is offered
+            pf_hold = Signal()                    # one was offered and not taken: offered until taken
+            pf_taken = named(m, "pf_taken", pf_go & mem.rd.ready)
+            ld_map = Signal(w["row"])             # the map row of the next answer to load
+            row_px = data.ArrayLayout(pixel_layout(w), t_c + 2)
+            raw_row = named(m, "raw_row", answer, row_px)
+            loaded = Signal(row_px)               # the answer as loaded (patched with the last visit's writes)
+            m.d.comb += loaded.eq(raw_row)
+            answer = loaded
+            # the last visit's write-back
             lt_word = Array(Signal(data.ArrayLayout(pixel_layout(w), t_c).size, name=f"lt_word{i}")
                             for i in range(t_r))
             lt_r0 = Signal(w["row"] + 1)
@@ -469,22 +471,22 @@ class TileEngine(wiring.Component):
             goto("SCHED1")
 
         def window(tile, pre):
-            """A tile's first map row, its window's first map row (the halo row above, if any) and
-            the window's rows inside the map."""
+            """A tile's first map row and column, its window's first map row (the halo row above,
+            if any) and the window's rows inside the map."""
             r0 = named(m, f"{pre}_r0", times(tile.r, t_r), w["row"] + 1)
+            c0 = named(m, f"{pre}_c0", times(tile.c, t_c), w["col"] + 1)
             first = named(m, f"{pre}_first", Mux(tile.r == 0, 0, r0 - 1), w["row"])
             last = named(m, f"{pre}_last", Mux(r0 + t_r >= H, H - 1, r0 + t_r), w["row"])
-            return r0, first, named(m, f"{pre}_rows", last - first + 1, range(t_r + 3))
+            return r0, c0, first, named(m, f"{pre}_rows", last - first + 1, range(t_r + 3))
 
         head = work.head
-        h_r0, h_first, h_rows = window(head, "h")
-        h_c0 = named(m, "h_c0", times(head.c, t_c), w["col"] + 1)
+        h_r0, h_c0, h_first, h_rows = window(head, "h")
         m.d.comb += [work.look_at.eq(Mux(at["SCHED1"], head, 0))]
         with m.If(at["SCHED1"]):
             m.d.comb += [work.look.eq(1), arr.clear.eq(1)]
             m.d.sync += [
                 vt.eq(head), r0.eq(h_r0), win_first.eq(h_first),
-                rows_left.eq(h_rows - pf_n - pf_taken), recv_left.eq(h_rows), ld_map.eq(h_first),
+                rows_left.eq(h_rows - pf_n - pf_taken if self.prefetch else h_rows), recv_left.eq(h_rows),
                 ld_row.eq(Mux(head.r == 0, 1, 0)),
                 own.eq(Mux(h_r0 + t_r > H, H - h_r0, t_r)),
                 col_present.eq(Cat(head.c != 0, *[h_c0 + (b - 1) < W for b in range(1, t_c + 2)])),
@@ -495,18 +497,25 @@ class TileEngine(wiring.Component):
         # READ: one window row per beat (the RAM answers one cycle later); the rows the
         # prefetch read during the last visit are not read again
         rd_row = Signal(w["row"])
-        own_rd = named(m, "own_rd", rows_left != 0)
-        with m.If(at["SCHED1"]):
-            m.d.sync += rd_row.eq(h_first + pf_n + pf_taken)
+        if self.prefetch:
+            own_rd = named(m, "own_rd", rows_left != 0)
+            with m.If(at["SCHED1"]):
+                m.d.sync += [rd_row.eq(h_first + pf_n + pf_taken), ld_map.eq(h_first)]
+            with m.If(at["READ"] & mem.rd_data.valid):
+                m.d.sync += ld_map.eq(ld_map + 1)
+        else:
+            own_rd = mem.rd.valid
+            with m.If(at["SCHED1"]):
+                m.d.sync += rd_row.eq(h_first)
         with m.If(at["READ"]):
             with m.If(own_rd & mem.rd.ready):
                 m.d.sync += [rd_row.eq(rd_row + 1), rows_left.eq(rows_left - 1)]
             with m.If(mem.rd_data.valid):
                 m.d.comb += arr.ld_en.eq(1)
-                m.d.sync += [ld_row.eq(ld_row + 1), recv_left.eq(recv_left - 1), ld_map.eq(ld_map + 1)]
+                m.d.sync += [ld_row.eq(ld_row + 1), recv_left.eq(recv_left - 1)]
                 with m.If(recv_left == 1):
                     goto("ITER")
-        m.d.comb += [arr.ld_row.eq(ld_row), arr.ld_present.eq(col_present), arr.ld_px.eq(loaded)]
+        m.d.comb += [arr.ld_row.eq(ld_row), arr.ld_present.eq(col_present), arr.ld_px.eq(answer)]
 
         # Prefetch: once this visit's own rows are read, the next visit's window (the worklist's
         # next tile: a FIFO, so no later push changes it) is read while this visit loads,
@@ -516,7 +525,7 @@ class TileEngine(wiring.Component):
         # patched in (lt_*: the tile rows it wrote, the only writes a prefetched read can miss,
         # since every earlier visit's writes were given before the read).
         if self.prefetch:
-            _, n_first, n_rows = window(work.peek, "n")
+            _, _, n_first, n_rows = window(work.peek, "n")
             # A read offered stays offered until taken (a stream's valid does not drop), through
             # SCHED0 / SCHED1 / LEVEL if need be (the peeked tile is still the popped one there);
             # one still waiting at SCHED1 becomes the visit's own first read (the same command).
@@ -696,14 +705,17 @@ class TileEngine(wiring.Component):
 
         # -- the RAM's ports
         rd, wr = mem.rd.payload, mem.wr.payload
-        with m.If(at["READ"] | pf_go):
-            m.d.comb += [mem.rd.valid.eq(own_rd | pf_go), rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs),
-                         mem.rd_data.ready.eq(at["READ"])]
-            with m.If(own_rd):
-                m.d.comb += [rd.row.eq(rd_row), rd.wcol.eq(vt.c)]
-            if self.prefetch:
+        with m.If((at["READ"] | pf_go) if self.prefetch else at["READ"]):
+            if self.prefetch:               # this visit's rows first, then the next one's
+                m.d.comb += [mem.rd.valid.eq(own_rd | pf_go), rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs),
+                             mem.rd_data.ready.eq(at["READ"])]
+                with m.If(own_rd):
+                    m.d.comb += [rd.row.eq(rd_row), rd.wcol.eq(vt.c)]
                 with m.Else():
                     m.d.comb += [rd.row.eq(n_first + pf_n), rd.wcol.eq(work.peek.c)]
+            else:
+                m.d.comb += [mem.rd.valid.eq(rows_left != 0), rd.row.eq(rd_row), rd.wcol.eq(vt.c),
+                             rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs), mem.rd_data.ready.eq(1)]
         with m.Elif(at["GOAL0"]):
             m.d.comb += [mem.rd.valid.eq(self.g_stream.valid), rd.row.eq(gp.row), rd.wcol.eq(g_wcol),
                          rd.di.eq(1), rd.bfs.eq(1)]

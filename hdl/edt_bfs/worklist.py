@@ -40,7 +40,7 @@ class Worklist(wiring.Component):
     head : Out(tile_layout)
     count : Out
         Tiles queued.
-    peek : Out(tile_layout)
+    peek : Out(tile_layout) (``peek=True`` only)
         The tile the next pop takes (a second read port, always reading at
         the head): valid while ``count`` is not 0, from the second cycle
         after a pop and from the cycle after a push into an empty FIFO
@@ -60,14 +60,15 @@ class Worklist(wiring.Component):
     transparently: ``near`` behaves as if the write were immediate.
     """
 
-    def __init__(self, w):
-        self.w = w
+    def __init__(self, w, peek=False):
+        self.w, self.has_peek = w, peek
         self.depth = w["tile_rows"] * w["tile_cols"]
         tl = tile_layout(w)
         super().__init__({
-            "init": In(1), "pop": In(1), "head": Out(tl), "count": Out(range(self.depth + 1)), "peek": Out(tl),
+            "init": In(1), "pop": In(1), "head": Out(tl), "count": Out(range(self.depth + 1)),
             "look": In(1), "look_at": In(tl), "near": Out(9),
             "push": In(1), "push_tile": In(tl), "clear": In(1), "clear_tile": In(tl),
+            **({"peek": Out(tl)} if peek else {}),
         })
 
     def elaborate(self, platform):
@@ -77,17 +78,17 @@ class Worklist(wiring.Component):
 
         # FIFO
         m.submodules.fifo = fifo = Memory(shape=tl, depth=depth, init=[])
-        wp = fifo.write_port()
-        rp = fifo.read_port()
-        pp = fifo.read_port(transparent_for=(wp,))     # a push into an empty FIFO shows the next cycle
+        rp, wp = fifo.read_port(), fifo.write_port()
         head = Signal(range(depth))
         tail = Signal(range(depth))
+        if self.has_peek:
+            pp = fifo.read_port(transparent_for=(wp,))     # a push into an empty FIFO shows the next cycle
+            m.d.comb += [pp.addr.eq(head), self.peek.eq(pp.data)]
 
         def inc(p):
             return Mux(p == depth - 1, 0, p + 1)
 
         m.d.comb += [rp.addr.eq(head), rp.en.eq(self.pop), self.head.eq(rp.data),
-                     pp.addr.eq(head), self.peek.eq(pp.data),
                      wp.addr.eq(tail), wp.data.eq(self.push_tile), wp.en.eq(self.push)]
         with m.If(self.init):
             m.d.sync += [head.eq(0), tail.eq(0), self.count.eq(0)]
