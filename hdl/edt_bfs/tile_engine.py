@@ -1,6 +1,6 @@
 """The EDT/BFS tile engine (issue 18): paper 004's cells as a T_r x T_c array over a map in block RAM."""
 
-from amaranth.hdl import Array, Cat, ClockDomain, ClockSignal, Const, DomainRenamer, Module, Mux, ResetSignal, Signal, signed
+from amaranth.hdl import Cat, ClockDomain, ClockSignal, Const, DomainRenamer, Module, Mux, ResetSignal, Signal, signed
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -14,8 +14,9 @@ from .dram_stores import DRAM_FIFO, DRAM_PORTS_PARAM, DRAM_WIDTH, DramStores
 from .state_cdc import StateCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
+from .write_patch import WritePatch
 from ..arith import divmod_const, times
-from .tile_layouts import BFS_FIELDS, EDT_FIELDS, MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout, pixels, tile_widths
+from .tile_layouts import MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout, pixels, tile_widths
 from .worklist import Worklist, tile_layout
 
 STATES = ("IDLE", "LOAD", "SCAN", "LEVEL", "SCHED0", "SCHED1", "READ", "ITER", "STORE",
@@ -27,6 +28,7 @@ __all__ = ["TileEngine", "command_layout", "map_layout", "goal_layout", "result_
 TIMING = Timing()       # the cycle constants this RTL implements (the model's defaults)
 MAX_PIXELS = 1 << 20    # on-chip state of a 1024 x 1024 map is ~50 Mbit: more than any FPGA's block RAM today
 STORES = ("bram", "external", "dram")
+PREFETCH_MAX = 3        # visits read ahead at most (each more: a WritePatch bank, a worklist read port)
 
 
 def command_layout(w):
@@ -204,10 +206,10 @@ class TileEngine(wiring.Component):
                   "native port",
               message="state store {value!r}: must be {allowed}"),
         DRAM_PORTS_PARAM,
-        Param("prefetch", bool, False,
-              doc="read the next visit's window while this visit loads, iterates and writes (a store "
-                  "outside: hides its latency; the cycle counts are then no longer the model's)",
-              message="prefetch {value!r}: must be 0 or 1"),
+        Param("prefetch", int, 0, lo=0, hi=PREFETCH_MAX,
+              doc="visits whose windows are read ahead, while this visit loads, iterates and writes (a "
+                  "store outside: hides its latency; the cycle counts are then no longer the model's)",
+              message="prefetch {value!r}: must be an integer in {lo}..{hi} (visits read ahead)"),
     )
     CONSTRAINTS = TILE_CONSTRAINTS[:2] + (
         Constraint(f"max_h * max_w <= {MAX_PIXELS} (bram)",
@@ -224,11 +226,11 @@ class TileEngine(wiring.Component):
     )
 
     @checked_init
-    def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1, prefetch=False):
+    def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1, prefetch=0):
         check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, store=store,
               dram_ports=dram_ports, prefetch=prefetch)
         self.t_r, self.t_c, self.max_h, self.max_w, self.store = t_r, t_c, max_h, max_w, store
-        self.dram_ports, self.prefetch = dram_ports, bool(prefetch)
+        self.dram_ports, self.prefetch = dram_ports, prefetch
         w = self.w = tile_widths(t_r, t_c, max_h, max_w)
         super().__init__({
             "c_stream": In(stream.Signature(command_layout(w))),
@@ -445,25 +447,16 @@ class TileEngine(wiring.Component):
         sj = Signal(range(t_r + 1))               # store: rows written
         pushed = Signal(9)
         answer = Cat(mem.rd_data.payload.left, mem.rd_data.payload.word, mem.rd_data.payload.right)
-        if self.prefetch:                         # (without it, the engine's Verilog is as before it)
-            pf_n = Signal(range(t_r + 3))         # rows of the next visit's window read
-            pf_go = Signal()                      # a prefetch read is offered
-            pf_hold = Signal()                    # one was offered and not taken: offered until taken
-            pf_taken = named(m, "pf_taken", pf_go & mem.rd.ready)
+        D = self.prefetch
+        if D:                                     # (without it, the engine's Verilog is as before it)
+            pf = [Signal(range(t_r + 3), name=f"pf{d + 1}") for d in range(D)]   # rows of visit +d's window read
+            lvl = Signal(range(D + 1))            # the read offered: 0 none, d: the next row of visit +d
+            hold = Signal(range(D + 1))           # one offered and not taken (its level): offered until taken
+            pf_taken = named(m, "pf_taken", (lvl != 0) & mem.rd.ready)
             ld_map = Signal(w["row"])             # the map row of the next answer to load
-            row_px = data.ArrayLayout(pixel_layout(w), t_c + 2)
-            raw_row = named(m, "raw_row", answer, row_px)
-            loaded = Signal(row_px)               # the answer as loaded (patched with the last visit's writes)
-            m.d.comb += loaded.eq(raw_row)
-            answer = loaded
-            # the last visit's write-back
-            lt_word = Array(Signal(data.ArrayLayout(pixel_layout(w), t_c).size, name=f"lt_word{i}")
-                            for i in range(t_r))
-            lt_r0 = Signal(w["row"] + 1)
-            lt_own = Signal(range(t_r + 1))
-            lt_c = Signal(range(w["words"]))
-            lt_bfs = Signal()
-            lt_valid = Signal()
+            m.submodules.patch = patch = WritePatch(w, t_r, t_c, D)
+            m.d.comb += patch.raw.eq(answer)
+            answer = patch.loaded
         with m.If(at["SCHED0"]):
             m.d.comb += work.pop.eq(1)
             with m.If(~bfs):
@@ -486,7 +479,7 @@ class TileEngine(wiring.Component):
             m.d.comb += [work.look.eq(1), arr.clear.eq(1)]
             m.d.sync += [
                 vt.eq(head), r0.eq(h_r0), win_first.eq(h_first),
-                rows_left.eq(h_rows - pf_n - pf_taken if self.prefetch else h_rows), recv_left.eq(h_rows),
+                rows_left.eq(h_rows - pf[0] - (pf_taken & (lvl == 1)) if D else h_rows), recv_left.eq(h_rows),
                 ld_row.eq(Mux(head.r == 0, 1, 0)),
                 own.eq(Mux(h_r0 + t_r > H, H - h_r0, t_r)),
                 col_present.eq(Cat(head.c != 0, *[h_c0 + (b - 1) < W for b in range(1, t_c + 2)])),
@@ -497,10 +490,10 @@ class TileEngine(wiring.Component):
         # READ: one window row per beat (the RAM answers one cycle later); the rows the
         # prefetch read during the last visit are not read again
         rd_row = Signal(w["row"])
-        if self.prefetch:
+        if D:
             own_rd = named(m, "own_rd", rows_left != 0)
             with m.If(at["SCHED1"]):
-                m.d.sync += [rd_row.eq(h_first + pf_n + pf_taken), ld_map.eq(h_first)]
+                m.d.sync += [rd_row.eq(h_first + pf[0] + (pf_taken & (lvl == 1))), ld_map.eq(h_first)]
             with m.If(at["READ"] & mem.rd_data.valid):
                 m.d.sync += ld_map.eq(ld_map + 1)
         else:
@@ -517,34 +510,38 @@ class TileEngine(wiring.Component):
                     goto("ITER")
         m.d.comb += [arr.ld_row.eq(ld_row), arr.ld_present.eq(col_present), arr.ld_px.eq(answer)]
 
-        # Prefetch: once this visit's own rows are read, the next visit's window (the worklist's
-        # next tile: a FIFO, so no later push changes it) is read while this visit loads,
-        # iterates and writes back; its answers wait in the store (rd_data not taken) until the
-        # next READ, which reads only the rest.  Those reads may leave the store before this
-        # visit's writes reach it, so a window row loads with the last visit's written words
-        # patched in (lt_*: the tile rows it wrote, the only writes a prefetched read can miss,
-        # since every earlier visit's writes were given before the read).
-        if self.prefetch:
-            _, _, n_first, n_rows = window(work.peek, "n")
+        # Prefetch (D = prefetch): once this visit's own rows are read, the windows of the next
+        # D visits (the worklist's next tiles: a FIFO, so no later push changes them) are read,
+        # the nearest first, while this visit loads, iterates and writes back; their answers
+        # wait in the store (rd_data not taken) until their visit's READ, which reads only the
+        # rest.  Such a read may reach the store before the writes of the D visits before its
+        # own: WritePatch lays those writes over the row as it loads (every earlier write was
+        # given before the read, and the store keeps reads behind earlier writes).
+        if D:
+            geo = [window(work.peek[d], f"n{d + 1}") for d in range(D)]
+            free = named(m, "pf_free", (at["READ"] & ~own_rd) | at["ITER"] | at["STORE"])
             # A read offered stays offered until taken (a stream's valid does not drop), through
-            # SCHED0 / SCHED1 / LEVEL if need be (the peeked tile is still the popped one there);
-            # one still waiting at SCHED1 becomes the visit's own first read (the same command).
-            m.d.comb += pf_go.eq(pf_hold | (((at["READ"] & ~own_rd) | at["ITER"] | at["STORE"])
-                                            & (work.count != 0) & (pf_n < n_rows)))
-            m.d.sync += pf_hold.eq(pf_go & ~mem.rd.ready & ~at["SCHED1"])
+            # SCHED0 / SCHED1 / LEVEL if need be (the peeked tiles are still the ones before the
+            # pop there); at SCHED1 every level moves one down (visit +d becomes +d-1), and one
+            # of visit +1 still waiting becomes the visit's own first read (the same command).
+            with m.If(hold != 0):
+                m.d.comb += lvl.eq(hold)
+            with m.Elif(free):
+                for d in range(D):                # the nearest visit first (its answers come first)
+                    with (m.Elif if d else m.If)((work.count > d) & (pf[d] < geo[d][3])):
+                        m.d.comb += lvl.eq(d + 1)
+            m.d.sync += hold.eq(Mux((lvl != 0) & ~mem.rd.ready, Mux(at["SCHED1"], lvl - 1, lvl), 0))
             with m.If(at["SCHED1"]):
-                m.d.sync += pf_n.eq(0)
-            with m.Elif(pf_taken):
-                m.d.sync += pf_n.eq(pf_n + 1)
-            hit = named(m, "lt_hit", lt_valid & (lt_bfs == bfs) & (ld_map >= lt_r0) & (ld_map < lt_r0 + lt_own))
-            src = data.ArrayLayout(pixel_layout(w), t_c)(lt_word[(ld_map - lt_r0)[:max(1, (t_r - 1).bit_length())]])
-            sources = {0: (lt_c + 1 == vt.c, src[t_c - 1]), t_c + 1: (lt_c == vt.c + 1, src[0])}
-            sources.update({b: (lt_c == vt.c, src[b - 1]) for b in range(1, t_c + 1)})
-            for b, (where, spx) in sources.items():
-                for group, use in ((EDT_FIELDS, ~bfs), (BFS_FIELDS, bfs)):
-                    for f in group:
-                        m.d.comb += getattr(loaded[b], f).eq(Mux(hit & where & use, getattr(spx, f),
-                                                                 getattr(raw_row[b], f)))
+                m.d.sync += [pf[d].eq(pf[d + 1] + (pf_taken & (lvl == d + 2)) if d + 1 < D else 0)
+                             for d in range(D)]
+            with m.Else():
+                for d in range(D):
+                    with m.If(pf_taken & (lvl == d + 1)):
+                        m.d.sync += pf[d].eq(pf[d] + 1)
+            with m.If(at["READ"] & mem.rd_data.valid):
+                m.d.sync += ld_map.eq(ld_map + 1)
+            m.d.comb += [patch.init.eq(at["IDLE"]), patch.ld_row.eq(ld_map), patch.ld_c.eq(vt.c),
+                         patch.bfs.eq(bfs)]
 
         # ITER: EDT one iteration; BFS until one changes nothing (counted), then one cycle (no step)
         # that sees it in arr.upd (Timing.stop: the cells' change bits are flip-flops, so the
@@ -597,13 +594,9 @@ class TileEngine(wiring.Component):
                     after_edt()
         with m.If(~visit_end):
             m.d.sync += self.visit.valid.eq(0)
-        if self.prefetch:                         # what this visit writes, for the next one's load
-            with m.If(at["STORE"]):
-                m.d.sync += [lt_r0.eq(r0), lt_own.eq(own), lt_c.eq(vt.c), lt_bfs.eq(bfs), lt_valid.eq(1)]
-                with m.If(wr_fire):
-                    m.d.sync += lt_word[sj].eq(arr.wb.as_value())
-            with m.If(at["IDLE"]):
-                m.d.sync += lt_valid.eq(0)
+        if D:                                     # what this visit writes, for the next visits' loads
+            m.d.comb += [patch.wr.eq(wr_fire), patch.wr_row.eq(sj), patch.wr_word.eq(arr.wb), patch.r0.eq(r0),
+                         patch.own.eq(own), patch.c.eq(vt.c), patch.done.eq(visit_end)]
         m.d.comb += arr.wb_row.eq(sj)
 
         # -- GOAL0 / GOAL1: read the goal's word; write hop 0 and push its tile if it is in the cfr
@@ -705,14 +698,15 @@ class TileEngine(wiring.Component):
 
         # -- the RAM's ports
         rd, wr = mem.rd.payload, mem.wr.payload
-        with m.If((at["READ"] | pf_go) if self.prefetch else at["READ"]):
-            if self.prefetch:               # this visit's rows first, then the next one's
-                m.d.comb += [mem.rd.valid.eq(own_rd | pf_go), rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs),
+        with m.If((at["READ"] | (lvl != 0)) if D else at["READ"]):
+            if D:                           # this visit's rows first, then the next visits'
+                m.d.comb += [mem.rd.valid.eq(own_rd | (lvl != 0)), rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs),
                              mem.rd_data.ready.eq(at["READ"])]
                 with m.If(own_rd):
                     m.d.comb += [rd.row.eq(rd_row), rd.wcol.eq(vt.c)]
-                with m.Else():
-                    m.d.comb += [rd.row.eq(n_first + pf_n), rd.wcol.eq(work.peek.c)]
+                for d in range(D):
+                    with m.Elif(lvl == d + 1):
+                        m.d.comb += [rd.row.eq(geo[d][2] + pf[d]), rd.wcol.eq(work.peek[d].c)]
             else:
                 m.d.comb += [mem.rd.valid.eq(rows_left != 0), rd.row.eq(rd_row), rd.wcol.eq(vt.c),
                              rd.di.eq(1), rd.nnt.eq(~bfs), rd.bfs.eq(bfs), mem.rd_data.ready.eq(1)]

@@ -40,11 +40,12 @@ class Worklist(wiring.Component):
     head : Out(tile_layout)
     count : Out
         Tiles queued.
-    peek : Out(tile_layout) (``peek=True`` only)
-        The tile the next pop takes (a second read port, always reading at
-        the head): valid while ``count`` is not 0, from the second cycle
-        after a pop and from the cycle after a push into an empty FIFO
-        (the engine's prefetch of the next visit's window).
+    peek : Out(tile_layout).array(peek) (``peek`` > 0 only)
+        ``peek[d]``: the tile the (d + 1)-th pop from now takes (a read port
+        each, always reading d entries behind the head): valid while
+        ``count`` > d, from the second cycle after a pop and from the cycle
+        after the push that wrote it (the engine's prefetch of the next
+        visits' windows).
     look : In(1), look_at : In(tile_layout)
         Read the queued bits around ``look_at``; ``near`` shows them the
         next cycle (held until the next look): bit 0 the tile itself, bit i
@@ -60,15 +61,15 @@ class Worklist(wiring.Component):
     transparently: ``near`` behaves as if the write were immediate.
     """
 
-    def __init__(self, w, peek=False):
-        self.w, self.has_peek = w, peek
+    def __init__(self, w, peek=0):
+        self.w, self.peeks = w, peek
         self.depth = w["tile_rows"] * w["tile_cols"]
         tl = tile_layout(w)
         super().__init__({
             "init": In(1), "pop": In(1), "head": Out(tl), "count": Out(range(self.depth + 1)),
             "look": In(1), "look_at": In(tl), "near": Out(9),
             "push": In(1), "push_tile": In(tl), "clear": In(1), "clear_tile": In(tl),
-            **({"peek": Out(tl)} if peek else {}),
+            **({"peek": Out(tl).array(peek)} if peek else {}),
         })
 
     def elaborate(self, platform):
@@ -81,9 +82,10 @@ class Worklist(wiring.Component):
         rp, wp = fifo.read_port(), fifo.write_port()
         head = Signal(range(depth))
         tail = Signal(range(depth))
-        if self.has_peek:
-            pp = fifo.read_port(transparent_for=(wp,))     # a push into an empty FIFO shows the next cycle
-            m.d.comb += [pp.addr.eq(head), self.peek.eq(pp.data)]
+        for d in range(self.peeks):
+            pp = fifo.read_port(transparent_for=(wp,))     # a push there shows the next cycle
+            m.d.comb += [pp.addr.eq(head if d == 0 else Mux(head + d >= depth, head + d - depth, head + d)),
+                         self.peek[d].eq(pp.data)]
 
         def inc(p):
             return Mux(p == depth - 1, 0, p + 1)

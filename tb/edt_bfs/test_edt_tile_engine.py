@@ -18,8 +18,8 @@ than the RAM, an empty one: cmd_err; a start outside the map: start_err; a
 goal outside the map: goal_err, dropped); with TILE_STORE=external the
 engine with its state outside on sim/rtl/state_store.py's store, at
 StateRam's timing (cycle-exact) and with random latency and stalls (the
-same results in more cycles); with TILE_PREFETCH=1 (the engine reads the
-next visit's window during this one: hdl/edt_bfs/tile_engine.py) the same
+same results in more cycles); with TILE_PREFETCH=d (the engine reads the
+next d visits' windows during this one: hdl/edt_bfs/tile_engine.py) the same
 results and trace in fewer cycles than the model's at StateRam's timing,
 in more with the slow store.  Environment: TILE_PARAMS
 (t_r,t_c,max_h,max_w), TILE_JOBS (random jobs), TILE_MID (HxW of the maps
@@ -49,7 +49,7 @@ BUNDLED = [n for n in os.environ.get("TILE_MAPS", "").split(",") if n]
 LARGE = os.environ.get("TILE_LARGE") == "1"
 EXTERNAL = os.environ.get("TILE_STORE") == "external"
 DRAM = os.environ.get("TILE_STORE") == "dram"
-PREFETCH = os.environ.get("TILE_PREFETCH") == "1"
+PREFETCH = int(os.environ.get("TILE_PREFETCH", "0"))     # visits read ahead
 DRAM_PORTS = 4          # the DRAM test's native ports: rows of a window on different ports (BANK_AT)
 MAPS = Path(__file__).resolve().parents[2] / "maps"
 
@@ -306,7 +306,8 @@ async def dram_store(dut):
     for shape in (MID, (_partial(2, MAX_H, T_R), _partial(2, MAX_W, T_C))):
         img, start, goals = _case(rng, shape)
         _, model, raw = await _check(drv, img, goals, start, 0, cycles=False)
-        assert raw["cycles"] > model.cycles, (raw["cycles"], model.cycles)
+        if not PREFETCH:            # (read ahead, the fast DRAM's latency may hide: fewer cycles)
+            assert raw["cycles"] > model.cycles, (raw["cycles"], model.cycles)
         jobs += 1
     st.set_timing(latency=6, extra=0.5, stall=0.3)
     drv.set_stalls(rng, 0.2, 0.3)
@@ -378,8 +379,8 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
 # tiles), its state on the state port (external: sim/rtl/state_store.py), without and with the
 # prefetch, or in a DRAM behind DRAM_PORTS native ports on a clock of their own (dram:
 # sim/rtl/native_dram.py), with the prefetch (as the catalog's edt_tile_dram).
-@pytest.mark.parametrize("store, prefetch", [("external", 0), ("external", 1), ("dram", 1)],
-                         ids=["external", "external-prefetch", "dram-prefetch"])
+@pytest.mark.parametrize("store, prefetch", [("external", 0), ("external", 1), ("external", 2), ("dram", 2)],
+                         ids=["external", "external-prefetch1", "external-prefetch2", "dram-prefetch2"])
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
 def test_edt_tile_engine_store(sim, store, prefetch):
     params = (4, 8, 21, 35, store, DRAM_PORTS if store == "dram" else 1, prefetch)
