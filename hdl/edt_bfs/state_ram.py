@@ -53,7 +53,10 @@ class StateSignature(wiring.Signature):
     no decision; ``rd.ready`` may depend on
     ``rd_data.ready``, valid never on ready.  The engine accepts every
     answer the cycle it is valid while it loads a tile, so a store with a
-    variable latency needs no buffer of its own beyond the pipeline.  The
+    variable latency needs no buffer of its own beyond the pipeline; with
+    its prefetch (TileEngine's ``prefetch``) it reads ahead and leaves
+    answers waiting, so such a store must hold them (``rd.ready`` low when
+    it cannot: StateRam's pipeline, StateCdc's read credit).  The
     engine's cycle counts (:mod:`models.edt_bfs_tiled`'s cycle model) assume
     what :class:`StateRam` gives: commands always ready, answers two cycles
     after the command (``Timing.latency``), reads pipelined (a command every

@@ -116,6 +116,21 @@ class TileEngine(wiring.Component):
         a window's rows at once (one store issues one native command a
         cycle, and LiteDRAM locks a port to one bank while the bank has
         commands queued).
+    prefetch : 0 .. 3
+        With a store outside (``external``, ``dram``): the visits whose
+        window rows are read ahead.  Once a visit's own rows are read, it
+        reads the windows of the worklist's next ``prefetch`` tiles (the
+        worklist is a FIFO: a push never changes them), nearest first,
+        while it loads, iterates and writes back; their answers wait in the
+        store (``rd_data`` not taken) until their own visit's ``READ``,
+        which reads only the rows not read yet: the store's latency is paid
+        while the engine works.  A read given that early may reach the
+        store before the writes of the visits between: a row loads through
+        :class:`~hdl.edt_bfs.write_patch.WritePatch`, which lays the last
+        ``prefetch`` visits' written tile rows over it, so every load sees
+        the state the model's visit sees (same results and visit trace;
+        the cycle counts are not the model's: fewer with StateRam's timing,
+        the latency it hides).  0: the engine's Verilog is as without it.
 
     Ports
     -----
