@@ -20,7 +20,8 @@ class TileLiteDram(wiring.Component):
     32-bit DDR3 on ECP5DDRPHY, ``dram_ports`` 128-bit native user ports) on
     its ``dram`` ports.
 
-    Parameters: the engine's ``t_r``, ``t_c``, ``max_h``, ``max_w``, ``dram_ports``, ``prefetch``;
+    Parameters: the engine's ``t_r``, ``t_c``, ``max_h``, ``max_w``, ``dram_ports``, ``prefetch``,
+    ``skip_clean``;
     ``addr_width``: the core's native address (25 for the 1 GB of two
     MT41K256M16 in 128-bit words: scripts/litedram_core.py's).
 
@@ -35,8 +36,9 @@ class TileLiteDram(wiring.Component):
     of the DRAM and has none.
     """
 
-    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, prefetch=False, addr_width=25):
-        self.engine = TileEngine(t_r, t_c, max_h, max_w, store="dram", dram_ports=dram_ports, prefetch=prefetch)
+    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, prefetch=0, skip_clean=False, addr_width=25):
+        self.engine = TileEngine(t_r, t_c, max_h, max_w, store="dram", dram_ports=dram_ports, prefetch=prefetch,
+                                 skip_clean=skip_clean)
         used = len(self.engine.dram[0].cmd.payload.addr)
         if used > addr_width:
             raise ValueError(f"the store's {used} address bits exceed the controller's {addr_width}")
