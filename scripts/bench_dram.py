@@ -109,7 +109,7 @@ def engine_mhz():
 def stores_fit():
     """The DRAM side (hdl/edt_bfs/dram_stores.py: a DramStore per port and the RowRouter) placed alone at its
     own clock (scripts/fit.py edt_dram_stores ...: its fit JSON), or None if it has not been placed."""
-    return B.fit_result(ARRAY, RAM, top="edt_dram_stores", extra={"dram_ports": PORTS})
+    return B.fit_result(ARRAY, RAM, top="edt_dram_stores", extra={k: PARAMS[k] for k in ("dram_ports", "skip_clean")})
 
 
 def section(maps=MAPS):

@@ -142,6 +142,12 @@ class DramStore(wiring.Component):
         Native reads unanswered at most: the depth of the FIFO that takes
         the answers (always ready: LiteDRAM's native port does not wait for
         ``rdata.ready``, a word not taken is lost).
+    changed : bool
+        The writes carry the pixels they change
+        (:func:`~hdl.edt_bfs.state_ram.write_layout`): a write issues only
+        the native words holding one of them (a group word any of whose
+        pixels changed; a neighbour's edge slot when the pixel it copies
+        changed).
 
     Ports
     -----
@@ -172,13 +178,13 @@ class DramStore(wiring.Component):
     latency.
     """
 
-    def __init__(self, w, p, max_h, data_width=128, max_reads=16):
+    def __init__(self, w, p, max_h, data_width=128, max_reads=16, changed=False):
         if not 1 <= max_reads <= 256:
             raise ValueError(f"max_reads {max_reads}: must be 1..256")
-        self.w, self.p, self.max_h, self.max_reads = w, p, max_h, max_reads
+        self.w, self.p, self.max_h, self.max_reads, self.changed = w, p, max_h, max_reads, changed
         self.lay = dram_layout(w, p, max_h, data_width)
         super().__init__({
-            **StateSignature(w, p).members,
+            **StateSignature(w, p, changed).members,
             "dram": Out(NativePortSignature(self.lay["addr_width"], data_width)),
         })
 
@@ -241,7 +247,17 @@ class DramStore(wiring.Component):
         rd_steps = Cat(*([need_a] * a), *([rcmd.bfs] * b), *([Const(1)] * e))
         right_ok = wcmd.wcol != w["words"] - 1
         left_ok = wcmd.wcol != 0
-        wr_steps = Cat(*([wcmd.edt] * a), *([wcmd.bfs] * b), right_ok, left_ok)
+        if self.changed:
+            # a group word goes when a pixel it holds (any of its bits) changed; a neighbour's
+            # slot when the pixel it copies changed (step a + b: our last pixel, a + b + 1: our first)
+            e_bits, b_bits = e_lay.size, b_lay.size
+            touched = [Cat(*[wcmd.changed[j] for j in range(p)
+                             if j * bits < (s + 1) * dw and (j + 1) * bits > s * dw]).any()
+                       for bits, count in ((e_bits, a), (b_bits, b)) for s in range(count)]
+            wr_steps = Cat(*[wcmd.edt & t for t in touched[:a]], *[wcmd.bfs & t for t in touched[a:]],
+                           right_ok & wcmd.changed[p - 1], left_ok & wcmd.changed[0])
+        else:
+            wr_steps = Cat(*([wcmd.edt] * a), *([wcmd.bfs] * b), right_ok, left_ok)
         m.d.comb += [desc.w_data.eq(rd_steps), desc.w_en.eq(take_rd)]
         m.d.sync += busy_mask.eq(rest)
         with m.If(take_wr):

@@ -10,7 +10,7 @@ from .row_router import RowRouter
 from .state_ram import StateSignature
 from .tile_layouts import TILE_CONSTRAINTS, TILE_PARAMS, tile_widths
 
-__all__ = ["DramStores", "DRAM_PORTS_PARAM", "DRAM_WIDTH", "DRAM_FIFO"]
+__all__ = ["DramStores", "DRAM_PORTS_PARAM", "SKIP_CLEAN_PARAM", "DRAM_WIDTH", "DRAM_FIFO"]
 
 DRAM_WIDTH = 128        # a native word of LiteDRAM's 1:2-rate PHY on a 32-bit DDR3 (2 x16 chips)
 DRAM_FIFO = 16          # engine reads unanswered at most (the engine's crossing FIFOs' depth), each store's
@@ -19,6 +19,10 @@ DRAM_PORTS_PARAM = Param("dram_ports", int, 1, choices=PORTS,
                          doc="store=dram: the controller's native ports used (a map row's port: its words' bank "
                              "bits)",
                          message="native ports dram_ports {value!r}: must be {allowed}")
+SKIP_CLEAN_PARAM = Param("skip_clean", bool, False,
+                         doc="a store outside: write back only what a visit changed (the tile rows; to a DRAM, "
+                             "the native words holding a changed pixel): the same cycles, less bandwidth",
+                         message="skip_clean {value!r}: must be 0 or 1")
 
 
 class DramStores(wiring.Component):
@@ -37,6 +41,10 @@ class DramStores(wiring.Component):
     t_r, t_c, max_h, max_w : the tile engine's (the widths:
         :func:`~hdl.edt_bfs.tile_layouts.tile_widths`).
     dram_ports : 1, 2 or 4
+    skip_clean : bool
+        The engine's writes carry the pixels they change
+        (:func:`~hdl.edt_bfs.state_ram.write_layout`): the stores issue
+        only the native words holding one of them.
 
     Ports
     -----
@@ -47,28 +55,30 @@ class DramStores(wiring.Component):
     One clock (``sync``: the controller's), reset with the controller.
     """
 
-    PARAMS = TILE_PARAMS + (DRAM_PORTS_PARAM,)
+    PARAMS = TILE_PARAMS + (DRAM_PORTS_PARAM, SKIP_CLEAN_PARAM)
     CONSTRAINTS = TILE_CONSTRAINTS
 
     @checked_init
-    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1):
-        check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, dram_ports=dram_ports)
+    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, skip_clean=False):
+        check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, dram_ports=dram_ports,
+              skip_clean=skip_clean)
         self.w = w = tile_widths(t_r, t_c, max_h, max_w)
-        self.t_c, self.max_h, self.ports = t_c, max_h, dram_ports
+        self.t_c, self.max_h, self.ports, self.changed = t_c, max_h, dram_ports, bool(skip_clean)
         super().__init__({
-            **StateSignature(w, t_c).members,
+            **StateSignature(w, t_c, self.changed).members,
             "dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH)).array(dram_ports),
         })
 
     def elaborate(self, platform):
         m = Module()
         n = self.ports
-        stores = [DramStore(self.w, self.t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO) for _ in range(n)]
+        stores = [DramStore(self.w, self.t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO, changed=self.changed)
+                  for _ in range(n)]
         if n == 1:
             sides = [self]
         else:
             m.submodules.rows = rows = RowRouter(self.w, self.t_c, n, lambda row: port_of_row(row, n),
-                                                 depth=DRAM_FIFO)
+                                                 depth=DRAM_FIFO, changed=self.changed)
             for name in ("rd", "rd_data", "wr"):
                 wiring.connect(m, wiring.flipped(getattr(self, name)), getattr(rows, name))
             sides = list(rows.stores)

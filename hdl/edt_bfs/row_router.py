@@ -27,6 +27,8 @@ class RowRouter(wiring.Component):
         ``n`` values at most; a word and the neighbours whose edge copies
         its write updates, :func:`~hdl.edt_bfs.dram_store.dram_layout`, are
         in one row, so one store holds every copy of a pixel).
+    changed : bool
+        The writes carry the pixels they change (:func:`~hdl.edt_bfs.state_ram.write_layout`).
     depth : int
         Reads unanswered at most (the FIFO of their stores; the engine's
         crossing allows :data:`~hdl.edt_bfs.dram_stores.DRAM_FIFO`).
@@ -45,13 +47,13 @@ class RowRouter(wiring.Component):
     pass through), so it adds no cycle.
     """
 
-    def __init__(self, w, p, n, select, depth=16):
+    def __init__(self, w, p, n, select, depth=16, changed=False):
         if not 2 <= n <= 8:
             raise ValueError(f"stores {n!r}: must be 2..8")
         if not 2 <= depth <= 256:
             raise ValueError(f"depth {depth!r}: must be 2..256")
         self.n, self.select, self.depth = n, select, depth
-        sig = StateSignature(w, p)
+        sig = StateSignature(w, p, changed)
         super().__init__({**sig.members, "stores": In(sig).array(n)})
 
     def elaborate(self, platform):

@@ -29,6 +29,8 @@ class StateCdc(wiring.Component):
         made before a reset are counted there, and their answers dropped.
     store_domain : str
         The store's clock.
+    changed : bool
+        The writes carry the pixels they change (:func:`~hdl.edt_bfs.state_ram.write_layout`).
     depth : int
         Each FIFO's depth (a power of two, 4..256); also the engine's reads
         unanswered at most, so the answer FIFO always has room for what the
@@ -43,12 +45,13 @@ class StateCdc(wiring.Component):
     ``rd``, the read credit); answers in command order.
     """
 
-    def __init__(self, w, p, user_domain="port", reset_domain="sync", store_domain="dram", depth=16):
+    def __init__(self, w, p, user_domain="port", reset_domain="sync", store_domain="dram", depth=16,
+                 changed=False):
         if not 4 <= depth <= 256 or depth & (depth - 1):
             raise ValueError(f"FIFO depth {depth}: must be a power of two in 4..256")
         self.user_domain, self.reset_domain, self.store_domain, self.depth = \
             user_domain, reset_domain, store_domain, depth
-        sig = StateSignature(w, p)
+        sig = StateSignature(w, p, changed)
         super().__init__({**sig.members, "store": In(sig)})
 
     def elaborate(self, platform):

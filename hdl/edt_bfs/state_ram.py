@@ -30,10 +30,14 @@ def read_data_layout(w, p):
     return data.StructLayout({"left": px, "word": data.ArrayLayout(px, p), "right": px})
 
 
-def write_layout(w, p):
-    """A write command: word (``row``, ``wcol``); ``edt`` / ``bfs`` select the field groups written."""
-    return data.StructLayout({"row": w["row"], "wcol": range(w["words"]), "edt": 1, "bfs": 1,
-                              "word": data.ArrayLayout(pixel_layout(w), p)})
+def write_layout(w, p, changed=False):
+    """A write command: word (``row``, ``wcol``); ``edt`` / ``bfs`` select the field groups written;
+    with ``changed`` (last, so the other fields keep their places) a bit per pixel, set for the
+    pixels whose written fields the write changes: a store may skip what holds none of them (the
+    others are written as they are, so writing them too is never wrong)."""
+    fields = {"row": w["row"], "wcol": range(w["words"]), "edt": 1, "bfs": 1,
+              "word": data.ArrayLayout(pixel_layout(w), p)}
+    return data.StructLayout({**fields, **({"changed": p} if changed else {})})
 
 
 class StateSignature(wiring.Signature):
@@ -41,7 +45,8 @@ class StateSignature(wiring.Signature):
 
     * ``rd`` (in): read commands; ``rd_data`` (out): their answers, in
       command order (:func:`read_data_layout`).
-    * ``wr`` (in): write commands (:func:`write_layout`).
+    * ``wr`` (in): write commands (:func:`write_layout`; ``changed``: with
+      the pixels each write changes).
 
     Contract, for any implementation (this block RAM, or an SDRAM
     controller with a cache of window rows): a read accepted after a write
@@ -63,11 +68,11 @@ class StateSignature(wiring.Signature):
     cycle while the answers are taken), a read and a write in the same cycle.
     """
 
-    def __init__(self, w, p):
+    def __init__(self, w, p, changed=False):
         super().__init__({
             "rd": In(stream.Signature(read_layout(w))),
             "rd_data": Out(stream.Signature(read_data_layout(w, p))),
-            "wr": In(stream.Signature(write_layout(w, p))),
+            "wr": In(stream.Signature(write_layout(w, p, changed))),
         })
 
 

@@ -11,7 +11,7 @@ from navcores.models.edt_bfs_tiled import Timing
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
 from .dram_store import NativePortSignature, dram_layout
-from .dram_stores import DRAM_FIFO, DRAM_PORTS_PARAM, DRAM_WIDTH, DramStores
+from .dram_stores import DRAM_FIFO, DRAM_PORTS_PARAM, DRAM_WIDTH, SKIP_CLEAN_PARAM, DramStores
 from .state_cdc import StateCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
@@ -231,10 +231,7 @@ class TileEngine(wiring.Component):
               doc="visits whose windows are read ahead, while this visit loads, iterates and writes (a "
                   "store outside: hides its latency; the cycle counts are then no longer the model's)",
               message="prefetch {value!r}: must be an integer in {lo}..{hi} (visits read ahead)"),
-        Param("skip_clean", bool, False,
-              doc="write back only the tile rows the visit changed (a store outside: saves its bandwidth; "
-                  "the same cycles)",
-              message="skip_clean {value!r}: must be 0 or 1"),
+        SKIP_CLEAN_PARAM,
     )
     CONSTRAINTS = TILE_CONSTRAINTS[:2] + (
         Constraint(f"max_h * max_w <= {MAX_PIXELS} (bram)",
@@ -268,7 +265,7 @@ class TileEngine(wiring.Component):
             "busy": Out(1), "cmd_err": Out(1), "start_err": Out(1), "goal_err": Out(1),
             "path_found": Out(1), "levels": Out(w["k"]), "tile_visits": Out(32),
             "visit": Out(visit_layout(w)),
-            **({"state": In(StateSignature(w, t_c))} if store == "external" else {}),
+            **({"state": In(StateSignature(w, t_c, self.skip_clean))} if store == "external" else {}),
             **({"dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH))
                 .array(dram_ports), "dram_clk": In(1), "dram_rst": In(1)} if store == "dram" else {}),
         })
@@ -302,9 +299,10 @@ class TileEngine(wiring.Component):
             m.domains.dram = ClockDomain("dram")
             m.d.comb += [ClockSignal("port").eq(ClockSignal("sync")),
                          ClockSignal("dram").eq(self.dram_clk), ResetSignal("dram").eq(self.dram_rst)]
-            m.submodules.cdc = mem = StateCdc(w, t_c, "port", "sync", "dram", depth=DRAM_FIFO)
+            m.submodules.cdc = mem = StateCdc(w, t_c, "port", "sync", "dram", depth=DRAM_FIFO,
+                                              changed=self.skip_clean)
             m.submodules.stores = stores = DomainRenamer("dram")(
-                DramStores(t_r, t_c, self.max_h, self.max_w, self.dram_ports))
+                DramStores(t_r, t_c, self.max_h, self.max_w, self.dram_ports, self.skip_clean))
             for name in ("rd", "rd_data", "wr"):
                 wiring.connect(m, getattr(mem.store, name), getattr(stores, name))
             for ours, theirs in zip(self.dram, stores.dram):
@@ -605,9 +603,11 @@ class TileEngine(wiring.Component):
                 m.d.sync += loaded_rows[(ld_row - 1)[:max(1, (t_r - 1).bit_length())]].eq(
                     Value.cast(answer)[px_l.size:(t_c + 1) * px_l.size])      # the word, without the edges
             was = data.ArrayLayout(px_l, t_c)(loaded_rows[sj[:max(1, (t_r - 1).bit_length())]])
-            differ = {g: Cat(*[getattr(arr.wb[j], f) != getattr(was[j], f) for j in range(t_c) for f in fields]).any()
+            differ = {g: Cat(*[Cat(*[getattr(arr.wb[j], f) != getattr(was[j], f) for f in fields]).any()
+                               for j in range(t_c)])
                       for g, fields in (("edt", EDT_FIELDS), ("bfs", BFS_FIELDS))}
-            row_dirty = named(m, "row_dirty", Mux(bfs, differ["bfs"], differ["edt"]))
+            px_changed = named(m, "px_changed", Mux(bfs, differ["bfs"], differ["edt"]), t_c)
+            row_dirty = named(m, "row_dirty", px_changed.any())
             wr_go = named(m, "wr_go", store_wr & row_dirty)
             wr_fire = named(m, "wr_fire", store_wr & (mem.wr.ready | ~row_dirty))
         else:
@@ -771,12 +771,18 @@ class TileEngine(wiring.Component):
         with m.If(at["LOAD"]):
             m.d.comb += [mem.wr.valid.eq(self.m_stream.valid), wr.row.eq(lr), wr.wcol.eq(lw),
                          wr.edt.eq(1), wr.bfs.eq(1), wr.word.eq(init_word)]
+            if self.skip_clean:                 # the load writes every pixel
+                m.d.comb += wr.changed.eq((1 << t_c) - 1)
         with m.Elif(at["STORE"]):
+            if self.skip_clean:
+                m.d.comb += wr.changed.eq(px_changed)
             m.d.comb += [mem.wr.valid.eq(wr_go), wr.row.eq(r0 + sj), wr.wcol.eq(vt.c),
                          wr.edt.eq(~bfs), wr.bfs.eq(bfs), wr.word.eq(arr.wb)]
         with m.Elif(at["GOAL1"]):
             m.d.comb += [mem.wr.valid.eq(mem.rd_data.valid & g_cfr), wr.row.eq(g.row), wr.wcol.eq(g_tile.c),
                          wr.bfs.eq(1), wr.word.eq(goal_word)]
+            if self.skip_clean:                 # the goal's pixel only (the others as read)
+                m.d.comb += wr.changed.eq(Const(1, t_c) << g_j)
 
         # -- the result stream
         o = self.o_stream.payload
