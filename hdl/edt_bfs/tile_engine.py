@@ -136,7 +136,10 @@ class TileEngine(wiring.Component):
         With a store outside: a tile row the visit did not change (its
         phase's fields equal to the row as loaded) is not written back; its
         beat passes without a command (the same cycles, less of the store's
-        bandwidth: on maze512-1-0 a third of the BFS visits' rows).
+        bandwidth: on maze512-1-0 a third of the BFS visits' rows); every
+        write carries the pixels it changes (``state``'s ``wr.changed``:
+        :func:`~hdl.edt_bfs.state_ram.write_layout`), so a DRAM store
+        issues only the native words holding one.
 
     Ports
     -----
