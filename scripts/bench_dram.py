@@ -128,8 +128,8 @@ def section(maps=MAPS):
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
     side = stores_fit()
     sys_mhz = litedram_core.SYS_CLK_HZ / 1e6
-    clock = (f"the engine at {mhz:.1f} MHz (the 4x8 / 512x512 engine with store=external and the prefetch placed on the "
-             f"{B.PART}: make fit; the same engine logic)" if mhz else
+    clock = (f"the engine at {mhz:.1f} MHz (the 4x8 / 512x512 engine with store=external, prefetch and skip_clean "
+             f"placed on the {B.PART}: make fit; the same engine logic)" if mhz else
              "no engine clock (the 4x8 / 512x512 engine is not placed for its current Verilog: no job times)")
     if side and side["fits"]:
         meets = "at least" if side["fmax_mhz"] >= sys_mhz else "BELOW"

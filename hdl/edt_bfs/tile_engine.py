@@ -17,7 +17,8 @@ from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
 from .write_patch import WritePatch
 from ..arith import divmod_const, times
-from .tile_layouts import BFS_FIELDS, EDT_FIELDS, MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout, pixels, tile_widths
+from .tile_layouts import (BFS_FIELDS, EDT_FIELDS, MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout,
+                           pixels, tile_widths)
 from .worklist import Worklist, tile_layout
 
 STATES = ("IDLE", "LOAD", "SCAN", "LEVEL", "SCHED0", "SCHED1", "READ", "ITER", "STORE",
@@ -567,8 +568,6 @@ class TileEngine(wiring.Component):
                 for d in range(D):
                     with m.If(pf_taken & (lvl == d + 1)):
                         m.d.sync += pf[d].eq(pf[d] + 1)
-            with m.If(at["READ"] & mem.rd_data.valid):
-                m.d.sync += ld_map.eq(ld_map + 1)
             m.d.comb += [patch.init.eq(at["IDLE"]), patch.ld_row.eq(ld_map), patch.ld_c.eq(vt.c),
                          patch.bfs.eq(bfs)]
 
@@ -601,7 +600,8 @@ class TileEngine(wiring.Component):
             # A tile row the visit left as it loaded it (its phase's fields: the group the write
             # writes) is not written: its beat passes without a command (the same cycles).
             px_l = pixel_layout(w)
-            loaded_rows = Array(Signal(data.ArrayLayout(px_l, t_c).size, name=f"loaded_row{i}") for i in range(t_r))
+            loaded_rows = Array(Signal(data.ArrayLayout(px_l, t_c).size, name=f"loaded_row{i}")
+                                for i in range(t_r))
             with m.If(at["READ"] & mem.rd_data.valid & (ld_row >= 1) & (ld_row <= t_r)):
                 m.d.sync += loaded_rows[(ld_row - 1)[:max(1, (t_r - 1).bit_length())]].eq(
                     Value.cast(answer)[px_l.size:(t_c + 1) * px_l.size])      # the word, without the edges

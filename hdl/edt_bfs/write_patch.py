@@ -108,8 +108,8 @@ class WritePatch(wiring.Component):
             hit = Signal(name=f"age{age}_hit")
             m.d.comb += hit.eq(pick["valid"] & (pick["bfs"] == self.bfs) & (self.ld_row >= pick["r0"])
                                & (off < pick["own"]))
-            src = data.ArrayLayout(pixel_layout(w), t_c)(
-                Array(words[b][i] for b in range(n) for i in range(t_r))[sel * t_r + off[:max(1, (t_r - 1).bit_length())]])
+            flat_rows = Array(words[b][i] for b in range(n) for i in range(t_r))     # bank b's row i at b t_r + i
+            src = data.ArrayLayout(pixel_layout(w), t_c)(flat_rows[sel * t_r + off[:max(1, (t_r - 1).bit_length())]])
             where = {0: pick["c"] + 1 == self.ld_c, t_c + 1: pick["c"] == self.ld_c + 1}
             out = Signal(data.ArrayLayout(pixel_layout(w), t_c + 2), name=f"age{age}_row")
             m.d.comb += out.eq(row)
