@@ -8,7 +8,8 @@ with its DRAM model: scripts/litedram_core.py) in Verilator, checks the
 results against models.edt_bfs_tiled (distances, vectors, cfr, parents,
 hop counts, path, tile visits and their trace: the same; cycles: more), and
 reports the job's engine cycles and its time at the engine's clock (the
-4x8 / 512x512 engine with store=external and the prefetch placed: :func:`engine_mhz`) with
+4x8 / 512x512 engine with store=external, prefetch and skip_clean placed:
+:func:`engine_mhz`) with
 the controller at litedram_core.SYS_CLK_HZ (the two clocks in that ratio
 in the simulation), against scipy on the same machine in the same run.
 ``--md FILE`` writes the rows as BENCHMARKS.md's section (scripts/bench.py
@@ -40,7 +41,8 @@ from navcores.sim.rtl.clock import PERIOD_NS  # noqa: E402
 from navcores.sim.rtl.runner import run  # noqa: E402
 
 WORK = B.ROOT / "build" / "bench_dram"
-# The engine: the catalog's edt_tile_dram (a 4x8 array over maps up to 512x512, four native ports, the prefetch)
+# The engine: the catalog's edt_tile_dram (a 4x8 array over maps up to 512x512, four native ports, prefetch,
+# skip_clean)
 PARAMS = dict(catalog.get("edt_tile_dram").params)
 ARRAY = (PARAMS["t_r"], PARAMS["t_c"])
 RAM = (PARAMS["max_h"], PARAMS["max_w"])
@@ -99,7 +101,7 @@ def measure(name, core, csrs, work, mhz):
 
 
 def engine_mhz():
-    """The engine's clock: the 4x8 engine over 512x512 with store=external and the prefetch placed on the part (its fit
+    """The engine's clock: the catalog engine's logic with store=external placed on the part (its fit
     JSON's median of seeds; the engine's logic is the same, the DramStore and StateCdc run on the
     controller's clock), or None if it has not been placed (for its current Verilog)."""
     fit = B.fit_result(ARRAY, RAM, store="external", extra=ENGINE)
