@@ -6,7 +6,7 @@
 up to 512x512 with ``store="dram"``, and LiteDRAM's generated controller
 with its DRAM model: scripts/litedram_core.py) in Verilator, checks the
 results against models.edt_bfs_tiled (distances, vectors, cfr, parents,
-hop counts, path, tile visits and their trace: the same; cycles: more), and
+hop counts, path, tile visits and their trace: the same; cycles: the DRAM's), and
 reports the job's engine cycles and its time at the engine's clock (the
 4x8 / 512x512 engine with store=external, prefetch and skip_clean placed:
 :func:`engine_mhz`) with
