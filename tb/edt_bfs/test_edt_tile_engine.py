@@ -19,10 +19,10 @@ goal outside the map: goal_err, dropped); with TILE_STORE=external the
 engine with its state outside on sim/rtl/state_store.py's store, at
 StateRam's timing (cycle-exact) and with random latency and stalls (the
 same results in more cycles); with TILE_PREFETCH=d (the engine reads the
-next d visits' windows during this one: hdl/edt_bfs/tile_engine.py) the same
-results and trace in fewer cycles than the model's at StateRam's timing,
-in more with the slow store; with TILE_SKIP_CLEAN=1 the same results and
-cycles in fewer writes than the model's words written (without: as many).  Environment: TILE_PARAMS
+next d visits' windows during this one: hdl/edt_bfs/tile_engine.py) the
+same results and trace, in fewer cycles than the model's at StateRam's
+timing; with TILE_SKIP_CLEAN=1 the visits write fewer words than the
+model's words written (without: as many).  Environment: TILE_PARAMS
 (t_r,t_c,max_h,max_w), TILE_JOBS (random jobs), TILE_MID (HxW of the maps
 of the edge cases, stalls, resets and changed environments), TILE_MAPS
 (the bundled maps to run, comma-separated), TILE_LARGE (1: random maps
