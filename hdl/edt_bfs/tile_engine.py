@@ -600,12 +600,13 @@ class TileEngine(wiring.Component):
             # A tile row the visit left as it loaded it (its phase's fields: the group the write
             # writes) is not written: its beat passes without a command (the same cycles).
             px_l = pixel_layout(w)
+            tile_row = max(1, (t_r - 1).bit_length())     # bits of a tile row's index
             loaded_rows = Array(Signal(data.ArrayLayout(px_l, t_c).size, name=f"loaded_row{i}")
                                 for i in range(t_r))
             with m.If(at["READ"] & mem.rd_data.valid & (ld_row >= 1) & (ld_row <= t_r)):
-                m.d.sync += loaded_rows[(ld_row - 1)[:max(1, (t_r - 1).bit_length())]].eq(
+                m.d.sync += loaded_rows[(ld_row - 1)[:tile_row]].eq(
                     Value.cast(answer)[px_l.size:(t_c + 1) * px_l.size])      # the word, without the edges
-            was = data.ArrayLayout(px_l, t_c)(loaded_rows[sj[:max(1, (t_r - 1).bit_length())]])
+            was = data.ArrayLayout(px_l, t_c)(loaded_rows[sj[:tile_row]])
             differ = {g: Cat(*[Cat(*[getattr(arr.wb[j], f) != getattr(was[j], f) for f in fields]).any()
                                for j in range(t_c)])
                       for g, fields in (("edt", EDT_FIELDS), ("bfs", BFS_FIELDS))}

@@ -110,12 +110,14 @@ class WritePatch(wiring.Component):
                                & (off < pick["own"]))
             flat_rows = Array(words[b][i] for b in range(n) for i in range(t_r))     # bank b's row i at b t_r + i
             src = data.ArrayLayout(pixel_layout(w), t_c)(flat_rows[sel * t_r + off[:max(1, (t_r - 1).bit_length())]])
+            same = Signal(name=f"age{age}_same")     # the bank's tile in the loading visit's word column
+            m.d.comb += same.eq(pick["c"] == self.ld_c)
             where = {0: pick["c"] + 1 == self.ld_c, t_c + 1: pick["c"] == self.ld_c + 1}
             out = Signal(data.ArrayLayout(pixel_layout(w), t_c + 2), name=f"age{age}_row")
             m.d.comb += out.eq(row)
             for x in range(t_c + 2):
                 spx = src[t_c - 1] if x == 0 else src[0] if x == t_c + 1 else src[x - 1]
-                there = where.get(x, pick["c"] == self.ld_c)
+                there = where.get(x, same)
                 for group, use in ((EDT_FIELDS, ~self.bfs), (BFS_FIELDS, self.bfs)):
                     for f in group:
                         m.d.comb += getattr(out[x], f).eq(Mux(hit & there & use, getattr(spx, f), getattr(row[x], f)))
