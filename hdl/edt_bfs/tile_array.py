@@ -82,12 +82,16 @@ class TileArray(wiring.Component):
     wb_row : In, wb : Out(T_c pixels)
         Tile row ``wb_row`` for the write-back: di, dx, dy (EDT) and hop,
         parent (BFS) of each pixel.
+    dirty : Out(T_c), with ``dirty`` only
+        The pixels of tile row ``wb_row`` whose write-back fields may differ
+        from the loaded ones (:class:`TileCell`'s ``dirty``).
     """
 
-    def __init__(self, t_r, t_c, w):
-        self.t_r, self.t_c, self.w = t_r, t_c, w
+    def __init__(self, t_r, t_c, w, dirty=False):
+        self.t_r, self.t_c, self.w, self.with_dirty = t_r, t_c, w, bool(dirty)
         px = pixel_layout(w)
         super().__init__({
+            **({"dirty": Out(t_c)} if self.with_dirty else {}),
             "phase": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "dfar": In(w["di"]),
             "clear": In(1),
             "ld_en": In(1), "ld_row": In(range(t_r + 2)), "ld_px": In(data.ArrayLayout(px, t_c + 2)),
@@ -126,7 +130,7 @@ class TileArray(wiring.Component):
             m.d.comb += load.eq(self.ld_en & (self.ld_row == a))
             for b in range(t_c + 2):
                 if 1 <= a <= t_r and 1 <= b <= t_c:
-                    cell = cells[a, b] = TileCell(w)
+                    cell = cells[a, b] = TileCell(w, self.with_dirty)
                     m.submodules[f"cell_{a - 1}_{b - 1}"] = cell
                     m.d.comb += [cell.phase.eq(self.phase), cell.step.eq(self.step), cell.k.eq(self.k),
                                  cell.kk.eq(self.kk), cell.clear.eq(self.clear), cell.load.eq(load),
@@ -194,4 +198,7 @@ class TileArray(wiring.Component):
                              row[b - 1].hop.eq(r.val), row[b - 1].parent.eq(r.aux)]
             rows.append(bits)
         m.d.comb += self.wb.eq(Array(rows)[self.wb_row])
+        if self.with_dirty:
+            m.d.comb += self.dirty.eq(Array(Cat(*[cells[a, b].dirty for b in range(1, t_c + 1)])
+                                            for a in range(1, t_r + 1))[self.wb_row])
         return m

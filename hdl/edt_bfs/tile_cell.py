@@ -81,16 +81,27 @@ class TileCell(wiring.Component):
     smark : Out(1)
         EDT self mark: present, not done, and a neighbour done in RAM
         (combinational from the registers; read after the iteration).
+    dirty : Out(1), with ``dirty`` only
+        The write-back's fields (EDT: di, dx, dy; BFS: hop, parent) may
+        differ from the loaded ones: set by an iteration that writes one of
+        them with a new value (EDT: the cell becomes done; BFS: its hop
+        falls or its parent changes), cleared by ``clear`` and ``load``.  A
+        flip-flop: the engine's skip_clean writes back only the pixels it
+        marks, instead of comparing each row with a copy of it as loaded.
+        Never clear where a field differs (an EDT cell made done again with
+        the same vector is marked: one pixel written for nothing).
     """
 
-    def __init__(self, w):
-        self.w = w
+    def __init__(self, w, dirty=False):
+        self.w, self.with_dirty = w, bool(dirty)
         # Plain vectors (the layouts are views inside): see tile_layouts.flat.
         cl, nl = cell_layout(w).size, nb_layout(w).size
         ports = {"phase": In(1), "step": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "clear": In(1), "load": In(1),
                  "ld": In(cl)}
         ports.update({f"n{i}": In(nl) for i in OFFSETS})
         ports.update({"nb": Out(nl), "state": Out(cl), "upd": Out(1), "smark": Out(1)})
+        if self.with_dirty:
+            ports["dirty"] = Out(1)
         super().__init__(ports)
 
     def elaborate(self, platform):
@@ -148,6 +159,12 @@ class TileCell(wiring.Component):
             m.d.sync += r.aux.eq(parent)
             with m.If(en_bfs):
                 m.d.sync += [r.flag.eq(1), r.chg.eq(1), r.val.eq(m1)]
+
+        if self.with_dirty:
+            with m.If(self.clear | self.load):
+                m.d.sync += self.dirty.eq(0)
+            with m.Elif(en_edt | (self.step & self.phase & (en_bfs | (parent != r.aux)))):
+                m.d.sync += self.dirty.eq(1)
 
         near = Cat(*[n[i].ram for i in OFFSETS]).any()
         m.d.comb += [self.upd.eq(en_edt | en_bfs), self.smark.eq(r.present & ~r.flag & near)]

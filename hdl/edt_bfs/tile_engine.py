@@ -1,7 +1,7 @@
 """The EDT/BFS tile engine (issue 18): paper 004's cells as a T_r x T_c array over a map in block RAM."""
 
-from amaranth.hdl import (Array, Cat, ClockDomain, ClockSignal, Const, DomainRenamer, Module, Mux, ResetSignal, Signal,
-                          Value, signed)
+from amaranth.hdl import (Cat, ClockDomain, ClockSignal, Const, DomainRenamer, Module, Mux, ResetSignal, Signal,
+                          signed)
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.wiring import In, Out
 
@@ -17,7 +17,7 @@ from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
 from .write_patch import WritePatch
 from ..arith import divmod_const, times
-from .tile_layouts import (BFS_FIELDS, EDT_FIELDS, MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout,
+from .tile_layouts import (MAX_CELLS, TILE_CONSTRAINTS, TILE_PARAMS, named, pixel_layout,
                            pixels, tile_widths)
 from .worklist import Worklist, tile_layout
 
@@ -315,7 +315,7 @@ class TileEngine(wiring.Component):
             mem = self.state
         m.submodules.work = work = Worklist(w, peek=self.prefetch)
         m.submodules.front = front = FrontierFlags(w, t_c)
-        m.submodules.array = arr = TileArray(t_r, t_c, w)
+        m.submodules.array = arr = TileArray(t_r, t_c, w, dirty=self.skip_clean)
 
         state = Signal(range(len(STATES)))
         at = {name: named(m, f"at_{name.lower()}", state == n) for n, name in enumerate(STATES)}
@@ -598,19 +598,9 @@ class TileEngine(wiring.Component):
         store_wr = named(m, "store_wr", at["STORE"] & (sj < own))
         if self.skip_clean:
             # A tile row the visit left as it loaded it (its phase's fields: the group the write
-            # writes) is not written: its beat passes without a command (the same cycles).
-            px_l = pixel_layout(w)
-            tile_row = max(1, (t_r - 1).bit_length())     # bits of a tile row's index
-            loaded_rows = Array(Signal(data.ArrayLayout(px_l, t_c).size, name=f"loaded_row{i}")
-                                for i in range(t_r))
-            with m.If(at["READ"] & mem.rd_data.valid & (ld_row >= 1) & (ld_row <= t_r)):
-                m.d.sync += loaded_rows[(ld_row - 1)[:tile_row]].eq(
-                    Value.cast(answer)[px_l.size:(t_c + 1) * px_l.size])      # the word, without the edges
-            was = data.ArrayLayout(px_l, t_c)(loaded_rows[sj[:tile_row]])
-            differ = {g: Cat(*[Cat(*[getattr(arr.wb[j], f) != getattr(was[j], f) for f in fields]).any()
-                               for j in range(t_c)])
-                      for g, fields in (("edt", EDT_FIELDS), ("bfs", BFS_FIELDS))}
-            px_changed = named(m, "px_changed", Mux(bfs, differ["bfs"], differ["edt"]), t_c)
+            # writes) is not written: its beat passes without a command (the same cycles).  The
+            # cells mark what they change (TileCell's dirty), so no copy of the rows as loaded.
+            px_changed = named(m, "px_changed", arr.dirty, t_c)
             row_dirty = named(m, "row_dirty", px_changed.any())
             wr_go = named(m, "wr_go", store_wr & row_dirty)
             wr_fire = named(m, "wr_fire", store_wr & (mem.wr.ready | ~row_dirty))

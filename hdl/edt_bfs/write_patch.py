@@ -1,7 +1,8 @@
 """The tile engine's last visits' write-backs, patched into window rows read before them (prefetch)."""
 
-from amaranth.hdl import Array, Module, Mux, Signal
+from amaranth.hdl import Array, Cat, Module, Mux, Signal
 from amaranth.lib import data, wiring
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from .tile_layouts import BFS_FIELDS, EDT_FIELDS, pixel_layout
@@ -20,7 +21,9 @@ class WritePatch(wiring.Component):
     behind earlier writes, StateSignature's contract), so the row the store
     returns plus the writes of the last d visits, oldest first, is the row
     as it is now.  This block keeps those writes (a bank per visit, d banks
-    in a ring, a visit's bank being the oldest one's) and patches them in:
+    in a ring, a visit's bank being the oldest one's; the rows in a small
+    memory with a read port per age, which synthesis maps to distributed
+    RAM, not to flip-flops behind wide multiplexers) and patches them in:
     a pixel of a loaded row takes a bank's value where the bank's visit
     wrote it (its tile's own rows: the word of the same word column, or
     the edge pixel of the word left or right of it) and wrote it in the
@@ -86,16 +89,17 @@ class WritePatch(wiring.Component):
         own = [Signal(self.own.shape(), name=f"b{b}_own") for b in range(n)]
         col = [Signal(self.c.shape(), name=f"b{b}_c") for b in range(n)]
         bfs = [Signal(name=f"b{b}_bfs") for b in range(n)]
-        words = [[Signal(wsize, name=f"b{b}_row{i}") for i in range(t_r)] for b in range(n)]
+        rbits = max(1, (t_r - 1).bit_length())         # a tile row's index; bank b's row i at b 2^rbits + i
+        m.submodules.rows = rows = Memory(shape=wsize, depth=n << rbits, init=[])
+        wp = rows.write_port()
+        m.d.comb += [wp.addr.eq(Cat(self.wr_row[:rbits], cur)), wp.data.eq(self.wr_word.as_value()),
+                     wp.en.eq(self.wr)]
         for b in range(n):
             with m.If(self.init):
                 m.d.sync += valid[b].eq(0)
             with m.Elif(self.wr & (cur == b)):
                 m.d.sync += [valid[b].eq(1), r0[b].eq(self.r0), own[b].eq(self.own), col[b].eq(self.c),
                              bfs[b].eq(self.bfs)]
-                for i in range(t_r):
-                    with m.If(self.wr_row == i):
-                        m.d.sync += words[b][i].eq(self.wr_word.as_value())
         # Oldest first: bank (cur + age) mod n is the age-th oldest; a newer visit's write wins.
         row = self.raw
         for age in range(n):
@@ -108,8 +112,9 @@ class WritePatch(wiring.Component):
             hit = Signal(name=f"age{age}_hit")
             m.d.comb += hit.eq(pick["valid"] & (pick["bfs"] == self.bfs) & (self.ld_row >= pick["r0"])
                                & (off < pick["own"]))
-            flat_rows = Array(words[b][i] for b in range(n) for i in range(t_r))     # bank b's row i at b t_r + i
-            src = data.ArrayLayout(pixel_layout(w), t_c)(flat_rows[sel * t_r + off[:max(1, (t_r - 1).bit_length())]])
+            rp = rows.read_port(domain="comb")
+            m.d.comb += rp.addr.eq(Cat(off[:rbits], sel[:max(1, (n - 1).bit_length())]))
+            src = data.ArrayLayout(pixel_layout(w), t_c)(rp.data)
             same = Signal(name=f"age{age}_same")     # the bank's tile in the loading visit's word column
             m.d.comb += same.eq(pick["c"] == self.ld_c)
             where = {0: pick["c"] + 1 == self.ld_c, t_c + 1: pick["c"] == self.ld_c + 1}
