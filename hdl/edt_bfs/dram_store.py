@@ -69,7 +69,11 @@ def dram_layout(w, p, max_h, data_width=128):
 
     * ``a`` words (from offset 0): the EDT field group (di, dx, dy) of the
       word's ``p`` pixels, packed (``p * edt`` bits);
-    * ``b`` words (from offset ``a``): the BFS group (hop, parent), packed;
+    * ``b`` words (from offset ``a``): the BFS group (hop, parent), packed,
+      then from byte ``cfr_byte`` of the region a bit per pixel: the pixel is
+      in the cfr by its di (``none`` or above d_far), kept by a store with
+      ``changed`` (:class:`DramStore`) so that a BFS read need not read the
+      ``a`` words for di;
     * ``e`` words (from offset ``a + b``): the *edge slots*, copies of the
       last pixel of word ``wcol - 1`` (slot 0, ``left``) and the first of
       word ``wcol + 1`` (slot 1, ``right``), each slot the EDT group then the
@@ -78,16 +82,18 @@ def dram_layout(w, p, max_h, data_width=128):
       (``e = 1``), else one each.
 
     So a window row (the word and one pixel either side) is ``a`` + ``e``
-    reads for an EDT visit, ``a + b + e`` for the rest, all in one block (one
+    reads for an EDT visit, ``b + e`` for a BFS visit with the cfr bits,
+    ``a + b + e`` for the rest, all in one block (one
     DRAM row); a write of one group is its ``a`` (or ``b``) words plus one
     byte-masked write into each neighbour's edge word.  Returns a dict of
-    those numbers, ``slot`` (the slot's size in bytes), ``edt_byte`` /
+    those numbers, ``cfr_byte``, ``slot`` (the slot's size in bytes), ``edt_byte`` /
     ``bfs_byte`` (each group's first byte in a slot), ``slot_at(s)`` ->
     (edge word, first byte) and ``addr_width``.
     """
     e_bits, b_bits = edt_layout(w).size, bfs_layout(w).size
     assert data_width % 8 == 0 and data_width >= 32, data_width
-    a, b = -(-p * e_bits // data_width), -(-p * b_bits // data_width)
+    cfr_byte = _bytes(p * b_bits)
+    a, b = -(-p * e_bits // data_width), -(-(cfr_byte + _bytes(p)) * 8 // data_width)
     slot = _bytes(e_bits) + _bytes(b_bits)
     if slot > data_width // 8:
         raise ValueError(f"a pixel's state ({slot} bytes) is wider than a native word ({data_width} bits)")
@@ -97,7 +103,7 @@ def dram_layout(w, p, max_h, data_width=128):
     rb = max(1, (max_h - 1).bit_length())
     # the row's low bits at ROW_BITS_AT even when a row's blocks take fewer address bits (a small map)
     return {"a": a, "b": b, "e": e, "kb": kb, "wb": wb, "rb": rb, "addr_width": rb + max(wb + kb, ROW_BITS_AT),
-            "slot": slot, "edt_byte": 0, "bfs_byte": _bytes(e_bits), "data_width": data_width,
+            "cfr_byte": cfr_byte, "slot": slot, "edt_byte": 0, "bfs_byte": _bytes(e_bits), "data_width": data_width,
             "slot_at": (lambda s: (s, 0) if e == 2 else (0, s * slot))}
 
 
@@ -143,11 +149,17 @@ class DramStore(wiring.Component):
         the answers (always ready: LiteDRAM's native port does not wait for
         ``rdata.ready``, a word not taken is lost).
     changed : bool
-        The writes carry the pixels they change
+        The writes carry the pixels they change and the pixels' cfr bits
         (:func:`~hdl.edt_bfs.state_ram.write_layout`): a write issues only
-        the native words holding one of them (a group word any of whose
+        the native words holding a changed pixel (a group word any of whose
         pixels changed; a neighbour's edge slot when the pixel it copies
-        changed).
+        changed); an EDT write (or the load) also writes the word's cfr
+        bits (:func:`dram_layout`: a byte-masked write of the B word holding
+        them, which a BFS write leaves out), and a read asking for di and the
+        BFS group without the vector (the BFS visits', the goals') skips the
+        ``a`` words: its answer's di is ``none`` for a pixel in the cfr, 0
+        for one outside (all the engine reads di for there), the edge
+        pixels' di as stored (the slot holds it).
 
     Ports
     -----
@@ -173,7 +185,7 @@ class DramStore(wiring.Component):
     it).  Order:
     the controller's (a read after a write to the same word sees it), so
     StateSignature's contract holds.  Timing: an EDT read takes ``a + e``
-    port cycles, a BFS read ``a + b + e``, a write ``a`` (or ``b``) + 2, at
+    port cycles, a BFS read ``a + b + e`` (``b + e`` with ``changed``), a write ``a`` (or ``b``) + 2, at
     best (one native command a cycle); answers follow the controller's
     latency.
     """
@@ -206,6 +218,7 @@ class DramStore(wiring.Component):
         wcol = Signal(range(w["words"]))
         wmask = Signal(2)               # a write's groups: bit 0 EDT, bit 1 BFS
         word = Signal(px.size * p)      # a write's pixels
+        cfr = Signal(p) if self.changed else Const(0, p)        # and their cfr bits
         hot, step = _lowest(m, busy_mask, n, "step")
 
         cmd, wdata = self.dram.cmd, self.dram.wdata
@@ -243,7 +256,8 @@ class DramStore(wiring.Component):
         take_rd = self.rd.valid & free & ~self.wr.valid & desc.w_rdy
         m.d.comb += [self.wr.ready.eq(free), self.rd.ready.eq(free & ~self.wr.valid & desc.w_rdy)]
         rcmd, wcmd = self.rd.payload, self.wr.payload
-        need_a = rcmd.di | rcmd.nnt
+        # with the cfr bits in the B words, di alone for a BFS group read is not a reason to read A
+        need_a = (rcmd.nnt | (rcmd.di & ~rcmd.bfs)) if self.changed else (rcmd.di | rcmd.nnt)
         rd_steps = Cat(*([need_a] * a), *([rcmd.bfs] * b), *([Const(1)] * e))
         right_ok = wcmd.wcol != w["words"] - 1
         left_ok = wcmd.wcol != 0
@@ -254,7 +268,12 @@ class DramStore(wiring.Component):
             touched = [Cat(*[wcmd.changed[j] for j in range(p)
                              if j * bits < (s + 1) * dw and (j + 1) * bits > s * dw]).any()
                        for bits, count in ((e_bits, a), (b_bits, b)) for s in range(count)]
-            wr_steps = Cat(*[wcmd.edt & t for t in touched[:a]], *[wcmd.bfs & t for t in touched[a:]],
+            # an EDT write (with any pixel changed) also writes the B word(s) holding the cfr bits
+            cfr_word = [s * nb < lay["cfr_byte"] + (p + 7) // 8 and (s + 1) * nb > lay["cfr_byte"] for s in range(b)]
+            anyc = wcmd.changed.any()
+            wr_steps = Cat(*[wcmd.edt & t for t in touched[:a]],
+                           *[(wcmd.bfs & t) | (wcmd.edt & anyc) if cw else wcmd.bfs & t
+                             for t, cw in zip(touched[a:], cfr_word)],
                            right_ok & wcmd.changed[p - 1], left_ok & wcmd.changed[0])
         else:
             wr_steps = Cat(*([wcmd.edt] * a), *([wcmd.bfs] * b), right_ok, left_ok)
@@ -263,6 +282,8 @@ class DramStore(wiring.Component):
         with m.If(take_wr):
             m.d.sync += [busy_mask.eq(wr_steps), is_wr.eq(1), row.eq(wcmd.row), wcol.eq(wcmd.wcol),
                          wmask.eq(Cat(wcmd.edt, wcmd.bfs)), word.eq(wcmd.word.as_value())]
+            if self.changed:
+                m.d.sync += cfr.eq(wcmd.cfr)
         with m.Elif(take_rd):
             m.d.sync += [busy_mask.eq(rd_steps), is_wr.eq(0), row.eq(rcmd.row), wcol.eq(rcmd.wcol)]
 
@@ -274,6 +295,8 @@ class DramStore(wiring.Component):
         edt_bits = Cat(*[pix[j].as_value()[px["di"].offset:px["dy"].offset + px["dy"].width] for j in range(p)])
         bfs_bits = Cat(*[pix[j].as_value()[px["hop"].offset:] for j in range(p)])
         assert px["di"].offset == 0 and px["hop"].offset == px["dy"].offset + px["dy"].width
+        b_region = Cat(bfs_bits, Const(0, lay["cfr_byte"] * 8 - len(bfs_bits)), cfr,
+                       Const(0, b * dw - lay["cfr_byte"] * 8 - p))
         m.d.comb += col.eq(wcol)
         with m.Switch(step):
             for s in range(n):
@@ -282,7 +305,13 @@ class DramStore(wiring.Component):
                         m.d.comb += [off.eq(s), wd.eq(edt_bits[s * dw:(s + 1) * dw]), wbe.eq((1 << nb) - 1)]
                     elif s < a + b:                             # B word s - a
                         k = s - a
-                        m.d.comb += [off.eq(s), wd.eq(bfs_bits[k * dw:(k + 1) * dw]), wbe.eq((1 << nb) - 1)]
+                        m.d.comb += [off.eq(s), wd.eq(b_region[k * dw:(k + 1) * dw])]
+                        if self.changed:                        # BFS group bytes; cfr bytes (EDT, load)
+                            cb = ((1 << (p + 7) // 8) - 1) << lay["cfr_byte"]
+                            cmask = (cb >> (k * nb)) & ((1 << nb) - 1)
+                            m.d.comb += wbe.eq(Mux(wmask[1], ((1 << nb) - 1) & ~cmask, 0) | Mux(wmask[0], cmask, 0))
+                        else:
+                            m.d.comb += wbe.eq((1 << nb) - 1)
                     else:
                         k = s - a - b
                         if k < e:                               # a read's edge word k
@@ -316,6 +345,10 @@ class DramStore(wiring.Component):
         m.d.comb += [rf.r_en.eq(collecting & (~out.valid | out.ready)), desc.r_en.eq(~collecting)]
         with m.If(~collecting & desc.r_rdy & desc.r_en):
             m.d.sync += amask.eq(desc.r_data)
+        if self.changed:
+            got_a = Signal()            # the read being collected brings the A words
+            with m.If(~collecting & desc.r_rdy & desc.r_en):
+                m.d.sync += got_a.eq(desc.r_data[0])
         with m.If(word_go):
             m.d.sync += amask.eq(amask & ~ahot)
             with m.Switch(astep):
@@ -334,6 +367,9 @@ class DramStore(wiring.Component):
             h = b_lay(b_bits[j * b_lay.size:(j + 1) * b_lay.size])
             m.d.comb += [getattr(ans.word[j], f).eq(getattr(g, f)) for f in EDT_FIELDS]
             m.d.comb += [getattr(ans.word[j], f).eq(getattr(h, f)) for f in BFS_FIELDS]
+            if self.changed:                # a read without A: di from the cfr bit (none: in the cfr)
+                none = (1 << w["di"]) - 1
+                m.d.comb += ans.word[j].di.eq(Mux(got_a, g.di, Mux(b_bits[lay["cfr_byte"] * 8 + j], none, 0)))
         for slot, dst in ((0, ans.left), (1, ans.right)):
             ew, byte = lay["slot_at"](slot)
             base = ew * dw + byte * 8

@@ -34,10 +34,12 @@ def write_layout(w, p, changed=False):
     """A write command: word (``row``, ``wcol``); ``edt`` / ``bfs`` select the field groups written;
     with ``changed`` (last, so the other fields keep their places) a bit per pixel, set for the
     pixels whose written fields the write changes: a store may skip what holds none of them (the
-    others are written as they are, so writing them too is never wrong)."""
+    others are written as they are, so writing them too is never wrong); and ``cfr``, a bit per
+    pixel: in the collision-free region by the written di (none, or above the job's d_far), for a
+    store that answers a BFS read's di from it (:class:`~hdl.edt_bfs.dram_store.DramStore`)."""
     fields = {"row": w["row"], "wcol": range(w["words"]), "edt": 1, "bfs": 1,
               "word": data.ArrayLayout(pixel_layout(w), p)}
-    return data.StructLayout({**fields, **({"changed": p} if changed else {})})
+    return data.StructLayout({**fields, **({"changed": p, "cfr": p} if changed else {})})
 
 
 class StateSignature(wiring.Signature):

@@ -762,19 +762,24 @@ class TileEngine(wiring.Component):
             m.d.comb += [mem.rd.valid.eq(rr_more), rd.row.eq(rr_row), rd.wcol.eq(rr_w),
                          rd.di.eq(1), rd.nnt.eq(1), rd.bfs.eq(1),
                          mem.rd_data.ready.eq(self.o_stream.ready & word_end)]
+        wword = wr.word                         # the write's word
+        if self.skip_clean:                     # each written pixel's cfr, by its di (meant for EDT writes),
+            wword = Signal(data.ArrayLayout(pixel_layout(w), t_c))      # from a signal of its own (no
+            m.d.comb += [wr.word.eq(wword),                             # loop through the payload)
+                         wr.cfr.eq(Cat(*[(wword[j].di == nonedi) | (wword[j].di > dfar) for j in range(t_c)]))]
         with m.If(at["LOAD"]):
             m.d.comb += [mem.wr.valid.eq(self.m_stream.valid), wr.row.eq(lr), wr.wcol.eq(lw),
-                         wr.edt.eq(1), wr.bfs.eq(1), wr.word.eq(init_word)]
+                         wr.edt.eq(1), wr.bfs.eq(1), wword.eq(init_word)]
             if self.skip_clean:                 # the load writes every pixel
                 m.d.comb += wr.changed.eq((1 << t_c) - 1)
         with m.Elif(at["STORE"]):
             if self.skip_clean:
                 m.d.comb += wr.changed.eq(px_changed)
             m.d.comb += [mem.wr.valid.eq(wr_go), wr.row.eq(r0 + sj), wr.wcol.eq(vt.c),
-                         wr.edt.eq(~bfs), wr.bfs.eq(bfs), wr.word.eq(arr.wb)]
+                         wr.edt.eq(~bfs), wr.bfs.eq(bfs), wword.eq(arr.wb)]
         with m.Elif(at["GOAL1"]):
             m.d.comb += [mem.wr.valid.eq(mem.rd_data.valid & g_cfr), wr.row.eq(g.row), wr.wcol.eq(g_tile.c),
-                         wr.bfs.eq(1), wr.word.eq(goal_word)]
+                         wr.bfs.eq(1), wword.eq(goal_word)]
             if self.skip_clean:                 # the goal's pixel only (the others as read)
                 m.d.comb += wr.changed.eq(Const(1, t_c) << g_j)
 

@@ -80,7 +80,7 @@ class TileEngineDriver:
         # store="dram": the DRAM on its native port (not reset with the engine); not when the top
         # holds its own controller (hdl/edt_bfs/tile_litedram.py, whose inner wires have those names)
         if hasattr(dut, "dram__0__cmd__valid") and not hasattr(dut, "wb_ctrl_cyc"):
-            lay = dram_layout(w, t_c, max_h, DRAM_WIDTH)
+            lay = self.dram_layout = dram_layout(w, t_c, max_h, DRAM_WIDTH)
             ports = next(i for i in itertools.count() if not hasattr(dut, f"dram__{i}__cmd__valid"))
             self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed), clock=dut.dram_clk,
                                     ports=ports)

@@ -26,6 +26,7 @@ the ports' contract and nothing more:
 """
 
 import itertools
+from collections import Counter
 
 from navcores.hdl.edt_bfs.dram_store import BANK_AT
 
@@ -74,6 +75,7 @@ class _Port:
         self.timing.schedule(cycle)
         self.rdata.put(d.word(addr))
         d.reads += 1
+        d.read_at[addr] += 1
 
     def _on_data(self, cycle, value):
         assert self._awaiting, f"a write data beat at cycle {cycle} before its command"
@@ -86,7 +88,7 @@ class NativeDram:
     ``dut.clk``).
 
     ``rng``: a ``random.Random``.  ``reads`` / ``writes`` count the commands
-    served, ``late`` the answers that waited beyond ``latency``, ``paused``
+    served (``read_at``: the reads by address), ``late`` the answers that waited beyond ``latency``, ``paused``
     the cycles a port held ``cmd`` or ``wdata`` back, ``held_back`` those it
     found an answer not taken, ``answered`` the answers taken.  Its streams
     have a :class:`~.stream.Streams` of their own without a reset: the
@@ -99,6 +101,7 @@ class NativeDram:
         self.streams = streams = Streams(dut, clock=clock, reset=None)
         self.words = {}
         self.reads = self.writes = 0
+        self.read_at = Counter()
         self.addr_mask = (1 << addr_width) - 1
         self.ports = [_Port(self, streams, f"dram__{i}", i) for i in range(ports)]
 
