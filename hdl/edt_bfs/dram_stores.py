@@ -21,7 +21,8 @@ DRAM_PORTS_PARAM = Param("dram_ports", int, 1, choices=PORTS,
                          message="native ports dram_ports {value!r}: must be {allowed}")
 SKIP_CLEAN_PARAM = Param("skip_clean", bool, False,
                          doc="a store outside: write back only what a visit changed (the tile rows; to a DRAM, "
-                             "the native words holding a changed pixel): the same cycles, less bandwidth",
+                             "the native words holding a changed pixel; a BFS read without di's words, from a cfr bit "
+                             "the EDT's writes keep): the same cycles, less bandwidth",
                          message="skip_clean {value!r}: must be 0 or 1")
 
 

@@ -134,13 +134,17 @@ class TileEngine(wiring.Component):
         the cycle counts are not the model's: fewer with StateRam's timing,
         the latency it hides).  0: the engine's Verilog is as without it.
     skip_clean : bool
-        With a store outside: a tile row the visit did not change (its
-        phase's fields equal to the row as loaded) is not written back; its
-        beat passes without a command (the same cycles, less of the store's
-        bandwidth: on maze512-1-0 a third of the BFS visits' rows); every
-        write carries the pixels it changes (``state``'s ``wr.changed``:
+        With a store outside: a tile row the visit did not change (no cell
+        of it marked by an iteration that gave one of the phase's fields a
+        new value: :class:`~hdl.edt_bfs.tile_cell.TileCell`'s ``dirty``) is
+        not written back; its beat passes without a command (the same
+        cycles, less of the store's bandwidth: on maze512-1-0 a third of
+        the BFS visits' rows); every write carries the pixels it changes
+        and their cfr bits (``state``'s ``wr.changed``, ``wr.cfr``:
         :func:`~hdl.edt_bfs.state_ram.write_layout`), so a DRAM store
-        issues only the native words holding one.
+        issues only the native words holding a changed pixel and answers a
+        BFS read without the words of di
+        (:class:`~hdl.edt_bfs.dram_store.DramStore`).
 
     Ports
     -----
