@@ -1,7 +1,7 @@
 """make fit: does a top fit a real FPGA, and how fast does it run there?
 
     make fit TOP=<top> PARAMS="name=value ..." PART=<part>
-    python scripts/fit.py TOP [name=value ...] --part PART [--seeds 3] [--jobs 2] [--freq MHZ] [--out FILE]
+    python scripts/fit.py TOP [name=value ...] --part PART [--seeds 3] [--jobs 2] [--out FILE]
 
 Synthesizes the top (``python -m hdl.emit --list`` shows the tops and their
 parameters) in the registered harness of scripts/fmax.py with yosys, places
@@ -21,8 +21,7 @@ results cached under build/cache), and writes ``build/fit/<module>--<part>.json`
                   logic levels, nets (cells core.* are the core's)
   tools           yosys and nextpnr versions, as the tools report them
   router          nextpnr's router (--router; router1 unless asked)
-  target_mhz      nextpnr's --freq: the part's unless --freq
-  cells, utilisation, synthesis, harness, seconds
+  cells, utilisation, target_mhz, synthesis, harness, seconds
 
 and prints one summary line.  Parts (case-insensitive): LFE5U-12F / 25F /
 45F / 85F (CABGA381, speed 6: the ULX3S boards), iCE40-UP5K (SG48:
@@ -32,7 +31,6 @@ with one line on stderr.
 """
 
 import argparse
-import dataclasses
 import json
 import os
 import sys
@@ -62,9 +60,6 @@ def parse_args(argv):
     ap.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="seeds placed at once (default 2)")
     ap.add_argument("--router", default="router1", choices=fmax.ROUTERS,
                     help="nextpnr's router (default router1)")
-    ap.add_argument("--freq", type=int, metavar="MHZ",
-                    help="nextpnr's target clock (default: the part's, 300 MHz on ECP5); near what the design "
-                         "reaches, the timing-driven placer and router spend less on paths that cannot meet it")
     ap.add_argument("--out", help="output JSON (default build/fit/<module>--<part>.json)")
     ap.error = _fail
     args = ap.parse_args(argv)
@@ -79,12 +74,8 @@ def parse_args(argv):
         _fail(f"--seeds {args.seeds}: must be odd, 1..99 (the median is one seed's figure)")
     if args.jobs < 1:
         _fail(f"--jobs {args.jobs}: must be >= 1")
-    if args.freq is not None and not 1 <= args.freq <= 1000:
-        _fail(f"--freq {args.freq}: must be 1..1000 MHz")
     try:
         args.part = fmax.part(args.part)
-        if args.freq is not None:
-            args.part = dataclasses.replace(args.part, target_mhz=args.freq)
         args.params = fmax.parse(fmax.params_of(args.top)[0], args.params)
         fmax.manifest(args.top, args.params)        # the component checks its parameters
     except (ValueError, TypeError) as e:
@@ -142,8 +133,7 @@ def main(argv=None):
     result["generator"] = " ".join(["python scripts/fit.py", args.top,
                                     *(f"{k}={v}" for k, v in sorted(args.params.items())),
                                     "--part", args.part.name, "--seeds", str(args.seeds),
-                                    *(("--router", args.router) if args.router != "router1" else ()),
-                                    *(("--freq", str(args.freq)) if args.freq is not None else ())])
+                                    *(("--router", args.router) if args.router != "router1" else ())])
     result["date"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     tmp = _temporary(out)
     tmp.write_text(json.dumps(result, indent=1) + "\n")
