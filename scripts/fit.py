@@ -1,7 +1,7 @@
 """make fit: does a top fit a real FPGA, and how fast does it run there?
 
     make fit TOP=<top> PARAMS="name=value ..." PART=<part>
-    python scripts/fit.py TOP [name=value ...] --part PART [--seeds 3] [--jobs 2] [--out FILE]
+    python scripts/fit.py TOP [name=value ...] --part PART [--seeds 3] [--first-seed 1] [--jobs 2] [--out FILE]
 
 Synthesizes the top (``python -m hdl.emit --list`` shows the tops and their
 parameters) in the registered harness of scripts/fmax.py with yosys, places
@@ -60,6 +60,8 @@ def parse_args(argv):
     ap.add_argument("--jobs", type=int, default=min(2, os.cpu_count() or 1), help="seeds placed at once (default 2)")
     ap.add_argument("--router", default="router1", choices=fmax.ROUTERS,
                     help="nextpnr's router (default router1)")
+    ap.add_argument("--first-seed", type=int, default=1, metavar="N",
+                    help="the first seed (default 1): seeds N .. N + SEEDS - 1")
     ap.add_argument("--out", help="output JSON (default build/fit/<module>--<part>.json)")
     ap.error = _fail
     args = ap.parse_args(argv)
@@ -74,6 +76,8 @@ def parse_args(argv):
         _fail(f"--seeds {args.seeds}: must be odd, 1..99 (the median is one seed's figure)")
     if args.jobs < 1:
         _fail(f"--jobs {args.jobs}: must be >= 1")
+    if not 1 <= args.first_seed <= 1000:
+        _fail(f"--first-seed {args.first_seed}: must be 1..1000")
     try:
         args.part = fmax.part(args.part)
         args.params = fmax.parse(fmax.params_of(args.top)[0], args.params)
@@ -124,7 +128,7 @@ def main(argv=None):
     args = parse_args(sys.argv[1:] if argv is None else argv)
     out = output_path(args)
     try:
-        result = fmax.fit(args.top, args.params, args.part, seeds=tuple(range(1, args.seeds + 1)),
+        result = fmax.fit(args.top, args.params, args.part, seeds=tuple(range(args.first_seed, args.first_seed + args.seeds)),
                           jobs=args.jobs, progress=_progress(), router=args.router)
     except (fmax.FlowError, toolchain.ToolError) as e:
         _fail(str(e).splitlines()[0], 1)
@@ -133,7 +137,8 @@ def main(argv=None):
     result["generator"] = " ".join(["python scripts/fit.py", args.top,
                                     *(f"{k}={v}" for k, v in sorted(args.params.items())),
                                     "--part", args.part.name, "--seeds", str(args.seeds),
-                                    *(("--router", args.router) if args.router != "router1" else ())])
+                                    *(("--router", args.router) if args.router != "router1" else ()),
+                                    *(("--first-seed", str(args.first_seed)) if args.first_seed != 1 else ())])
     result["date"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     tmp = _temporary(out)
     tmp.write_text(json.dumps(result, indent=1) + "\n")
