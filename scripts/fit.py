@@ -128,7 +128,8 @@ def main(argv=None):
     args = parse_args(sys.argv[1:] if argv is None else argv)
     out = output_path(args)
     try:
-        result = fmax.fit(args.top, args.params, args.part, seeds=tuple(range(args.first_seed, args.first_seed + args.seeds)),
+        seeds = tuple(range(args.first_seed, args.first_seed + args.seeds))
+        result = fmax.fit(args.top, args.params, args.part, seeds=seeds,
                           jobs=args.jobs, progress=_progress(), router=args.router)
     except (fmax.FlowError, toolchain.ToolError) as e:
         _fail(str(e).splitlines()[0], 1)
