@@ -261,6 +261,10 @@ class DramStore(wiring.Component):
         rd_steps = Cat(*([need_a] * a), *([rcmd.bfs] * b), *([Const(1)] * e))
         right_ok = wcmd.wcol != w["words"] - 1
         left_ok = wcmd.wcol != 0
+        def cfr_bytes(k):
+            """The byte enables of the cfr bits in B word k (dram_layout's cfr_byte)."""
+            return ((((1 << _bytes(p)) - 1) << lay["cfr_byte"]) >> (k * nb)) & ((1 << nb) - 1)
+
         if self.changed:
             # a group word goes when a pixel it holds (any of its bits) changed; a neighbour's
             # slot when the pixel it copies changed (step a + b: our last pixel, a + b + 1: our first)
@@ -269,7 +273,7 @@ class DramStore(wiring.Component):
                              if j * bits < (s + 1) * dw and (j + 1) * bits > s * dw]).any()
                        for bits, count in ((e_bits, a), (b_bits, b)) for s in range(count)]
             # an EDT write (with any pixel changed) also writes the B word(s) holding the cfr bits
-            cfr_word = [s * nb < lay["cfr_byte"] + _bytes(p) and (s + 1) * nb > lay["cfr_byte"] for s in range(b)]
+            cfr_word = [cfr_bytes(s) != 0 for s in range(b)]
             anyc = wcmd.changed.any()
             wr_steps = Cat(*[wcmd.edt & t for t in touched[:a]],
                            *[(wcmd.bfs & t) | (wcmd.edt & anyc) if cw else wcmd.bfs & t
@@ -307,8 +311,7 @@ class DramStore(wiring.Component):
                         k = s - a
                         m.d.comb += [off.eq(s), wd.eq(b_region[k * dw:(k + 1) * dw])]
                         if self.changed:                        # BFS group bytes; cfr bytes (EDT, load)
-                            cb = ((1 << _bytes(p)) - 1) << lay["cfr_byte"]
-                            cmask = (cb >> (k * nb)) & ((1 << nb) - 1)
+                            cmask = cfr_bytes(k)
                             m.d.comb += wbe.eq(Mux(wmask[1], ((1 << nb) - 1) & ~cmask, 0) | Mux(wmask[0], cmask, 0))
                         else:
                             m.d.comb += wbe.eq((1 << nb) - 1)
