@@ -85,13 +85,15 @@ class TileArray(wiring.Component):
     dirty : Out(T_c), with ``dirty`` only
         The pixels of tile row ``wb_row`` whose write-back fields may differ
         from the loaded ones (:class:`TileCell`'s ``dirty``).
+    dirty_rows : Out(T_r), with ``dirty`` only
+        Bit a: tile row a has such a pixel.
     """
 
     def __init__(self, t_r, t_c, w, dirty=False):
         self.t_r, self.t_c, self.w, self.with_dirty = t_r, t_c, w, bool(dirty)
         px = pixel_layout(w)
         super().__init__({
-            **({"dirty": Out(t_c)} if self.with_dirty else {}),
+            **({"dirty": Out(t_c), "dirty_rows": Out(t_r)} if self.with_dirty else {}),
             "phase": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "dfar": In(w["di"]),
             "clear": In(1),
             "ld_en": In(1), "ld_row": In(range(t_r + 2)), "ld_px": In(data.ArrayLayout(px, t_c + 2)),
@@ -199,6 +201,6 @@ class TileArray(wiring.Component):
             rows.append(bits)
         m.d.comb += self.wb.eq(Array(rows)[self.wb_row])
         if self.with_dirty:
-            m.d.comb += self.dirty.eq(Array(Cat(*[cells[a, b].dirty for b in range(1, t_c + 1)])
-                                            for a in range(1, t_r + 1))[self.wb_row])
+            dirty = [Cat(*[cells[a, b].dirty for b in range(1, t_c + 1)]) for a in range(1, t_r + 1)]
+            m.d.comb += [self.dirty.eq(Array(dirty)[self.wb_row]), self.dirty_rows.eq(Cat(*[d.any() for d in dirty]))]
         return m

@@ -132,15 +132,18 @@ class TileEngine(wiring.Component):
         ``prefetch`` visits' written tile rows over it, so every load sees
         the state the model's visit sees (same results and visit trace;
         the cycle counts are not the model's: fewer with StateRam's timing,
-        the latency it hides).  0: the engine's Verilog is as without it.
+        the latency it hides, and a cycle less a visit: the worklist shows
+        the next tile before its pop, so ``SCHED1`` pops and sets the window
+        up at once).  0: the engine's Verilog is as without it.
     skip_clean : bool
         With a store outside: a tile row the visit did not change (no cell
         of it marked by an iteration that gave one of the phase's fields a
         new value: :class:`~hdl.edt_bfs.tile_cell.TileCell`'s ``dirty``) is
         not written back; its beat passes without a command (the same
         cycles, less of the store's bandwidth: on maze512-1-0 a third of
-        the BFS visits' rows); every write carries the pixels it changes
-        and their cfr bits (``state``'s ``wr.changed``, ``wr.cfr``:
+        the BFS visits' rows; with the prefetch it takes no beat either:
+        ``STORE`` lasts max(dirty rows, marks) cycles); every write carries
+        the pixels it changes and their cfr bits (``state``'s ``wr.changed``, ``wr.cfr``:
         :func:`~hdl.edt_bfs.state_ram.write_layout`), so a DRAM store
         issues only the native words holding a changed pixel and answers a
         BFS read without the words of di
@@ -461,13 +464,20 @@ class TileEngine(wiring.Component):
                 with m.Else():
                     after_edt()
 
+        # A visit starts in SCHED0 (pop), then SCHED1 (the window's set-up from the popped tile);
+        # with the prefetch the worklist shows the next tile before its pop (peek[0]), so a visit
+        # starts in SCHED1, which pops and sets up in one cycle (a cycle less a visit).
+        D = self.prefetch
+        first_sched = "SCHED1" if D else "SCHED0"
+
         # -- LEVEL: W_{k+1} becomes W_k
         with m.If(at["LEVEL"]):
             m.d.sync += [k.eq(k + 1), kk.eq(kk + (k << 1) + 2), self.levels.eq(self.levels + 1),
                          rem.eq(work.count)]
-            goto("SCHED0")
+            goto(first_sched)
 
-        # -- a visit: SCHED0 pops, SCHED1 sets the window up, READ loads it, ITER, STORE
+        # -- a visit: SCHED0 pops, SCHED1 sets the window up (both with the prefetch), READ loads it,
+        # ITER, STORE
         vt = Signal(tile_layout(w))
         r0 = Signal(w["row"] + 1)
         win_first = Signal(w["row"])
@@ -478,10 +488,14 @@ class TileEngine(wiring.Component):
         col_present = Signal(t_c + 2)
         iters = Signal(w["iters"])
         stepped = Signal()                        # BFS: ITER has stepped the array in this visit
-        sj = Signal(range(t_r + 1))               # store: rows written
+        sj = Signal(range(t_r + 1))               # store: rows written (with zero_clean: the row it writes)
+        # With the prefetch (the cycles no longer the model's) and skip_clean, a clean row takes no
+        # beat either: STORE writes the dirty rows inside the map, lowest first, while it pushes
+        # the marks (max(dirty rows, marks) cycles, at least one).
+        zero_clean = bool(D) and self.skip_clean
+        wrote = Signal(t_r) if zero_clean else None  # the tile rows this visit's STORE wrote
         pushed = Signal(9)
         answer = Cat(mem.rd_data.payload.left, mem.rd_data.payload.word, mem.rd_data.payload.right)
-        D = self.prefetch
         if D:                                     # (without it, the engine's Verilog is as before it)
             pf = [Signal(range(t_r + 3), name=f"pf{d + 1}") for d in range(D)]   # rows of visit +d's window read
             lvl = Signal(range(D + 1))            # the read offered: 0 none, d: the next row of visit +d
@@ -491,11 +505,15 @@ class TileEngine(wiring.Component):
             m.submodules.patch = patch = WritePatch(w, t_r, t_c, D)
             m.d.comb += patch.raw.eq(answer)
             answer = patch.loaded
-        with m.If(at["SCHED0"]):
+        def pop():
             m.d.comb += work.pop.eq(1)
             with m.If(~bfs):
                 m.d.sync += rem.eq(rem - 1)
-            goto("SCHED1")
+
+        if not D:
+            with m.If(at["SCHED0"]):
+                pop()
+                goto("SCHED1")
 
         def window(tile, pre):
             """A tile's first map row and column, its window's first map row (the halo row above,
@@ -506,10 +524,17 @@ class TileEngine(wiring.Component):
             last = named(m, f"{pre}_last", Mux(r0 + t_r >= H, H - 1, r0 + t_r), w["row"])
             return r0, c0, first, named(m, f"{pre}_rows", last - first + 1, range(t_r + 3))
 
-        head = work.head
-        h_r0, h_c0, h_first, h_rows = window(head, "h")
+        if D:                                     # the next visits' tiles (the first: this one)
+            geo = [window(work.peek[d], f"n{d + 1}") for d in range(D)]
+            head = work.peek[0]
+            h_r0, h_c0, h_first, h_rows = geo[0]
+        else:
+            head = work.head
+            h_r0, h_c0, h_first, h_rows = window(head, "h")
         m.d.comb += [work.look_at.eq(Mux(at["SCHED1"], head, 0))]
         with m.If(at["SCHED1"]):
+            if D:
+                pop()
             m.d.comb += [work.look.eq(1), arr.clear.eq(1)]
             m.d.sync += [
                 vt.eq(head), r0.eq(h_r0), win_first.eq(h_first),
@@ -517,7 +542,7 @@ class TileEngine(wiring.Component):
                 ld_row.eq(Mux(head.r == 0, 1, 0)),
                 own.eq(Mux(h_r0 + t_r > H, H - h_r0, t_r)),
                 col_present.eq(Cat(head.c != 0, *[h_c0 + (b - 1) < W for b in range(1, t_c + 2)])),
-                iters.eq(0), stepped.eq(0), sj.eq(0), pushed.eq(0),
+                iters.eq(0), stepped.eq(0), (wrote if zero_clean else sj).eq(0), pushed.eq(0),
             ]
             goto("READ")
 
@@ -552,12 +577,11 @@ class TileEngine(wiring.Component):
         # own: WritePatch lays those writes over the row as it loads (every earlier write was
         # given before the read, and the store keeps reads behind earlier writes).
         if D:
-            geo = [window(work.peek[d], f"n{d + 1}") for d in range(D)]
             free = named(m, "pf_free", (at["READ"] & ~own_rd) | at["ITER"] | at["STORE"])
             # A read offered stays offered until taken (a stream's valid does not drop), through
-            # SCHED0 / SCHED1 / LEVEL if need be (the peeked tiles are still the ones before the
-            # pop there); at SCHED1 every level moves one down (visit +d becomes +d-1), and one
-            # of visit +1 still waiting becomes the visit's own first read (the same command).
+            # SCHED1 / LEVEL if need be (the peeked tiles are still the ones before the pop
+            # there); at SCHED1 every level moves one down (visit +d becomes +d-1), and one of
+            # visit +1 still waiting becomes the visit's own first read (the same command).
             with m.If(hold != 0):
                 m.d.comb += lvl.eq(hold)
             with m.Elif(free):
@@ -599,25 +623,40 @@ class TileEngine(wiring.Component):
         for i, (dr, dc) in OFFSETS.items():
             with m.If(low[i]):
                 m.d.comb += [mark_tile.r.eq(vt.r + dr), mark_tile.c.eq(vt.c + dc)]
-        store_wr = named(m, "store_wr", at["STORE"] & (sj < own))
-        if self.skip_clean:
-            # A tile row the visit left as it loaded it (its phase's fields: the group the write
-            # writes) is not written: its beat passes without a command (the same cycles).  The
-            # cells mark what they change (TileCell's dirty), so no copy of the rows as loaded.
+        if zero_clean:
+            todo = named(m, "store_todo", arr.dirty_rows & Cat(*[own > a for a in range(t_r)]) & ~wrote, t_r)
+            hot = named(m, "store_hot", todo & (~todo + 1), t_r)
+            for a in reversed(range(t_r)):
+                with m.If(todo[a]):
+                    m.d.comb += sj.eq(a)
             px_changed = named(m, "px_changed", arr.dirty, t_c)
-            row_dirty = named(m, "row_dirty", px_changed.any())
-            wr_go = named(m, "wr_go", store_wr & row_dirty)
-            wr_fire = named(m, "wr_fire", store_wr & (mem.wr.ready | ~row_dirty))
-        else:
-            wr_go = store_wr
+            wr_go = store_wr = named(m, "store_wr", at["STORE"] & (todo != 0))
             wr_fire = named(m, "wr_fire", store_wr & mem.wr.ready)
-        visit_end = named(m, "visit_end", at["STORE"] & ((sj + wr_fire) >= own) & ((pend & ~low) == 0))
+            rows_done = (todo & ~Mux(wr_fire, hot, 0)) == 0
+            with m.If(wr_fire):
+                m.d.sync += wrote.eq(wrote | hot)
+        else:
+            store_wr = named(m, "store_wr", at["STORE"] & (sj < own))
+            if self.skip_clean:
+                # A tile row the visit left as it loaded it (its phase's fields: the group the write
+                # writes) is not written: its beat passes without a command (the same cycles).  The
+                # cells mark what they change (TileCell's dirty), so no copy of the rows as loaded.
+                px_changed = named(m, "px_changed", arr.dirty, t_c)
+                row_dirty = named(m, "row_dirty", px_changed.any())
+                wr_go = named(m, "wr_go", store_wr & row_dirty)
+                wr_fire = named(m, "wr_fire", store_wr & (mem.wr.ready | ~row_dirty))
+            else:
+                wr_go = store_wr
+                wr_fire = named(m, "wr_fire", store_wr & mem.wr.ready)
+            rows_done = (sj + wr_fire) >= own
+        visit_end = named(m, "visit_end", at["STORE"] & rows_done & ((pend & ~low) == 0))
         all_marks = named(m, "all_marks", pushed | low)
         with m.If(at["STORE"]):
             m.d.comb += [push.eq(pend != 0), push_tile.eq(mark_tile)]
             m.d.sync += pushed.eq(pushed | low)
-            with m.If(wr_fire):
-                m.d.sync += sj.eq(sj + 1)
+            if not zero_clean:
+                with m.If(wr_fire):
+                    m.d.sync += sj.eq(sj + 1)
             with m.If(visit_end):
                 m.d.sync += [self.visit.valid.eq(1), self.visit.bfs.eq(bfs), self.visit.r.eq(vt.r),
                              self.visit.c.eq(vt.c), self.visit.iterations.eq(iters),
@@ -625,11 +664,11 @@ class TileEngine(wiring.Component):
                              self.tile_visits.eq(self.tile_visits + 1)]
                 with m.If(bfs):
                     with m.If(queued_after):
-                        goto("SCHED0")
+                        goto(first_sched)
                     with m.Else():
                         after_bfs()
                 with m.Elif(rem != 0):
-                    goto("SCHED0")
+                    goto(first_sched)
                 with m.Elif(queued_after):
                     goto("LEVEL")
                 with m.Else():
@@ -638,7 +677,7 @@ class TileEngine(wiring.Component):
             m.d.sync += self.visit.valid.eq(0)
         if D:                                     # what this visit writes, for the next visits' loads
             m.d.comb += [patch.wr.eq(wr_fire), patch.wr_row.eq(sj), patch.wr_word.eq(arr.wb), patch.r0.eq(r0),
-                         patch.own.eq(own), patch.c.eq(vt.c), patch.done.eq(visit_end)]
+                         patch.own.eq(own), patch.c.eq(vt.c), patch.start.eq(at["ITER"]), patch.done.eq(visit_end)]
         m.d.comb += arr.wb_row.eq(sj)
 
         # -- GOAL0 / GOAL1: read the goal's word; write hop 0 and push its tile if it is in the cfr
@@ -675,7 +714,7 @@ class TileEngine(wiring.Component):
             m.d.sync += goals_left.eq(goals_left - 1)
             with m.If(goals_left == 1):
                 with m.If(queued_after):
-                    goto("SCHED0")
+                    goto(first_sched)
                 with m.Else():
                     after_bfs()
             with m.Else():

@@ -42,10 +42,11 @@ class Worklist(wiring.Component):
         Tiles queued.
     peek : Out(tile_layout).array(peek) (``peek`` > 0 only)
         ``peek[d]``: the tile the (d + 1)-th pop from now takes (a read port
-        each, always reading d entries behind the head): valid while
-        ``count`` > d, from the second cycle after a pop and from the cycle
-        after the push that wrote it (the engine's prefetch of the next
-        visits' windows).
+        each, always reading d entries behind the head as it is after this
+        cycle's pop): valid while ``count`` > d, from the cycle after a pop
+        and from the cycle after the push that wrote it (the engine's
+        prefetch of the next visits' windows; ``peek[0]`` is the tile the
+        next pop takes, so a visit pops and sets up in one cycle).
     look : In(1), look_at : In(tile_layout)
         Read the queued bits around ``look_at``; ``near`` shows them the
         next cycle (held until the next look): bit 0 the tile itself, bit i
@@ -82,13 +83,19 @@ class Worklist(wiring.Component):
         rp, wp = fifo.read_port(), fifo.write_port()
         head = Signal(range(depth))
         tail = Signal(range(depth))
-        for d in range(self.peeks):
-            pp = fifo.read_port(transparent_for=(wp,))     # a push there shows the next cycle
-            m.d.comb += [pp.addr.eq(head if d == 0 else Mux(head + d >= depth, head + d - depth, head + d)),
-                         self.peek[d].eq(pp.data)]
 
         def inc(p):
             return Mux(p == depth - 1, 0, p + 1)
+
+        if self.peeks:
+            # the peek ports read behind the head as it is after this cycle's pop, so that they show
+            # the tiles after it the next cycle (the engine's visit pops and sets up in one cycle)
+            ahead = Signal(range(depth))
+            m.d.comb += ahead.eq(Mux(self.pop, inc(head), head))
+        for d in range(self.peeks):
+            pp = fifo.read_port(transparent_for=(wp,))     # a push there shows the next cycle
+            m.d.comb += [pp.addr.eq(ahead if d == 0 else Mux(ahead + d >= depth, ahead + d - depth, ahead + d)),
+                         self.peek[d].eq(pp.data)]
 
         m.d.comb += [rp.addr.eq(head), rp.en.eq(self.pop), self.head.eq(rp.data),
                      wp.addr.eq(tail), wp.data.eq(self.push_tile), wp.en.eq(self.push)]

@@ -1,6 +1,6 @@
 """The tile engine's last visits' write-backs, patched into window rows read before them (prefetch)."""
 
-from amaranth.hdl import Array, Cat, Module, Mux, Signal
+from amaranth.hdl import Array, Cat, Const, Module, Mux, Signal
 from amaranth.lib import data, wiring
 from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
@@ -31,6 +31,10 @@ class WritePatch(wiring.Component):
     those fields are patched, so a write of another phase, before the
     goals, never is).  A row read after all those writes is patched with
     what it already holds: the patch is right whatever the store's timing.
+    A bank remembers which of its tile's rows its visit wrote (a visit may
+    leave rows out: the engine's ``skip_clean``), and forgets them when the
+    visit that writes it next has loaded its window (``start``): until
+    then its rows are the oldest writes a load may still need.
 
     Parameters
     ----------
@@ -50,6 +54,9 @@ class WritePatch(wiring.Component):
     r0 : In, own : In, c : In, bfs : In(1)
         This visit's tile: its first map row, its rows inside the map, its
         word column; the phase.  Taken with each ``wr``.
+    start : In(1)
+        This visit has loaded its window and will write: its bank forgets
+        the rows of the visit before (not in the cycle of a ``wr``).
     done : In(1)
         This visit ended: the next one writes the next bank.
     ld_row : In, ld_c : In
@@ -70,7 +77,7 @@ class WritePatch(wiring.Component):
             "init": In(1),
             "wr": In(1), "wr_row": In(range(t_r)), "wr_word": In(data.ArrayLayout(px, t_c)),
             "r0": In(w["row"] + 1), "own": In(range(t_r + 1)), "c": In(range(w["words"])), "bfs": In(1),
-            "done": In(1),
+            "start": In(1), "done": In(1),
             "ld_row": In(w["row"]), "ld_c": In(range(w["words"])),
             "raw": In(data.ArrayLayout(px, t_c + 2)), "loaded": Out(data.ArrayLayout(px, t_c + 2)),
         })
@@ -84,7 +91,7 @@ class WritePatch(wiring.Component):
             m.d.sync += cur.eq(0)
         with m.Elif(self.done):
             m.d.sync += cur.eq(Mux(cur == n - 1, 0, cur + 1))
-        valid = [Signal(name=f"b{b}_valid") for b in range(n)]
+        valid = [Signal(t_r, name=f"b{b}_rows") for b in range(n)]     # the tile rows the bank's visit wrote
         r0 = [Signal(self.r0.shape(), name=f"b{b}_r0") for b in range(n)]
         own = [Signal(self.own.shape(), name=f"b{b}_own") for b in range(n)]
         col = [Signal(self.c.shape(), name=f"b{b}_c") for b in range(n)]
@@ -98,8 +105,10 @@ class WritePatch(wiring.Component):
             with m.If(self.init):
                 m.d.sync += valid[b].eq(0)
             with m.Elif(self.wr & (cur == b)):
-                m.d.sync += [valid[b].eq(1), r0[b].eq(self.r0), own[b].eq(self.own), col[b].eq(self.c),
-                             bfs[b].eq(self.bfs)]
+                m.d.sync += [valid[b].eq(valid[b] | (Const(1, t_r) << self.wr_row)), r0[b].eq(self.r0),
+                             own[b].eq(self.own), col[b].eq(self.c), bfs[b].eq(self.bfs)]
+            with m.Elif(self.start & (cur == b)):
+                m.d.sync += valid[b].eq(0)
         # Oldest first: bank (cur + age) mod n is the age-th oldest; a newer visit's write wins.
         row = self.raw
         for age in range(n):
@@ -110,8 +119,8 @@ class WritePatch(wiring.Component):
             off = Signal(w["row"] + 1, name=f"age{age}_off")     # the loaded row in the bank's tile
             m.d.comb += off.eq(self.ld_row - pick["r0"])
             hit = Signal(name=f"age{age}_hit")
-            m.d.comb += hit.eq(pick["valid"] & (pick["bfs"] == self.bfs) & (self.ld_row >= pick["r0"])
-                               & (off < pick["own"]))
+            m.d.comb += hit.eq(pick["valid"].bit_select(off[:rbits], 1) & (pick["bfs"] == self.bfs)
+                               & (self.ld_row >= pick["r0"]) & (off < pick["own"]))
             rp = rows.read_port(domain="comb")
             m.d.comb += rp.addr.eq(Cat(off[:rbits], sel[:max(1, (n - 1).bit_length())]))
             src = data.ArrayLayout(pixel_layout(w), t_c)(rp.data)
