@@ -1,7 +1,8 @@
 """make fit: does a top fit a real FPGA, and how fast does it run there?
 
     make fit TOP=<top> PARAMS="name=value ..." PART=<part>
-    python scripts/fit.py TOP [name=value ...] --part PART [--seeds 3] [--first-seed 1] [--jobs 2] [--out FILE]
+    python scripts/fit.py TOP [name=value ...] --part PART [--seeds 3] [--first-seed 1] [--jobs 2]
+                          [--router router1|router2] [--density BETA] [--out FILE]
 
 Synthesizes the top (``python -m hdl.emit --list`` shows the tops and their
 parameters) in the registered harness of scripts/fmax.py with yosys, places
@@ -21,6 +22,7 @@ results cached under build/cache), and writes ``build/fit/<module>--<part>.json`
                   logic levels, nets (cells core.* are the core's)
   tools           yosys and nextpnr versions, as the tools report them
   router          nextpnr's router (--router; router1 unless asked)
+  placer_density  nextpnr's placement density (--density; null: its default, 0.9)
   cells, utilisation, target_mhz, synthesis, harness, seconds
 
 and prints one summary line.  Parts (case-insensitive): LFE5U-12F / 25F /
@@ -62,6 +64,9 @@ def parse_args(argv):
                     help="nextpnr's router (default router1)")
     ap.add_argument("--first-seed", type=int, default=1, metavar="N",
                     help="the first seed (default 1): seeds N .. N + SEEDS - 1")
+    ap.add_argument("--density", type=float, metavar="BETA",
+                    help="the placer's largest share of a region's cells, 0.5..1 (nextpnr's --placer-heap-beta; "
+                         "default its 0.9): lower spreads a crowded design for the router")
     ap.add_argument("--out", help="output JSON (default build/fit/<module>--<part>.json)")
     ap.error = _fail
     args = ap.parse_args(argv)
@@ -78,6 +83,8 @@ def parse_args(argv):
         _fail(f"--jobs {args.jobs}: must be >= 1")
     if not 1 <= args.first_seed <= 1000:
         _fail(f"--first-seed {args.first_seed}: must be 1..1000")
+    if args.density is not None and not 0.5 <= args.density <= 1.0:
+        _fail(f"--density {args.density}: must be 0.5..1 (a share of a region's cells)")
     try:
         args.part = fmax.part(args.part)
         args.params = fmax.parse(fmax.params_of(args.top)[0], args.params)
@@ -130,7 +137,7 @@ def main(argv=None):
     try:
         seeds = tuple(range(args.first_seed, args.first_seed + args.seeds))
         result = fmax.fit(args.top, args.params, args.part, seeds=seeds,
-                          jobs=args.jobs, progress=_progress(), router=args.router)
+                          jobs=args.jobs, progress=_progress(), router=args.router, density=args.density)
     except (fmax.FlowError, toolchain.ToolError) as e:
         _fail(str(e).splitlines()[0], 1)
     except KeyboardInterrupt:
@@ -139,7 +146,8 @@ def main(argv=None):
                                     *(f"{k}={v}" for k, v in sorted(args.params.items())),
                                     "--part", args.part.name, "--seeds", str(args.seeds),
                                     *(("--router", args.router) if args.router != "router1" else ()),
-                                    *(("--first-seed", str(args.first_seed)) if args.first_seed != 1 else ())])
+                                    *(("--first-seed", str(args.first_seed)) if args.first_seed != 1 else ()),
+                                    *(("--density", str(args.density)) if args.density is not None else ())])
     result["date"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     tmp = _temporary(out)
     tmp.write_text(json.dumps(result, indent=1) + "\n")

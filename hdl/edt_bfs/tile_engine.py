@@ -736,6 +736,11 @@ class TileEngine(wiring.Component):
                 if dc:
                     edge, dw, j_in = wrap[dc]
                     m.d.comb += [nxt_w.eq(Mux(edge, cur_w + dw, cur_w)), nxt_j.eq(Mux(edge, j_in, cur_j + dc))]
+        if D:   # with a store outside (its latency a pixel's), the next pixel in the word read: no read
+            stay = named(m, "path_stay", advance & (nxt.row == cur.row) & (nxt_w == cur_w))
+            read_next, take = advance & ~stay, self.o_stream.ready & ~stay       # (the answer kept)
+        else:
+            read_next, take = advance, self.o_stream.ready
         with m.If(at["PATH"]):
             with m.If(mem.rd.valid):
                 m.d.sync += p_need.eq(~mem.rd.ready)
@@ -798,9 +803,9 @@ class TileEngine(wiring.Component):
             m.d.comb += mem.rd_data.ready.eq(mem.wr.ready)
         with m.Elif(at["PATH"]):
             pos = named(m, "path_pos", Mux(advance, nxt.as_value(), cur.as_value()), goal_layout(w))
-            m.d.comb += [mem.rd.valid.eq(p_need | advance), rd.row.eq(pos.row),
+            m.d.comb += [mem.rd.valid.eq(p_need | read_next), rd.row.eq(pos.row),
                          rd.wcol.eq(Mux(advance, nxt_w, cur_w)), rd.di.eq(1), rd.nnt.eq(1), rd.bfs.eq(1),
-                         mem.rd_data.ready.eq(no_path | self.o_stream.ready)]
+                         mem.rd_data.ready.eq(no_path | take)]
         with m.Elif(at["READOUT"]):
             m.d.comb += [mem.rd.valid.eq(rr_more), rd.row.eq(rr_row), rd.wcol.eq(rr_w),
                          rd.di.eq(1), rd.nnt.eq(1), rd.bfs.eq(1),
