@@ -78,8 +78,9 @@ class StateStore:
     """The store on ``streams``' DUT's ``state`` port, for engine widths ``w`` and ``p`` pixels a word.
 
     ``rng``: a ``random.Random`` (the unwritten words' bits, the random
-    timing).  ``reads`` / ``writes`` count the commands served; ``late``
-    the answers that waited beyond ``latency``."""
+    timing).  ``reads`` / ``writes`` count the commands served
+    (``full_reads`` the reads of every field: the path's and the read-out's);
+    ``late`` the answers that waited beyond ``latency``."""
 
     def __init__(self, streams, w, p, rng):
         self.streams, self.p, self.rng = streams, p, rng
@@ -104,7 +105,7 @@ class StateStore:
         self.words = {}
         self._pending_writes = []               # (cycle, row, wcol, edt, bfs, word) not applied yet
         self.timing = AnswerTiming(streams, rng, 2)
-        self.reads = self.writes = 0
+        self.reads = self.writes = self.full_reads = 0
         self.stall = 0.0
         self.rd = streams.sink("state__rd")
         self.wr = streams.sink("state__wr")
@@ -163,6 +164,7 @@ class StateStore:
         self.timing.schedule(cycle)
         self.rd_data.put(answer)
         self.reads += 1
+        self.full_reads += all(self._field(value, self._rf[g]) for g in ("di", "nnt", "bfs"))
 
     def reset(self):
         """The engine was reset: the answers in flight are dropped (the source's queue is cleared by

@@ -252,6 +252,17 @@ async def refusals(dut):
     _, _, raw = await _check(drv, img, goals, start, 0)
 
 
+def _check_full_reads(st, before, img, model, start):
+    """The store's reads of every field since ``before``: the read-out's words and one a path pixel
+    (the start's alone without a path), but with the prefetch none for a step to a pixel of the word
+    read (left or right inside it).  Returns those steps."""
+    path = model.path or [start]
+    inside = sum(r == r1 and c // T_C == c1 // T_C for (r, c), (r1, c1) in zip(path, path[1:]))
+    full = st.full_reads - before - img.shape[0] * -(-img.shape[1] // T_C)
+    assert full == len(path) - (inside if PREFETCH else 0), (full, len(path), inside)
+    return inside
+
+
 @cocotb.test(skip=not EXTERNAL)
 async def external_store(dut):
     """The engine with its state outside (store="external") on the test's store
@@ -267,10 +278,11 @@ async def external_store(dut):
     for shape in (MID, (_partial(2, MAX_H, T_R), _partial(2, MAX_W, T_C))):
         img, start, goals = _case(rng, shape)
         # StateRam's timing: cycle-exact; with the prefetch faster (the latency it hides)
-        writes = st.writes
+        writes, full_reads = st.writes, st.full_reads
         _, model, raw = await _check(drv, img, goals, start, 0, cycles=not PREFETCH)
         if PREFETCH:
             assert raw["cycles"] < model.cycles, (raw["cycles"], model.cycles)
+        _check_full_reads(st, full_reads, img, model, start)
         # the visits' writes: the model's words written, or fewer skipping the rows left clean
         h, w = img.shape
         visits = st.writes - writes - h * -(-w // T_C) - sum(
@@ -278,6 +290,12 @@ async def external_store(dut):
         full = model.stats["words_written"]
         assert visits < full if SKIP_CLEAN else visits == full, (visits, full)
         jobs += 1
+    # a path along row 0 inside one word (the parent east before south-east): 5 steps inside
+    img, start, goals = np.zeros(MID, dtype=bool), (0, 0), [(0, 5)]
+    full_reads = st.full_reads
+    _, model, _ = await _check(drv, img, goals, start, 0, cycles=not PREFETCH)
+    assert _check_full_reads(st, full_reads, img, model, start) == 5
+    jobs += 1
     st.set_timing(latency=2, extra=0.5, stall=0.3)
     drv.set_stalls(rng, 0.2, 0.3)
     for n in range(3):
