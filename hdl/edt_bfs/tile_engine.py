@@ -476,8 +476,8 @@ class TileEngine(wiring.Component):
                          rem.eq(work.count)]
             goto(first_sched)
 
-        # -- a visit: SCHED0 pops, SCHED1 sets the window up (both with the prefetch), READ loads it,
-        # ITER, STORE
+        # -- a visit: SCHED0 pops, SCHED1 sets the window up (with the prefetch SCHED1 does both),
+        # READ loads it, ITER, STORE
         vt = Signal(tile_layout(w))
         r0 = Signal(w["row"] + 1)
         win_first = Signal(w["row"])
@@ -505,6 +505,7 @@ class TileEngine(wiring.Component):
             m.submodules.patch = patch = WritePatch(w, t_r, t_c, D)
             m.d.comb += patch.raw.eq(answer)
             answer = patch.loaded
+
         def pop():
             m.d.comb += work.pop.eq(1)
             with m.If(~bfs):
