@@ -261,6 +261,7 @@ class DramStore(wiring.Component):
         rd_steps = Cat(*([need_a] * a), *([rcmd.bfs] * b), *([Const(1)] * e))
         right_ok = wcmd.wcol != w["words"] - 1
         left_ok = wcmd.wcol != 0
+
         def cfr_bytes(k):
             """The byte enables of the cfr bits in B word k (dram_layout's cfr_byte)."""
             return ((((1 << _bytes(p)) - 1) << lay["cfr_byte"]) >> (k * nb)) & ((1 << nb) - 1)

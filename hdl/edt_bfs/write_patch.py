@@ -91,7 +91,7 @@ class WritePatch(wiring.Component):
             m.d.sync += cur.eq(0)
         with m.Elif(self.done):
             m.d.sync += cur.eq(Mux(cur == n - 1, 0, cur + 1))
-        valid = [Signal(t_r, name=f"b{b}_rows") for b in range(n)]     # the tile rows the bank's visit wrote
+        wrote = [Signal(t_r, name=f"b{b}_rows") for b in range(n)]     # the tile rows the bank's visit wrote
         r0 = [Signal(self.r0.shape(), name=f"b{b}_r0") for b in range(n)]
         own = [Signal(self.own.shape(), name=f"b{b}_own") for b in range(n)]
         col = [Signal(self.c.shape(), name=f"b{b}_c") for b in range(n)]
@@ -103,23 +103,23 @@ class WritePatch(wiring.Component):
                      wp.en.eq(self.wr)]
         for b in range(n):
             with m.If(self.init):
-                m.d.sync += valid[b].eq(0)
+                m.d.sync += wrote[b].eq(0)
             with m.Elif(self.wr & (cur == b)):
-                m.d.sync += [valid[b].eq(valid[b] | (Const(1, t_r) << self.wr_row)), r0[b].eq(self.r0),
+                m.d.sync += [wrote[b].eq(wrote[b] | (Const(1, t_r) << self.wr_row)), r0[b].eq(self.r0),
                              own[b].eq(self.own), col[b].eq(self.c), bfs[b].eq(self.bfs)]
             with m.Elif(self.start & (cur == b)):
-                m.d.sync += valid[b].eq(0)
+                m.d.sync += wrote[b].eq(0)
         # Oldest first: bank (cur + age) mod n is the age-th oldest; a newer visit's write wins.
         row = self.raw
         for age in range(n):
             sel = Signal(range(max(n, 2)), name=f"age{age}")
             m.d.comb += sel.eq(Mux(cur + age >= n, cur + age - n, cur + age))
-            pick = {k: Array(v)[sel] for k, v in (("valid", valid), ("r0", r0), ("own", own), ("c", col),
+            pick = {k: Array(v)[sel] for k, v in (("wrote", wrote), ("r0", r0), ("own", own), ("c", col),
                                                    ("bfs", bfs))}
             off = Signal(w["row"] + 1, name=f"age{age}_off")     # the loaded row in the bank's tile
             m.d.comb += off.eq(self.ld_row - pick["r0"])
             hit = Signal(name=f"age{age}_hit")
-            m.d.comb += hit.eq(pick["valid"].bit_select(off[:rbits], 1) & (pick["bfs"] == self.bfs)
+            m.d.comb += hit.eq(pick["wrote"].bit_select(off[:rbits], 1) & (pick["bfs"] == self.bfs)
                                & (self.ld_row >= pick["r0"]) & (off < pick["own"]))
             rp = rows.read_port(domain="comb")
             m.d.comb += rp.addr.eq(Cat(off[:rbits], sel[:max(1, (n - 1).bit_length())]))
