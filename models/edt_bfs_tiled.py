@@ -166,7 +166,8 @@ ready, counted from the command (exclusive) to the last beat:
                                         each pixel's read needs the previous one's parent
     readout    = latency + H * W        optional: every pixel, one per beat (reads run ahead)
 
-    visit(t)   = sched + latency + read_beats(t) + iterations [+ stop, BFS] + max(write_beats(t), marks)
+    visit(t)   = sched + latency + read_beats(t) + iteration * iterations [+ stop, BFS]
+                 + max(write_beats(t), marks)
 
 ``read_beats(t)``: the window's rows inside the map times the beats of the
 words covering its columns inside the map; ``write_beats(t)``: the tile's
@@ -174,14 +175,19 @@ rows times the beats of its own words; ``iterations``: 1 per EDT visit, the
 relaxation's count per BFS visit (the last one changes nothing), and in
 a BFS visit ``stop`` cycles to see that (the engine registers the OR of
 its cells' changes: that OR over the whole array is not on the clock's
-path); ``marks``: the tiles the visit enqueues
+path); ``iteration``: the cycles of one array iteration (1; 2 where the
+cells register their MIN selection's winner between its comparators and
+its multiplexers: the select cycle, then the step; in the BFS the cycle
+that sees a change is the next iteration's select cycle, so ``stop``
+stays one cycle); ``marks``: the tiles the visit enqueues
 (self, then each marked direction in Fig. 1 order, when not already queued:
 the engine reads the queued bits of the tile's 3 x 3 tile neighbourhood
 while it schedules the visit), one per beat during the store.  The
 constants are :class:`Timing`'s; the RTL's (``Timing()``): sched 2 (pop,
 window set-up), latency 2 (the block RAM's read register and its output
 register, which keeps the RAM's slow data output off the clock's paths),
-level 1, goal 3 (= 1 + latency: issue the read, wait for the word), stop 1.
+level 1, goal 3 (= 1 + latency: issue the read, wait for the word), stop 1,
+iteration 1 (2 with the engine's ``iter_cycles`` 2).
 Words moved counts every word read or written; the floor is each visit
 reading and writing each pixel of its tile once, ``2 ceil(T_r T_c / p)``
 words per visit.
@@ -211,12 +217,13 @@ class Timing:
     level: int = 1        # EDT: swap the worklists of levels k and k+1
     goal: int = 3         # per goal: read its word (cfr?; 1 + latency), write hop 0 and push its tile
     stop: int = 1         # per BFS visit: the cycle that reads the registered "no cell changed" and leaves
+    iteration: int = 1    # per array iteration (2: the cells' MIN selection registered between its halves)
 
     def __post_init__(self):
-        for name in ("sched", "latency", "level", "goal", "stop"):
+        for name in ("sched", "latency", "level", "goal", "stop", "iteration"):
             v = getattr(self, name)
-            if not isinstance(v, int) or v < 0:
-                raise ValueError(f"Timing.{name} {v!r}: must be an integer >= 0")
+            if not isinstance(v, int) or v < (1 if name == "iteration" else 0):
+                raise ValueError(f"Timing.{name} {v!r}: must be an integer >= {1 if name == 'iteration' else 0}")
 
 
 def _bits(n):
@@ -490,7 +497,7 @@ class TileEngine:
         self.counts[f"pixels_read_{phase}"] += int(g.read_px[t])
         self.counts[f"pixels_written_{phase}"] += int(g.write_px[t])
         self.counts["marks"] += marks
-        self.cycles[phase] += (tm.sched + tm.latency + int(g.read_beats[t]) + iterations
+        self.cycles[phase] += (tm.sched + tm.latency + int(g.read_beats[t]) + tm.iteration * iterations
                                + (tm.stop if phase == "bfs" else 0) + max(int(g.write_beats[t]), marks))
 
     # -- EDT -----------------------------------------------------------------------------------

@@ -66,7 +66,9 @@ class TileArray(wiring.Component):
         Load window row ``ld_row``: window column b takes ``ld_px[b]``
         (map column c0 - 1 + b), present where ``ld_present[b]``.
     step : In(1)
-        One iteration (EDT: iteration k; BFS: one relaxation).
+        One iteration (EDT: iteration k; BFS: one relaxation).  With
+        ``select_reg`` (the cells' registered MIN winner, :class:`TileCell`)
+        only in a cycle after one without ``clear``, ``ld_en`` or ``step``.
     upd : Out(1)
         Some cell changed in the last cycle's iteration (the BFS visit's end
         test): each cell's change is a flip-flop beside its register, and
@@ -89,8 +91,8 @@ class TileArray(wiring.Component):
         Bit a: tile row a has such a pixel.
     """
 
-    def __init__(self, t_r, t_c, w, dirty=False):
-        self.t_r, self.t_c, self.w, self.with_dirty = t_r, t_c, w, bool(dirty)
+    def __init__(self, t_r, t_c, w, dirty=False, select_reg=False):
+        self.t_r, self.t_c, self.w, self.with_dirty, self.select_reg = t_r, t_c, w, bool(dirty), bool(select_reg)
         px = pixel_layout(w)
         super().__init__({
             **({"dirty": Out(t_c), "dirty_rows": Out(t_r)} if self.with_dirty else {}),
@@ -132,7 +134,7 @@ class TileArray(wiring.Component):
             m.d.comb += load.eq(self.ld_en & (self.ld_row == a))
             for b in range(t_c + 2):
                 if 1 <= a <= t_r and 1 <= b <= t_c:
-                    cell = cells[a, b] = TileCell(w, self.with_dirty)
+                    cell = cells[a, b] = TileCell(w, self.with_dirty, self.select_reg)
                     m.submodules[f"cell_{a - 1}_{b - 1}"] = cell
                     m.d.comb += [cell.phase.eq(self.phase), cell.step.eq(self.step), cell.k.eq(self.k),
                                  cell.kk.eq(self.kk), cell.clear.eq(self.clear), cell.load.eq(load),

@@ -56,12 +56,26 @@ class TileCell(wiring.Component):
     iteration, so the last one, which changes nothing, leaves the parent of
     the final values (:meth:`models.edt_bfs_tiled.TileEngine.bfs_visit`).
 
+    *Select register* (``select_reg``): the MIN's one-hot winner (and
+    "a neighbour is done / visited") is registered every cycle, and the
+    iteration uses the registered winner: the clock's path from a
+    neighbour's register through the candidates, the 28 comparators and the
+    winner logic ends in that register, and the next one starts again at
+    the neighbours' registers, through the candidates, the AND-OR
+    multiplexers and the threshold's comparator, into the cell's register.
+    The candidates are combinational from registers that do not change in
+    between, so the registered winner is the MIN of the values the step
+    sees, bit for bit; the engine gives every ``step`` a select cycle before
+    it (no ``load``, ``clear`` or ``step`` of the array in the cycle before a
+    step: :class:`~models.edt_bfs_tiled.Timing`'s ``iteration`` 2).
+
     Ports
     -----
     phase : In(1)
         0: EDT, 1: BFS.
     step : In(1)
-        Run one iteration.
+        Run one iteration (with ``select_reg``: only in a cycle after one
+        without ``load``, ``clear`` or ``step`` anywhere in the array).
     k : In(k bits)
         The EDT's level (the paper's iteration number k: di of a new cell).
     kk : In(kk bits)
@@ -92,8 +106,8 @@ class TileCell(wiring.Component):
         the same vector is marked: one pixel written for nothing).
     """
 
-    def __init__(self, w, dirty=False):
-        self.w, self.with_dirty = w, bool(dirty)
+    def __init__(self, w, dirty=False, select_reg=False):
+        self.w, self.with_dirty, self.select_reg = w, bool(dirty), bool(select_reg)
         # Plain vectors (the layouts are views inside): see tile_layouts.flat.
         cl, nl = cell_layout(w).size, nb_layout(w).size
         ports = {"phase": In(1), "step": In(1), "k": In(w["k"]), "kk": In(w["kk"]), "clear": In(1), "load": In(1),
@@ -129,13 +143,21 @@ class TileCell(wiring.Component):
 
         # MIN: flat, ties to the smallest index; the winner's d2 (EDT), vector, hop (BFS), index.
         win = min_select(m, [c[0] for c in cands], [c[1] for c in cands])
+        if self.select_reg:
+            win_q = Signal(len(win), name="win_q")
+            m.d.sync += win_q.eq(Cat(*win))
+            win = list(win_q)
         xm = pick(m, win, [c[2] for c in cands], signed(w["dx"]), "x_m")
         ym = pick(m, win, [c[3] for c in cands], signed(w["dy"]), "y_m")
         km = pick(m, win, [c[1] for c in cands], w["val"], "key_m")
         hm = pick(m, win, [c[4] for c in cands], hb, "hop_m")
         im = pick(m, win, list(OFFSETS), 4, "i_m")
         vm = Signal(name="v_m")
-        m.d.comb += vm.eq(Cat(*[c[0] for c in cands]).any())
+        some = vm.eq(Cat(*[c[0] for c in cands]).any())       # a neighbour done (EDT) / visited (BFS)
+        if self.select_reg:
+            m.d.sync += some
+        else:
+            m.d.comb += some
 
         # EDT: the third enable, d2_m <= kk (delta_m + 2k >= 0), on the winner's d2.
         en_edt = Signal(name="en_edt")

@@ -243,6 +243,10 @@ class TileEngine(wiring.Component):
                   "store outside: hides its latency; the cycle counts are then no longer the model's)",
               message="prefetch {value!r}: must be an integer in {lo}..{hi} (visits read ahead)"),
         SKIP_CLEAN_PARAM,
+        Param("iter_cycles", int, 1, lo=1, hi=2,
+              doc="cycles an array iteration takes: 2 registers the cells' MIN winner between its comparators "
+                  "and its multiplexers (a shorter clock path, a cycle more an iteration)",
+              message="iter_cycles {value!r}: must be 1 or 2 (cycles an array iteration takes)"),
     )
     CONSTRAINTS = TILE_CONSTRAINTS[:2] + (
         Constraint(f"max_h * max_w <= {MAX_PIXELS} (bram)",
@@ -262,11 +266,14 @@ class TileEngine(wiring.Component):
     )
 
     @checked_init
-    def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1, prefetch=0, skip_clean=False):
+    def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1, prefetch=0, skip_clean=False,
+                 iter_cycles=1):
         check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, store=store,
-              dram_ports=dram_ports, prefetch=prefetch, skip_clean=skip_clean)
+              dram_ports=dram_ports, prefetch=prefetch, skip_clean=skip_clean, iter_cycles=iter_cycles)
         self.t_r, self.t_c, self.max_h, self.max_w, self.store = t_r, t_c, max_h, max_w, store
         self.dram_ports, self.prefetch, self.skip_clean = dram_ports, prefetch, bool(skip_clean)
+        self.iter_cycles = iter_cycles
+        self.cycle_timing = Timing(iteration=iter_cycles)   # the model's constants for this engine
         w = self.w = tile_widths(t_r, t_c, max_h, max_w)
         super().__init__({
             "c_stream": In(stream.Signature(command_layout(w))),
@@ -283,10 +290,11 @@ class TileEngine(wiring.Component):
 
     def timing(self):
         """The cycle figures hdl.emit puts in the manifest (models.edt_bfs_tiled's cycle model)."""
-        t = TIMING
+        t = self.cycle_timing
+        iterations = f"{t.iteration} * iterations" if t.iteration > 1 else "iterations"
         return {"load_cycles": "H * ceil(W / T_c)", "scan_cycles": "tiles",
                 "edt_cycles": f"sum over levels ({t.level} + visits)", "goal_cycles": t.goal,
-                "visit_cycles": f"{t.sched} + {t.latency} + window rows + iterations (+ {t.stop} in the BFS) "
+                "visit_cycles": f"{t.sched} + {t.latency} + window rows + {iterations} (+ {t.stop} in the BFS) "
                                 "+ max(tile rows, marks)",
                 "path_cycles": f"1 + {t.latency} * len(path)", "readout_cycles": f"{t.latency} + H * W",
                 "note": "source always valid, sink always ready; back-pressure adds cycles"
@@ -322,7 +330,7 @@ class TileEngine(wiring.Component):
             mem = self.state
         m.submodules.work = work = Worklist(w, peek=self.prefetch)
         m.submodules.front = front = FrontierFlags(w, t_c)
-        m.submodules.array = arr = TileArray(t_r, t_c, w, dirty=self.skip_clean)
+        m.submodules.array = arr = TileArray(t_r, t_c, w, dirty=self.skip_clean, select_reg=self.iter_cycles == 2)
 
         state = Signal(range(len(STATES)))
         at = {name: named(m, f"at_{name.lower()}", state == n) for n, name in enumerate(STATES)}
@@ -603,12 +611,23 @@ class TileEngine(wiring.Component):
         # ITER: EDT one iteration; BFS until one changes nothing (counted), then one cycle (no step)
         # that sees it in arr.upd (Timing.stop: the cells' change bits are flip-flops, so the
         # FSM reads their OR a cycle after the step, and no cell's logic reaches the FSM)
+        # With iter_cycles 2 each step follows a select cycle (the cells register their MIN's winner):
+        # the first ITER cycle, then the cycle that reads arr.upd after each step.
+        leave = bfs & stepped & ~arr.upd
+        if self.iter_cycles == 2:
+            armed = Signal()                      # this cycle steps (the last one was the select cycle)
+            leave = leave & ~armed
         with m.If(at["ITER"]):
-            with m.If(bfs & stepped & ~arr.upd):
+            with m.If(leave):
                 goto("STORE")
+            if self.iter_cycles == 2:
+                with m.Elif(~armed):
+                    m.d.sync += armed.eq(1)
             with m.Else():
                 m.d.comb += arr.step.eq(1)
                 m.d.sync += [iters.eq(iters + 1), stepped.eq(1)]
+                if self.iter_cycles == 2:
+                    m.d.sync += armed.eq(0)
                 with m.If(~bfs):
                     goto("STORE")
 

@@ -18,8 +18,12 @@ parent the smallest index with ``hop = m + 1``.  Modes: clear, load (a
 random register), EDT step, BFS step, idle; ``upd`` and ``smark`` are
 checked in the cycle, the register after it.  Counts of enables, refusals,
 winners that are not the first done neighbour, ties between different
-vectors, far candidates and parents are asserted.
+vectors, far candidates and parents are asserted.  With CELL_SELECT=1 the
+cell registers its MIN's winner (``select_reg``): each step follows a
+select cycle with the same inputs and no step (in which nothing changes).
 """
+
+import os
 
 import cocotb
 import numpy as np
@@ -35,11 +39,12 @@ from navcores.sim.rtl.stream import pack, unpack
 
 PARAMS = {"t_r": 8, "t_c": 8, "max_h": 64, "max_w": 64}
 CYCLES = 3000
+SELECT = os.environ.get("CELL_SELECT") == "1"      # the MIN's winner registered (select_reg)
 
 
-def tile_cell(t_r, t_c, max_h, max_w):
+def tile_cell(t_r, t_c, max_h, max_w, select_reg=False):
     """The test's top: one TileCell with the widths of that engine."""
-    return TileCell(tile_widths(t_r, t_c, max_h, max_w))
+    return TileCell(tile_widths(t_r, t_c, max_h, max_w), select_reg=select_reg)
 
 
 def _edt_model(reg, nb, k):
@@ -141,6 +146,16 @@ async def random_cycles(dut):
         dut.load.value = int(mode == "load")
         dut.ld.value = pack(cl, ld)
         dut.step.value = int(mode in ("edt", "bfs"))
+        if SELECT and mode in ("edt", "bfs"):
+            # the select cycle: the same inputs without the step; nothing changes
+            dut.step.value = 0
+            await ReadOnly()
+            assert int(dut.upd.value) == 0, f"cycle {cyc}: upd in the select cycle"
+            await RisingEdge(dut.clk)
+            await ReadOnly()
+            assert unpack(cl, int(dut.state.value)) == reg, f"cycle {cyc}: the select cycle changed the register"
+            await Timer(1, unit="ns")
+            dut.step.value = 1
         # model
         changed = False
         if mode == "clear":
@@ -184,6 +199,8 @@ async def random_cycles(dut):
 
 
 # Icarus only: the cell runs on Verilator inside every tile engine of test_edt_tile_engine.
+@pytest.mark.parametrize("select_reg", [False, True], ids=["comb", "select_reg"])
 @pytest.mark.parametrize("sim", [s for s in SIMULATORS if s == "icarus"])
-def test_edt_tile_cell(sim):
-    run("edt_tile_cell", PARAMS, sim, "test_edt_tile_cell", factory=tile_cell)
+def test_edt_tile_cell(sim, select_reg):
+    params = {**PARAMS, "select_reg": True} if select_reg else PARAMS
+    run("edt_tile_cell", params, sim, "test_edt_tile_cell", factory=tile_cell, env={"CELL_SELECT": int(select_reg)})

@@ -22,7 +22,9 @@ same results in more cycles); with TILE_PREFETCH=d (the engine reads the
 next d visits' windows during this one: hdl/edt_bfs/tile_engine.py) the
 same results and trace, in fewer cycles than the model's at StateRam's
 timing; with TILE_SKIP_CLEAN=1 the visits write fewer words than the
-model's words written (without: as many).  Environment: TILE_PARAMS
+model's words written (without: as many); with TILE_ITER=2 (the cells'
+registered MIN winner: two cycles an array iteration) the cycles of
+the model's Timing(iteration=2).  Environment: TILE_PARAMS
 (t_r,t_c,max_h,max_w), TILE_JOBS (random jobs), TILE_MID (HxW of the maps
 of the edge cases, stalls, resets and changed environments), TILE_MAPS
 (the bundled maps to run, comma-separated), TILE_LARGE (1: random maps
@@ -52,6 +54,7 @@ EXTERNAL = os.environ.get("TILE_STORE") == "external"
 DRAM = os.environ.get("TILE_STORE") == "dram"
 PREFETCH = int(os.environ.get("TILE_PREFETCH", "0"))     # visits read ahead
 SKIP_CLEAN = os.environ.get("TILE_SKIP_CLEAN") == "1"    # rows the visit did not change not written
+ITER = int(os.environ.get("TILE_ITER", "1"))              # cycles an array iteration takes (iter_cycles)
 DRAM_PORTS = 4          # the DRAM test's native ports: rows of a window on different ports (BANK_AT)
 MAPS = Path(__file__).resolve().parents[2] / "maps"
 
@@ -65,7 +68,7 @@ async def _setup(dut):
 
 
 def _model(img, goals, start, dfar, readout=True):
-    return plan_path_tiled(img, goals, start, dfar, array=(T_R, T_C), readout=readout)
+    return plan_path_tiled(img, goals, start, dfar, array=(T_R, T_C), readout=readout, timing=Timing(iteration=ITER))
 
 
 async def _check(drv, img, goals, start, dfar, readout=True, cycles=True, **kw):
@@ -372,7 +375,8 @@ async def dram_store(dut):
 
 
 def _params(p):
-    return dict(zip(("t_r", "t_c", "max_h", "max_w", "store", "dram_ports", "prefetch", "skip_clean"), p))
+    return dict(zip(("t_r", "t_c", "max_h", "max_w", "store", "dram_ports", "prefetch", "skip_clean", "iter_cycles"),
+                    p))
 
 
 # One build per simulator and parameter set.  An 8x8 array on a 64x64 RAM on
@@ -385,22 +389,22 @@ def _params(p):
 # cocotb), so there it runs the sized cases on small maps; the controller
 # and stream cases run on Verilator at 8x8 and on Icarus with a non-square,
 # non-power-of-two 3x5 array on a 23x67 RAM (constant divisions by reciprocal, partial
-# tiles everywhere).
+# tiles everywhere) whose cells register their MIN's winner (iter_cycles 2: two cycles an iteration).
 # (sim, (t_r, t_c, max_h, max_w), random jobs, mid size, bundled maps, large, cocotb test filter or None)
 SIZED = "bundled_and_random|edge_cases"
 CASES = [
     ("verilator", (8, 8, 64, 64), 4, "13x21", "room-64-64-8", 1, None),
     ("icarus", (8, 8, 64, 64), 4, "13x21", "", 0, SIZED),
-    ("icarus", (3, 5, 23, 67), 4, "11x17", "", 1, None),
+    ("icarus", (3, 5, 23, 67, "bram", 1, 0, 0, 2), 4, "11x17", "", 1, None),
 ]
 
 
 @pytest.mark.parametrize("sim, params, jobs, mid, maps, large, only", CASES,
-                         ids=[f"{s}-{p[0]}x{p[1]}-map{p[2]}x{p[3]}{'-sized' if o else ''}"
+                         ids=[f"{s}-{p[0]}x{p[1]}-map{p[2]}x{p[3]}{'-sized' if o else ''}{'-iter2' if p[8:] else ''}"
                               for s, p, _, _, _, _, o in CASES])
 def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
-    env = {"TILE_PARAMS": ",".join(map(str, params)), "TILE_JOBS": jobs, "TILE_MID": mid, "TILE_MAPS": maps,
-           "TILE_LARGE": large}
+    env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_JOBS": jobs, "TILE_MID": mid, "TILE_MAPS": maps,
+           "TILE_LARGE": large, "TILE_ITER": _params(params).get("iter_cycles", 1)}
     if only:
         env["COCOTB_TEST_FILTER"] = only
     ran = run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env)
@@ -411,13 +415,17 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
 # The stores outside the engine: a 4x8 array (a power-of-two word) over maps up to 21x35 (partial
 # tiles), its state on the state port (external: sim/rtl/state_store.py), without and with the
 # prefetch and skip_clean, or in a DRAM behind DRAM_PORTS native ports on a clock of their own
-# (dram: sim/rtl/native_dram.py), with both (as the catalog's edt_tile_dram).
-@pytest.mark.parametrize("store, prefetch, skip_clean",
-                         [("external", 0, 0), ("external", 1, 0), ("external", 2, 1), ("dram", 2, 1)],
-                         ids=["external", "external-prefetch1", "external-prefetch2-skip", "dram-prefetch2-skip"])
+# (dram: sim/rtl/native_dram.py), with both (as the catalog's edt_tile_dram), and both with the
+# cells' MIN winner registered (iter_cycles 2).
+@pytest.mark.parametrize("store, prefetch, skip_clean, iter_cycles",
+                         [("external", 0, 0, 1), ("external", 1, 0, 1), ("external", 2, 1, 1), ("dram", 2, 1, 1),
+                          ("external", 2, 1, 2)],
+                         ids=["external", "external-prefetch1", "external-prefetch2-skip", "dram-prefetch2-skip",
+                              "external-prefetch2-skip-iter2"])
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
-def test_edt_tile_engine_store(sim, store, prefetch, skip_clean):
-    params = (4, 8, 21, 35, store, DRAM_PORTS if store == "dram" else 1, prefetch, skip_clean)
+def test_edt_tile_engine_store(sim, store, prefetch, skip_clean, iter_cycles):
+    params = (4, 8, 21, 35, store, DRAM_PORTS if store == "dram" else 1, prefetch, skip_clean, iter_cycles)
     env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": store,
-           "TILE_PREFETCH": prefetch, "TILE_SKIP_CLEAN": skip_clean, "COCOTB_TEST_FILTER": f"{store}_store"}
+           "TILE_PREFETCH": prefetch, "TILE_SKIP_CLEAN": skip_clean, "TILE_ITER": iter_cycles,
+           "COCOTB_TEST_FILTER": f"{store}_store"}
     assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1

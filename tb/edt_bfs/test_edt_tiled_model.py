@@ -291,7 +291,7 @@ def test_cycle_model_brute_force():
     rng = np.random.default_rng(seed_from_env() + 50)
     for n in range(25):
         name, img, (tr, tc), p, banks, cells = _random_case(rng, n)
-        tm = Timing(*(int(v) for v in rng.integers(0, 4, 5)))
+        tm = Timing(*(int(v) for v in rng.integers(0, 4, 5)), iteration=int(rng.integers(1, 4)))
         start = cells[0] if cells else None
         res = plan_path_tiled(img, cells[1:3], start, 0, array=(tr, tc), word_pixels=p, banks=banks,
                               timing=tm, readout=bool(n % 2))
@@ -307,7 +307,7 @@ def test_cycle_model_brute_force():
             rw, rb = _brute_beats(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w, p, banks)
             ww, wb = _brute_beats(range(r0, r0 + tr), range(c0, c0 + tc), h, w, p, banks)
             read, written = read + rw, written + ww
-            cyc[phase] += tm.sched + tm.latency + rb + iterations + (tm.stop if phase == "bfs" else 0) + max(wb, marks)
+            cyc[phase] += tm.sched + tm.latency + rb + tm.iteration * iterations + (tm.stop if phase == "bfs" else 0) + max(wb, marks)
         cyc["edt"] += tm.level * res.stats["levels"]
         goals = tm.goal * len(cells[1:3])
         total = (h * -(-w // p) + res.stats["tiles"] + cyc["edt"] + goals + cyc["bfs"]
@@ -366,6 +366,8 @@ def test_bad_parameters():
             plan_path_tiled(img, [(0, 0)], None, 0, **kw)
     with pytest.raises(ValueError, match="Timing.sched"):
         Timing(sched=-1)
+    with pytest.raises(ValueError, match="Timing.iteration 0"):
+        Timing(iteration=0)
     with pytest.raises(ValueError, match="outside"):
         plan_path_tiled(img, [(5, 0)], None, 0)
     with pytest.raises(ValueError, match="dfar"):
