@@ -307,7 +307,8 @@ def test_cycle_model_brute_force():
             rw, rb = _brute_beats(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w, p, banks)
             ww, wb = _brute_beats(range(r0, r0 + tr), range(c0, c0 + tc), h, w, p, banks)
             read, written = read + rw, written + ww
-            cyc[phase] += tm.sched + tm.latency + rb + tm.iteration * iterations + (tm.stop if phase == "bfs" else 0) + max(wb, marks)
+            cyc[phase] += (tm.sched + tm.latency + rb + tm.iteration * iterations + (tm.stop if phase == "bfs" else 0)
+                           + max(wb, marks))
         cyc["edt"] += tm.level * res.stats["levels"]
         goals = tm.goal * len(cells[1:3])
         total = (h * -(-w // p) + res.stats["tiles"] + cyc["edt"] + goals + cyc["bfs"]
