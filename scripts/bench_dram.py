@@ -36,7 +36,7 @@ import software  # noqa: E402
 
 from navcores.hdl import catalog  # noqa: E402
 from navcores.hdl.edt_bfs.tile_litedram import TileLiteDram  # noqa: E402
-from navcores.models.edt_bfs_tiled import plan_path_tiled  # noqa: E402
+from navcores.models.edt_bfs_tiled import Timing, plan_path_tiled  # noqa: E402
 from navcores.sim.rtl.clock import PERIOD_NS  # noqa: E402
 from navcores.sim.rtl.runner import run  # noqa: E402
 
@@ -48,6 +48,7 @@ ARRAY = (PARAMS["t_r"], PARAMS["t_c"])
 RAM = (PARAMS["max_h"], PARAMS["max_w"])
 PORTS = PARAMS["dram_ports"]
 ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", "dram_ports")}
+TIMING = Timing(iteration=PARAMS.get("iter_cycles", 1))     # the model's cycle constants for that engine
 # The clocks' ratio in the simulation when the engine has not been placed (engine_mhz() is None):
 # about what the 4x8 engines reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
 RATIO_MHZ = 22.0
@@ -80,7 +81,7 @@ def rtl_job(obstacle, goal, start, core, csrs, work, mhz):
 
 def measure(name, core, csrs, work, mhz):
     obstacle, goal, start = B.job(name)
-    model = plan_path_tiled(obstacle, [goal], start, B.DFAR, array=ARRAY)
+    model = plan_path_tiled(obstacle, [goal], start, B.DFAR, array=ARRAY, timing=TIMING)
     sw = software.edt_bfs(obstacle, [goal], B.DFAR, bfs=("csgraph",), repeats=3)
     t0 = time.perf_counter()
     rtl = rtl_job(obstacle, goal, start, core, csrs, work, mhz or RATIO_MHZ)

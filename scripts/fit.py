@@ -2,7 +2,8 @@
 
     make fit TOP=<top> PARAMS="name=value ..." PART=<part>
     python scripts/fit.py TOP [name=value ...] --part PART [--seeds 3] [--first-seed 1] [--jobs 2]
-                          [--router router1|router2] [--density BETA] [--out FILE]
+                          [--router router1|router2] [--placer heap|static] [--density BETA]
+                          [--out FILE]
 
 Synthesizes the top (``python -m hdl.emit --list`` shows the tops and their
 parameters) in the registered harness of scripts/fmax.py with yosys, places
@@ -23,6 +24,7 @@ results cached under build/cache), and writes ``build/fit/<module>--<part>.json`
   tools           yosys and nextpnr versions, as the tools report them
   router          nextpnr's router (--router; router1 unless asked)
   placer_density  nextpnr's placement density (--density; null: its default, 0.9)
+  placer          nextpnr's placer (--placer; heap unless asked)
   cells, utilisation, target_mhz, synthesis, harness, seconds
 
 and prints one summary line.  Parts (case-insensitive): LFE5U-12F / 25F /
@@ -64,6 +66,8 @@ def parse_args(argv):
                     help="nextpnr's router (default router1)")
     ap.add_argument("--first-seed", type=int, default=1, metavar="N",
                     help="the first seed (default 1): seeds N .. N + SEEDS - 1")
+    ap.add_argument("--placer", default="heap", choices=fmax.PLACERS,
+                    help="nextpnr's placer (default heap; static: its electrostatic placer)")
     ap.add_argument("--density", type=float, metavar="BETA",
                     help="the placer's largest share of a region's cells, 0.5..1 (nextpnr's --placer-heap-beta; "
                          "default its 0.9): lower spreads a crowded design for the router")
@@ -85,6 +89,8 @@ def parse_args(argv):
         _fail(f"--first-seed {args.first_seed}: must be 1..1000")
     if args.density is not None and not 0.5 <= args.density <= 1.0:
         _fail(f"--density {args.density}: must be 0.5..1 (a share of a region's cells)")
+    if args.density is not None and args.placer != "heap":
+        _fail(f"--density with --placer {args.placer}: the density is the heap placer's")
     try:
         args.part = fmax.part(args.part)
         args.params = fmax.parse(fmax.params_of(args.top)[0], args.params)
@@ -137,7 +143,8 @@ def main(argv=None):
     try:
         seeds = tuple(range(args.first_seed, args.first_seed + args.seeds))
         result = fmax.fit(args.top, args.params, args.part, seeds=seeds,
-                          jobs=args.jobs, progress=_progress(), router=args.router, density=args.density)
+                          jobs=args.jobs, progress=_progress(), router=args.router, density=args.density,
+                          placer=args.placer)
     except (fmax.FlowError, toolchain.ToolError) as e:
         _fail(str(e).splitlines()[0], 1)
     except KeyboardInterrupt:
@@ -147,7 +154,8 @@ def main(argv=None):
                                     "--part", args.part.name, "--seeds", str(args.seeds),
                                     *(("--router", args.router) if args.router != "router1" else ()),
                                     *(("--first-seed", str(args.first_seed)) if args.first_seed != 1 else ()),
-                                    *(("--density", str(args.density)) if args.density is not None else ())])
+                                    *(("--density", str(args.density)) if args.density is not None else ()),
+                                    *(("--placer", args.placer) if args.placer != "heap" else ())])
     result["date"] = time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime())
     tmp = _temporary(out)
     tmp.write_text(json.dumps(result, indent=1) + "\n")

@@ -254,6 +254,7 @@ def critical_path(report):
 
 
 ROUTERS = ("router1", "router2")
+PLACERS = ("heap", "static")
 
 
 # nextpnr's error when the resources are within the part but the packed cells do not place
@@ -280,7 +281,7 @@ def _does_not_fit(run):
             or UNPLACEABLE in log + run.text("stderr.txt"))
 
 
-def place(netlist, prt, seed, progress=None, router="router1", density=None):
+def place(netlist, prt, seed, progress=None, router="router1", density=None, placer="heap"):
     """One nextpnr run of ``netlist`` on ``prt`` with ``seed``: a dict with
     seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow
     (what the part lacks; empty with ``unplaceable``, nextpnr's error, when
@@ -291,14 +292,22 @@ def place(netlist, prt, seed, progress=None, router="router1", density=None):
     designs; neither routed a harmonic block of 18x36 or more here:
     hdl/harmonic/README.md).  ``density``: the placer's largest share of a
     region's cells (nextpnr's ``--placer-heap-beta``; None: its default,
-    0.9); lower spreads a crowded design, for the router's sake."""
+    0.9); lower spreads a crowded design, for the router's sake.  ``placer``:
+    nextpnr's placer, heap (its default, every figure unless a JSON says
+    otherwise) or static (its electrostatic placer: spreads by a density
+    field, for designs the heap placer leaves too crowded to route)."""
     if router not in ROUTERS:
         raise ValueError(f"router {router!r}: one of {', '.join(ROUTERS)}")
+    if placer not in PLACERS:
+        raise ValueError(f"placer {placer!r}: one of {', '.join(PLACERS)}")
+    if density is not None and placer != "heap":
+        raise ValueError("density is the heap placer's (--placer-heap-beta)")
     pin_flag = "--lpf-allow-unconstrained" if prt.family == "ecp5" else "--pcf-allow-unconstrained"
     args = [*prt.device_args, "--json", "{netlist}", pin_flag, "--seed", str(seed),
             "--freq", str(prt.target_mhz), "--timing-allow-fail", "--report", "report.json",
             "--log", "nextpnr.log", "-q", *(("--router", router) if router != "router1" else ()),
-            *(("--placer-heap-beta", str(density)) if density is not None else ())]
+            *(("--placer-heap-beta", str(density)) if density is not None else ()),
+            *(("--placer", placer) if placer != "heap" else ())]
     run = toolchain.run(prt.nextpnr, args, {"netlist": netlist}, progress, result_failure=_does_not_fit)
     log = run.text("nextpnr.log")
     util = utilisation(log)
@@ -377,7 +386,7 @@ def counts(name, params, prt, progress=None, source=None):
     return syn, netlist, packed, cells, res
 
 
-def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1", density=None):
+def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1", density=None, placer="heap"):
     """The fit of ``name`` at ``params`` on Part ``prt``: a JSON-ready dict
     (see scripts/fit.py).  Raises FlowError when a tool fails otherwise than
     by the design's size, toolchain.ToolError when a tool is missing."""
@@ -391,7 +400,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
     def one(seed):
         if progress:
             progress(f"{module} on {prt.name}, seed {seed}: placing and routing")
-        r = place(netlist, prt, seed, progress, router, density)
+        r = place(netlist, prt, seed, progress, router, density, placer)
         if progress:
             what = f"{r['fmax_mhz']:.1f} MHz" if "fmax_mhz" in r else "does not fit: " + shortfall(r)
             progress(f"{module} on {prt.name}, seed {seed}: {what}{_took(r)}")
@@ -427,6 +436,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
         "tools": {"yosys": syn.version, "nextpnr": first["version"]},
         "router": router,
         "placer_density": density,
+        "placer": placer,
         "seconds": {"synthesis": syn.seconds, "place_and_route": [r["seconds"] for r in runs],
                     "cached": syn.cached and all(r["cached"] for r in runs)},
     }

@@ -21,7 +21,7 @@ class TileLiteDram(wiring.Component):
     its ``dram`` ports.
 
     Parameters: the engine's ``t_r``, ``t_c``, ``max_h``, ``max_w``, ``dram_ports``, ``prefetch``,
-    ``skip_clean``;
+    ``skip_clean``, ``iter_cycles``;
     ``addr_width``: the core's native address (25 for the 1 GB of two
     MT41K256M16 in 128-bit words: scripts/litedram_core.py's).
 
@@ -36,9 +36,10 @@ class TileLiteDram(wiring.Component):
     of the DRAM and has none.
     """
 
-    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, prefetch=0, skip_clean=False, addr_width=25):
+    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, prefetch=0, skip_clean=False, iter_cycles=1,
+                 addr_width=25):
         self.engine = TileEngine(t_r, t_c, max_h, max_w, store="dram", dram_ports=dram_ports, prefetch=prefetch,
-                                 skip_clean=skip_clean)
+                                 skip_clean=skip_clean, iter_cycles=iter_cycles)
         used = len(self.engine.dram[0].cmd.payload.addr)
         if used > addr_width:
             raise ValueError(f"the store's {used} address bits exceed the controller's {addr_width}")

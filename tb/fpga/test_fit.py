@@ -100,7 +100,11 @@ def test_too_large_does_not_fit(tmp_path):
     (["harmonic_node"], "give a PART"),
     (["harmonic_node", "--part", "LFE5U-85F", "--seeds", "2"], "--seeds 2"),
     (["harmonic_node", "--part", "LFE5U-85F", "--router", "router3"], "invalid choice: 'router3'"),
-], ids=["top", "param-range", "param-name", "part", "no-part", "even-seeds", "router"])
+    (["harmonic_node", "--part", "LFE5U-85F", "--placer", "sa"], "invalid choice: 'sa'"),
+    (["harmonic_node", "--part", "LFE5U-85F", "--placer", "static", "--density", "0.8"], "the heap placer's"),
+    (["harmonic_node", "--part", "LFE5U-85F", "--density", "0.3"], "--density 0.3: must be 0.5..1"),
+], ids=["top", "param-range", "param-name", "part", "no-part", "even-seeds", "router", "placer", "placer-density",
+        "density"])
 def test_refusals(tmp_path, args, says):
     out = tmp_path / "x.json"
     r = fit(*args, out=out)
