@@ -157,7 +157,7 @@ SETS = (
     # reading the next two visits' windows during this one (prefetch: hides the DRAM's latency) and writing
     # back only the rows a visit changed (skip_clean: the DRAM's bandwidth).
     Set("edt_tile_dram", "edt_tile_engine", {"t_r": 4, "t_c": 8, "max_h": 512, "max_w": 512, "store": "dram",
-                                              "dram_ports": 4, "prefetch": 2, "skip_clean": 1, "iter_cycles": 2},
+                                              "dram_ports": 4, "prefetch": 2, "skip_clean": 1},
         emit=True, beyond="the tile engine with its per-pixel state in a DRAM (a 32-bit DDR3 behind LiteDRAM)"),
 )
 
