@@ -56,18 +56,20 @@ class TileCell(wiring.Component):
     iteration, so the last one, which changes nothing, leaves the parent of
     the final values (:meth:`models.edt_bfs_tiled.TileEngine.bfs_visit`).
 
-    *Select register* (``select_reg``): the MIN's one-hot winner (and
-    "a neighbour is done / visited") is registered every cycle, and the
-    iteration uses the registered winner: the clock's path from a
-    neighbour's register through the candidates, the 28 comparators and the
-    winner logic ends in that register, and the next one starts again at
-    the neighbours' registers, through the candidates, the AND-OR
-    multiplexers and the threshold's comparator, into the cell's register.
-    The candidates are combinational from registers that do not change in
-    between, so the registered winner is the MIN of the values the step
-    sees, bit for bit; the engine gives every ``step`` a select cycle before
-    it (no ``load``, ``clear`` or ``step`` of the array in the cycle before a
-    step: :class:`~models.edt_bfs_tiled.Timing`'s ``iteration`` 2).
+    *Select register* (``select_reg``): the MIN's one-hot winner, the
+    eight candidates' keys (d2_i: the ADD-SUB's two adders) and "a
+    neighbour is done / visited" are registered every cycle, and the
+    iteration uses them: the clock's path from a neighbour's register
+    (or the engine's ``phase``, the adders' gate) through the ADD-SUB, the
+    28 comparators and the winner logic ends in those registers, and the
+    step's starts there, through the AND-OR multiplexers and the
+    threshold's comparator (EDT; the BFS: the multiplexed hop + 1 against
+    the cell's) into the cell's register.  They hold what the step would
+    compute from registers that do not change in between, so the
+    iteration is the same bit for bit; the engine gives every ``step`` a
+    select cycle before it (no ``load``, ``clear`` or ``step`` of the array
+    in the cycle before a step: :class:`~models.edt_bfs_tiled.Timing`'s
+    ``iteration`` 2).
 
     Ports
     -----
@@ -142,17 +144,20 @@ class TileCell(wiring.Component):
             cands.append((nb.flag, key, x, y, nb.val[:hb]))
 
         # MIN: flat, ties to the smallest index; the winner's d2 (EDT), vector, hop (BFS), index.
-        win = min_select(m, [c[0] for c in cands], [c[1] for c in cands])
+        keys = [c[1] for c in cands]
+        win = min_select(m, [c[0] for c in cands], keys)
         if self.select_reg:
-            win_q = Signal(len(win), name="win_q")
-            m.d.sync += win_q.eq(Cat(*win))
-            win = list(win_q)
+            # Written every cycle, read only in a step after a select cycle: no reset needed.
+            win_q = Signal(len(win), name="win_q", reset_less=True)
+            keys_q = [Signal(len(k), name=f"key_q{i}", reset_less=True) for i, k in zip(OFFSETS, keys)]
+            m.d.sync += [win_q.eq(Cat(*win)), *(q.eq(k) for q, k in zip(keys_q, keys))]
+            win, keys = list(win_q), keys_q
         xm = pick(m, win, [c[2] for c in cands], signed(w["dx"]), "x_m")
         ym = pick(m, win, [c[3] for c in cands], signed(w["dy"]), "y_m")
-        km = pick(m, win, [c[1] for c in cands], w["val"], "key_m")
+        km = pick(m, win, keys, w["val"], "key_m")
         hm = pick(m, win, [c[4] for c in cands], hb, "hop_m")
         im = pick(m, win, list(OFFSETS), 4, "i_m")
-        vm = Signal(name="v_m")
+        vm = Signal(name="v_m", reset_less=self.select_reg)
         some = vm.eq(Cat(*[c[0] for c in cands]).any())       # a neighbour done (EDT) / visited (BFS)
         if self.select_reg:
             m.d.sync += some
