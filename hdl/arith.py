@@ -31,10 +31,11 @@ def times(value, c):
     return terms[0]
 
 
-def divmod_const(value, d):
+def divmod_const(value, d, table_bits=TABLE_BITS):
     """``(value // d, value % d)`` for a constant ``d >= 1``: slices when ``d``
     is a power of two, a lookup table when ``value`` is unsigned with at most
-    :data:`TABLE_BITS` bits (LUTs, no carry chain), a product by the
+    ``table_bits`` bits (LUTs, no carry chain; a bit more than
+    :data:`TABLE_BITS` buys a short path with LUTs), a product by the
     reciprocal when it is wider and unsigned, else Amaranth's operators
     (floor division, as Python's: a signed value).
 
@@ -55,7 +56,7 @@ def divmod_const(value, d):
         s = d.bit_length() - 1
         return value >> s, value[:s] if s else Const(0, 1)
     w = len(value)
-    if w <= TABLE_BITS and not value.shape().signed:
+    if w <= table_bits and not value.shape().signed:
         # a constant word indexed by the value (continuous assignments, no
         # process: defined from time 0 in every simulator)
         n = 1 << w

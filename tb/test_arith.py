@@ -50,6 +50,17 @@ def test_reciprocal_has_no_divider():
     assert "$div" not in text and "$mod" not in text
 
 
+def test_wider_table():
+    """``table_bits`` 8: an 8-bit value by 3 from a lookup table (no adder, no divider), every value exact."""
+    from amaranth.back import rtlil
+    _check(8, lambda x: divmod_const(x, 3, table_bits=8), lambda v: divmod(v, 3))
+    m = Module()
+    x, q, r = Signal(8), Signal(8), Signal(2)
+    m.d.comb += [q.eq(divmod_const(x, 3, table_bits=8)[0]), r.eq(divmod_const(x, 3, table_bits=8)[1])]
+    text = rtlil.convert(m, ports=[x, q, r])
+    assert "$add" not in text and "$div" not in text and "$mod" not in text
+
+
 def test_signed_uses_the_operators():
     """A signed value (e.g. ``width - 1``) floors as Python does, negative values included."""
     _check(4, lambda x: divmod_const(x.as_signed(), 3), lambda v: tuple(t % (1 << 24) for t in divmod(v - 16 * (v >> 3), 3)))

@@ -7,7 +7,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
-from ..arith import times
+from ..arith import divmod_const, times
 from .tile_layouts import named
 
 __all__ = ["Worklist", "tile_layout"]
@@ -112,6 +112,17 @@ class Worklist(wiring.Component):
         # with one spare row and column of addresses for the neighbours past the last tile.
         sr = -(-w["tile_rows"] // 3) + 1
         sc = -(-w["tile_cols"] // 3) + 1
+        # With the peek ports the look's tile comes straight from the FIFO RAM's output
+        # (peek[0]), so its path to the banks' addresses is kept short: the divisions by 3 are
+        # lookup tables and a bank row is a power of two of addresses (the address a
+        # concatenation, no multiply-add); without them (a registered tile) as before.
+        fast = bool(self.peeks)
+        kc = max(1, (sc - 1).bit_length())
+        if fast:
+            sc = 1 << kc
+
+        def address(q_r, q_c):
+            return Cat(q_c[:kc], q_r) if fast else times(q_r, sc) + q_c
         # A queued bit's write goes through a register (the bank and address logic after it, off
         # the engine's mark -> push path); the read ports are transparent to it, so a look in the
         # cycle after a push sees the push as before.
@@ -130,11 +141,15 @@ class Worklist(wiring.Component):
         wq = [named(m, n, v, shape) for n, v, shape in (
             ("wq_r", wr_tile.r // 3, range(sr)), ("wm_r", wr_tile.r % 3, 2),
             ("wq_c", wr_tile.c // 3, range(sc)), ("wm_c", wr_tile.c % 3, 2))]
-        waddr = named(m, "waddr", times(wq[0], sc) + wq[2], range(sr * sc))
+        waddr = named(m, "waddr", address(wq[0], wq[2]), range(sr * sc))
 
         at = self.look_at
-        lr, lm = named(m, "lq_r", at.r // 3, range(sr)), named(m, "lm_r", at.r % 3, 2)
-        cq, cm = named(m, "lq_c", at.c // 3, range(sc)), named(m, "lm_c", at.c % 3, 2)
+        if fast:
+            (qr, mr), (qc, mc) = divmod_const(at.r, 3, table_bits=8), divmod_const(at.c, 3, table_bits=8)
+        else:
+            qr, mr, qc, mc = at.r // 3, at.r % 3, at.c // 3, at.c % 3
+        lr, lm = named(m, "lq_r", qr, range(sr)), named(m, "lm_r", mr, 2)
+        cq, cm = named(m, "lq_c", qc, range(sc)), named(m, "lm_c", mc, 2)
         seen = Signal(4)               # (r mod 3, c mod 3) of the last look
         with m.If(self.look):
             m.d.sync += seen.eq(Cat(lm, cm))
@@ -158,7 +173,7 @@ class Worklist(wiring.Component):
                 m.submodules[f"queued{a}{b}"] = mem
                 qwp = mem.write_port()
                 qrp = mem.read_port(transparent_for=(qwp,))
-                m.d.comb += [qrp.addr.eq(Mux(oka & okb, times(qa, sc) + qb, 0)), qrp.en.eq(self.look),
+                m.d.comb += [qrp.addr.eq(Mux(oka & okb, address(qa, qb), 0)), qrp.en.eq(self.look),
                              qwp.addr.eq(waddr), qwp.data.eq(wr_val),
                              qwp.en.eq(wr_en & (wq[1] == a) & (wq[3] == b))]
                 bits[a, b] = qrp.data
