@@ -415,16 +415,17 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
 # The stores outside the engine: a 4x8 array (a power-of-two word) over maps up to 21x35 (partial
 # tiles), its state on the state port (external: sim/rtl/state_store.py), without and with the
 # prefetch and skip_clean, or in a DRAM behind DRAM_PORTS native ports on a clock of their own
-# (dram: sim/rtl/native_dram.py), with both (as the catalog's edt_tile_dram), and both with the
-# cells' MIN winner registered (iter_cycles 2).
-@pytest.mark.parametrize("store, prefetch, skip_clean, iter_cycles",
-                         [("external", 0, 0, 1), ("external", 1, 0, 1), ("external", 2, 1, 1), ("dram", 2, 1, 1),
-                          ("external", 2, 1, 2)],
-                         ids=["external", "external-prefetch1", "external-prefetch2-skip", "dram-prefetch2-skip",
-                              "external-prefetch2-skip-iter2"])
+# (dram: sim/rtl/native_dram.py), with both, on a 4x8 and a 2x8 array, and both with the cells' MIN
+# winner registered (iter_cycles 2).
+STORE_CASES = {"external": (4, "external", 0, 0, 1), "external-prefetch1": (4, "external", 1, 0, 1),
+               "external-prefetch2-skip": (4, "external", 2, 1, 1), "dram-prefetch2-skip": (4, "dram", 2, 1, 1),
+               "2x8-dram-prefetch2-skip": (2, "dram", 2, 1, 1), "external-prefetch2-skip-iter2": (4, "external", 2, 1, 2)}
+
+
+@pytest.mark.parametrize("t_r, store, prefetch, skip_clean, iter_cycles", STORE_CASES.values(), ids=STORE_CASES)
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
-def test_edt_tile_engine_store(sim, store, prefetch, skip_clean, iter_cycles):
-    params = (4, 8, 21, 35, store, DRAM_PORTS if store == "dram" else 1, prefetch, skip_clean, iter_cycles)
+def test_edt_tile_engine_store(sim, t_r, store, prefetch, skip_clean, iter_cycles):
+    params = (t_r, 8, 21, 35, store, DRAM_PORTS if store == "dram" else 1, prefetch, skip_clean, iter_cycles)
     env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": store,
            "TILE_PREFETCH": prefetch, "TILE_SKIP_CLEAN": skip_clean, "TILE_ITER": iter_cycles,
            "COCOTB_TEST_FILTER": f"{store}_store"}
