@@ -2,16 +2,16 @@
 
 ``python scripts/bench_dram.py [MAP ...] [--md FILE]`` runs each map's job
 (scripts/bench_edt_tiled.job: the map's longest scenario) on
-:class:`~hdl.edt_bfs.tile_litedram.TileLiteDram` (the 4x8 engine over maps
-up to 512x512 with ``store="dram"``, and LiteDRAM's generated controller
-with its DRAM model: scripts/litedram_core.py) in Verilator, checks the
-results against models.edt_bfs_tiled (distances, vectors, cfr, parents,
-hop counts, path, tile visits and their trace: the same; cycles: the DRAM's), and
-reports the job's engine cycles and its time at the engine's clock (the
-4x8 / 512x512 engine with store=external, prefetch and skip_clean placed:
-:func:`engine_mhz`) with
-the controller at litedram_core.SYS_CLK_HZ (the two clocks in that ratio
-in the simulation), against scipy on the same machine in the same run.
+:class:`~hdl.edt_bfs.tile_litedram.TileLiteDram` (the catalog's
+``edt_tile_dram``: a 2x8 engine over maps up to 512x512 with
+``store="dram"``, and LiteDRAM's generated controller with its DRAM
+model: scripts/litedram_core.py) in Verilator, checks the results against
+models.edt_bfs_tiled (distances, vectors, cfr, parents, hop counts, path,
+tile visits and their trace: the same; cycles: the DRAM's), and reports
+the job's engine cycles and its time at the engine's clock (the same
+engine with store=external placed: :func:`engine_mhz`) with the controller
+at litedram_core.SYS_CLK_HZ (the two clocks in that ratio in the
+simulation), against scipy on the same machine in the same run.
 ``--md FILE`` writes the rows as BENCHMARKS.md's section (scripts/bench.py
 ``--only dram`` does that within make bench).  Needs ``pip install -e
 .[dram]``; exit 2 without it.
@@ -41,16 +41,17 @@ from navcores.sim.rtl.clock import PERIOD_NS  # noqa: E402
 from navcores.sim.rtl.runner import run  # noqa: E402
 
 WORK = B.ROOT / "build" / "bench_dram"
-# The engine: the catalog's edt_tile_dram (a 4x8 array over maps up to 512x512, four native ports, prefetch,
+# The engine: the catalog's edt_tile_dram (a 2x8 array over maps up to 512x512, four native ports, prefetch,
 # skip_clean)
 PARAMS = dict(catalog.get("edt_tile_dram").params)
 ARRAY = (PARAMS["t_r"], PARAMS["t_c"])
 RAM = (PARAMS["max_h"], PARAMS["max_w"])
 PORTS = PARAMS["dram_ports"]
+NAME = f"{ARRAY[0]}x{ARRAY[1]} / {RAM[0]}x{RAM[1]}"
 ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", "dram_ports")}
 TIMING = Timing(iteration=PARAMS.get("iter_cycles", 1))     # the model's cycle constants for that engine
 # The clocks' ratio in the simulation when the engine has not been placed (engine_mhz() is None):
-# about what the 4x8 engines reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
+# about what the 4x8 engines without the prefetch reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
 RATIO_MHZ = 22.0
 MAPS = ("room-64-64-8", "maze512-1-0")
 SECTION = "EDT/BFS tile engine through LiteDRAM's DDR3 controller, simulated (issue 18)"
@@ -131,9 +132,9 @@ def section(maps=MAPS):
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
     side = stores_fit()
     sys_mhz = litedram_core.SYS_CLK_HZ / 1e6
-    clock = (f"the engine at {mhz:.1f} MHz (the 4x8 / 512x512 engine with store=external, prefetch and skip_clean "
+    clock = (f"the engine at {mhz:.1f} MHz (the {NAME} engine with store=external, prefetch and skip_clean "
              f"placed on the {B.PART}: make fit; the same engine logic)" if mhz else
-             "no engine clock (the 4x8 / 512x512 engine is not placed for its current Verilog: no job times)")
+             f"no engine clock (the {NAME} engine is not placed for its current Verilog: no job times)")
     if side and side["fits"]:
         meets = "at least" if side["fmax_mhz"] >= sys_mhz else "BELOW"
         clock += (f"; its DRAM side (DramStores: {PORTS} DramStores and the RowRouter, on the controller's clock) "
@@ -143,7 +144,8 @@ def section(maps=MAPS):
     else:
         clock += "; its DRAM side (DramStores) not placed for its current Verilog"
     text = (f"Measured by `python scripts/bench_dram.py` on {stamp}, load average {load} on {os.cpu_count()} "
-            f"cores. The 4x8 tile engine over maps up to 512x512 with store=dram on {PORTS} native ports "
+            f"cores. The {ARRAY[0]}x{ARRAY[1]} tile engine over maps up to {RAM[0]}x{RAM[1]} with store=dram on "
+            f"{PORTS} native ports "
             "(hdl/edt_bfs/dram_stores.py, dram_store.py, row_router.py, state_cdc.py) and LiteDRAM's generated "
             "controller (scripts/litedram_core.py: a 32-bit DDR3 of two "
             "MT41K256M16 on ECP5DDRPHY, the ECPIX-5's, system clock "
