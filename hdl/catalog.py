@@ -155,9 +155,9 @@ SETS = (
         emit=True, beyond="the tile engine with its per-pixel state in an external store (maze512-1-0: 13.9 Mbit)"),
     # ... and the engine with that state in a DRAM behind four of a controller's native ports (LiteDRAM's),
     # reading the next two visits' windows during this one (prefetch: hides the DRAM's latency) and writing
-    # back only the rows a visit changed (skip_clean: the DRAM's bandwidth), on a 2x8 array: the largest with
-    # the prefetch that places and routes on the LFE5U-85F (the 4x8 one, at 80 % of it, does not route).
-    Set("edt_tile_dram", "edt_tile_engine", {"t_r": 2, "t_c": 8, "max_h": 512, "max_w": 512, "store": "dram",
+    # back only the rows a visit changed (skip_clean: the DRAM's bandwidth); on the LFE5U-85F it routes with
+    # nextpnr's electrostatic placer (scripts/fit.py --placer static: 82 % of the part).
+    Set("edt_tile_dram", "edt_tile_engine", {"t_r": 4, "t_c": 8, "max_h": 512, "max_w": 512, "store": "dram",
                                               "dram_ports": 4, "prefetch": 2, "skip_clean": 1},
         emit=True, beyond="the tile engine with its per-pixel state in a DRAM (a 32-bit DDR3 behind LiteDRAM)"),
 )

@@ -3,7 +3,7 @@
 ``python scripts/bench_dram.py [MAP ...] [--md FILE]`` runs each map's job
 (scripts/bench_edt_tiled.job: the map's longest scenario) on
 :class:`~hdl.edt_bfs.tile_litedram.TileLiteDram` (the catalog's
-``edt_tile_dram``: a 2x8 engine over maps up to 512x512 with
+``edt_tile_dram``: a 4x8 engine over maps up to 512x512 with
 ``store="dram"``, and LiteDRAM's generated controller with its DRAM
 model: scripts/litedram_core.py) in Verilator, checks the results against
 models.edt_bfs_tiled (distances, vectors, cfr, parents, hop counts, path,
@@ -41,7 +41,7 @@ from navcores.sim.rtl.clock import PERIOD_NS  # noqa: E402
 from navcores.sim.rtl.runner import run  # noqa: E402
 
 WORK = B.ROOT / "build" / "bench_dram"
-# The engine: the catalog's edt_tile_dram (a 2x8 array over maps up to 512x512, four native ports, prefetch,
+# The engine: the catalog's edt_tile_dram (a 4x8 array over maps up to 512x512, four native ports, prefetch,
 # skip_clean)
 PARAMS = dict(catalog.get("edt_tile_dram").params)
 ARRAY = (PARAMS["t_r"], PARAMS["t_c"])
