@@ -35,8 +35,9 @@ import litedram_core  # noqa: E402
 import software  # noqa: E402
 
 from navcores.hdl import catalog  # noqa: E402
+from navcores.hdl.edt_bfs.tile_engine import model_timing  # noqa: E402
 from navcores.hdl.edt_bfs.tile_litedram import TileLiteDram  # noqa: E402
-from navcores.models.edt_bfs_tiled import Timing, plan_path_tiled  # noqa: E402
+from navcores.models.edt_bfs_tiled import plan_path_tiled  # noqa: E402
 from navcores.sim.rtl.clock import PERIOD_NS  # noqa: E402
 from navcores.sim.rtl.runner import run  # noqa: E402
 
@@ -49,7 +50,7 @@ RAM = (PARAMS["max_h"], PARAMS["max_w"])
 PORTS = PARAMS["dram_ports"]
 NAME = f"{ARRAY[0]}x{ARRAY[1]} / {RAM[0]}x{RAM[1]}"
 ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", "dram_ports")}
-TIMING = Timing(iteration=PARAMS.get("iter_cycles", 1))     # the model's cycle constants for that engine
+TIMING = model_timing(PARAMS.get("iter_cycles", 1))     # the model's cycle constants for that engine
 # The clocks' ratio in the simulation when the engine has not been placed (engine_mhz() is None):
 # about what the 4x8 engines without the prefetch reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
 RATIO_MHZ = 22.0

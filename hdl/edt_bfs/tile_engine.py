@@ -25,9 +25,8 @@ STATES = ("IDLE", "LOAD", "SCAN", "LEVEL", "SCHED0", "SCHED1", "READ", "ITER", "
           "GOAL0", "GOAL1", "PATH", "READOUT")
 
 __all__ = ["TileEngine", "command_layout", "map_layout", "goal_layout", "result_layout", "visit_layout",
-           "TIMING", "MAX_CELLS", "DRAM_WIDTH"]
+           "model_timing", "MAX_CELLS", "DRAM_WIDTH"]
 
-TIMING = Timing()       # the cycle constants this RTL implements (the model's defaults)
 MAX_PIXELS = 1 << 20    # on-chip state of a 1024 x 1024 map is ~50 Mbit: more than any FPGA's block RAM today
 STORES = ("bram", "external", "dram")
 PREFETCH_MAX = 3        # visits read ahead at most (each more: a WritePatch bank, a worklist read port)
@@ -63,6 +62,11 @@ def visit_layout(w):
     """The visit monitor: one cycle of ``valid`` at the end of each tile visit."""
     return data.StructLayout({"valid": 1, "bfs": 1, "r": range(w["tile_rows"]), "c": range(w["tile_cols"]),
                               "iterations": w["iters"], "marks": 4})
+
+
+def model_timing(iter_cycles=1):
+    """The cycle constants of :mod:`models.edt_bfs_tiled` that the engine with ``iter_cycles`` runs."""
+    return Timing(iteration=iter_cycles)
 
 
 def _above(value, limit):
@@ -273,7 +277,7 @@ class TileEngine(wiring.Component):
         self.t_r, self.t_c, self.max_h, self.max_w, self.store = t_r, t_c, max_h, max_w, store
         self.dram_ports, self.prefetch, self.skip_clean = dram_ports, prefetch, bool(skip_clean)
         self.iter_cycles = iter_cycles
-        self.cycle_timing = Timing(iteration=iter_cycles)   # the model's constants for this engine
+        self.cycle_timing = model_timing(iter_cycles)
         w = self.w = tile_widths(t_r, t_c, max_h, max_w)
         super().__init__({
             "c_stream": In(stream.Signature(command_layout(w))),

@@ -40,6 +40,7 @@ import pytest
 from cocotb.triggers import ReadOnly, RisingEdge
 
 from images import FAMILIES, free_cells
+from navcores.hdl.edt_bfs.tile_engine import model_timing
 from navcores.models.edt_bfs_tiled import Timing, plan_path_tiled
 from navcores.models.maps import load_grid
 from navcores.sim.rtl.edt_tile_driver import TileEngineDriver, compare
@@ -68,7 +69,7 @@ async def _setup(dut):
 
 
 def _model(img, goals, start, dfar, readout=True):
-    return plan_path_tiled(img, goals, start, dfar, array=(T_R, T_C), readout=readout, timing=Timing(iteration=ITER))
+    return plan_path_tiled(img, goals, start, dfar, array=(T_R, T_C), readout=readout, timing=model_timing(ITER))
 
 
 async def _check(drv, img, goals, start, dfar, readout=True, cycles=True, **kw):
