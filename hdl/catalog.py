@@ -159,7 +159,7 @@ SETS = (
     # nextpnr's electrostatic placer (scripts/fit.py --placer static: 82 % of the part).
     Set("edt_tile_dram", "edt_tile_engine", {"t_r": 4, "t_c": 8, "max_h": 512, "max_w": 512, "store": "dram",
                                               "dram_ports": 4, "prefetch": 2, "skip_clean": 1},
-        emit=True, beyond="the tile engine with its per-pixel state in a DRAM (a 32-bit DDR3 behind LiteDRAM)"),
+        emit=True, beyond="the tile engine with its per-pixel state in a DRAM (a 16-bit DDR3 behind LiteDRAM)"),
 )
 
 # (top, params) of every set make verilog emits, in order.

@@ -252,7 +252,7 @@ def comparison(maps=MAPS, arrays=ARRAYS, progress=print):
                             "latency)" if max(floor, r['hw_seconds']) < r['sw_seconds'] else
                             "not below scipy's even at the SDRAM's peak")
                          + "; a board with "
-                         f"a 32-bit DDR3 has the bandwidth on paper: the engine through LiteDRAM's DDR3 controller "
+                         f"a DDR3 has the bandwidth on paper: the engine through LiteDRAM's DDR3 controller "
                          f"(store=dram, simulated) is the next section's. "
                          f"Cost: {r['visits_edt'] + r['visits_bfs']:,} "
                          f"tile visits at {r['cycles_per_visit']:.1f} cycles each, {r['words_moved']:,} RAM words "

@@ -80,6 +80,9 @@ def _ecp5(size, board):
 
 PARTS = {p.name.lower(): p for p in (
     _ecp5(12, "ULX3S-12F"), _ecp5(25, "ULX3S-25F"), _ecp5(45, "ULX3S-45F"), _ecp5(85, "ULX3S-85F"),
+    # The ECPIX-5's: the LFE5U-85F's fabric (with SERDES) at speed grade 8, the only grade it comes in.
+    Part("LFE5UM5G-85F", "ecp5", "CABGA554", "8", "ECPIX-5", ("--um5g-85k", "--package", "CABGA554", "--speed", "8"),
+         "synth_ecp5", 300),
     # UP5K: synthesis for its timing (-device u) and its SB_MAC16 DSPs; the HX has no DSP.
     Part("iCE40-UP5K", "ice40", "SG48", None, "iCEBreaker", ("--up5k", "--package", "sg48"),
          "synth_ice40 -device u -dsp", 150),
@@ -109,18 +112,24 @@ def _port(name):
     return name + " " if name.startswith("\\") else name
 
 
-def harness(verilog_text, module, clock="clk"):
-    """Verilog of ``fmax_<module>``: the core between a serial input chain and an XOR tree."""
+def harness(verilog_text, module, clock="clk", pins=()):
+    """Verilog of ``fmax_<module>``: the core between a serial input chain and an XOR tree.
+
+    ``pins``: the core's ports that are the harness's own ports instead (a
+    second clock, a memory's pads: placed at the part's pins by the fit's
+    constraints)."""
     ps = ports(verilog_text, module)
-    ins = [(n, w) for d, n, w in ps if d == "input" and n != clock]
-    outs = [(n, w) for d, n, w in ps if d == "output"]
+    ins = [(n, w) for d, n, w in ps if d == "input" and n != clock and n not in pins]
+    outs = [(n, w) for d, n, w in ps if d == "output" and n not in pins]
+    own = [(d, n, w) for d, n, w in ps if n in pins]
     n_in = max(1, sum(w for _, w in ins))
     n_out = sum(w for _, w in outs)
-    lines = [f"module fmax_{module}(input {clock}, input si, output so);",
+    decl = "".join(f", {d} " + (f"[{w - 1}:0] " if w > 1 else "") + n for d, n, w in own)
+    lines = [f"module fmax_{module}(input {clock}, input si, output so{decl});",
              f"  reg [{n_in - 1}:0] chain;",
              f"  always @(posedge {clock}) chain <= {{chain[{max(n_in - 2, 0)}:0], si}};" if n_in > 1
              else f"  always @(posedge {clock}) chain <= si;"]
-    conns, pos = [f".{clock}({clock})"], 0
+    conns, pos = [f".{clock}({clock})"] + [f".{_port(n)}({n})" for _, n, _ in own], 0
     for name, w in ins:
         conns.append(f".{_port(name)}(chain[{pos + w - 1}:{pos}])")
         pos += w
@@ -192,31 +201,35 @@ def _write_changed(path, text):
     return path
 
 
-def synthesize(name, params, family_synth, work, progress=None, source=None):
+def synthesize(name, params, family_synth, work, progress=None, source=None, pins=(), library=None):
     """Emit ``name`` at ``params`` into ``work`` (unless ``source``, its
-    Verilog, is given), wrap it in the harness and synthesize it with
-    ``family_synth`` (e.g. ``synth_ecp5``).  Returns (module, toolchain.Run,
-    the core's cell counts)."""
+    Verilog, is given), wrap it in the harness (with ``pins``: :func:`harness`)
+    and synthesize it with ``family_synth`` (e.g. ``synth_ecp5``), with
+    ``library`` (a Verilog file of modules the core instances) beside it.
+    Returns (module, toolchain.Run, the core's cell counts: with the
+    library's modules it instances)."""
     module = top_name(name, params)
     work = Path(work)
     work.mkdir(parents=True, exist_ok=True)
     source = source or emit(name, params, work, with_manifest=False)
     wrap = work / f"fmax_{module}.v"
     core = source.read_text()
-    text = harness(core, module)
+    text = harness(core, module, pins=pins)
     # The block RAMs' all-zero init lines, dropped: the same hardware on these
     # parts, and yosys' read_verilog stalls on them (hdl/ram_init.strip_zero_init).
     synth_core = strip_zero_init(core)
     if synth_core != core:
         source = _write_changed(work / f"synth_{module}.v", synth_core)
     _write_changed(wrap, text)
-    script = (f"read_verilog {{core}} {{harness}}; setattr -mod -set keep_hierarchy 1 {module}; "
+    inputs = {"core": source, "harness": wrap, **({"library": library} if library is not None else {})}
+    script = (f"read_verilog {' '.join('{' + k + '}' for k in inputs)}; "
+              f"setattr -mod -set keep_hierarchy 1 {module}; "
               f"{family_synth} -top fmax_{module}; tee -q -o stat.json stat -json; "
               f"setattr -mod -unset keep_hierarchy {module}; flatten; write_json netlist.json")
     if progress:
         progress(f"{module}: yosys {family_synth}")
     run = toolchain.run("yosys", ["-q", "-l", "yosys.log", "-p", script],
-                        {"core": source, "harness": wrap}, progress)
+                        inputs, progress)
     if run.returncode or not (run.dir / "netlist.json").exists():
         raise FlowError(f"yosys failed on {module}: "
                         + _error_line(run.text("yosys.log") + run.text("stderr.txt"), "yosys")
@@ -281,7 +294,7 @@ def _does_not_fit(run):
             or UNPLACEABLE in log + run.text("stderr.txt"))
 
 
-def place(netlist, prt, seed, progress=None, router="router1", density=None, placer="heap"):
+def place(netlist, prt, seed, progress=None, router="router1", density=None, placer="heap", lpf=None):
     """One nextpnr run of ``netlist`` on ``prt`` with ``seed``: a dict with
     seed, fmax_mhz, critical_path, utilisation and, when it does not fit, overflow
     (what the part lacks; empty with ``unplaceable``, nextpnr's error, when
@@ -295,7 +308,10 @@ def place(netlist, prt, seed, progress=None, router="router1", density=None, pla
     0.9); lower spreads a crowded design, for the router's sake.  ``placer``:
     nextpnr's placer, heap (its default, every figure unless a JSON says
     otherwise) or static (its electrostatic placer: spreads by a density
-    field, for designs the heap placer leaves too crowded to route)."""
+    field, for designs the heap placer leaves too crowded to route).
+    ``lpf``: an ECP5 constraint file (pins, clocks' frequencies) for a top
+    with pins of its own (:func:`harness`'s ``pins``); ``clocks`` in the
+    result then holds each clock's achieved MHz (fmax_mhz is the lowest)."""
     if router not in ROUTERS:
         raise ValueError(f"router {router!r}: one of {', '.join(ROUTERS)}")
     if placer not in PLACERS:
@@ -303,12 +319,16 @@ def place(netlist, prt, seed, progress=None, router="router1", density=None, pla
     if density is not None and placer != "heap":
         raise ValueError("density is the heap placer's (--placer-heap-beta)")
     pin_flag = "--lpf-allow-unconstrained" if prt.family == "ecp5" else "--pcf-allow-unconstrained"
-    args = [*prt.device_args, "--json", "{netlist}", pin_flag, "--seed", str(seed),
+    if lpf is not None and prt.family != "ecp5":
+        raise ValueError("lpf: an ECP5 part's constraints")
+    pins = ("--lpf", "{lpf}") if lpf is not None else ()
+    args = [*prt.device_args, "--json", "{netlist}", pin_flag, *pins, "--seed", str(seed),
             "--freq", str(prt.target_mhz), "--timing-allow-fail", "--report", "report.json",
             "--log", "nextpnr.log", "-q", *(("--router", router) if router != "router1" else ()),
             *(("--placer-heap-beta", str(density)) if density is not None else ()),
             *(("--placer", placer) if placer != "heap" else ())]
-    run = toolchain.run(prt.nextpnr, args, {"netlist": netlist}, progress, result_failure=_does_not_fit)
+    inputs = {"netlist": netlist, **({"lpf": lpf} if lpf is not None else {})}
+    run = toolchain.run(prt.nextpnr, args, inputs, progress, result_failure=_does_not_fit)
     log = run.text("nextpnr.log")
     util = utilisation(log)
     out = {"seed": seed, "seconds": run.seconds, "cached": run.cached, "version": run.version,
@@ -327,6 +347,8 @@ def place(netlist, prt, seed, progress=None, router="router1", density=None, pla
         return out
     report = json.loads(run.text("report.json"))
     out["fmax_mhz"] = round(min(c["achieved"] for c in report["fmax"].values()), 2)
+    if lpf is not None:
+        out["clocks"] = {k: round(c["achieved"], 2) for k, c in report["fmax"].items()}
     out["critical_path"] = critical_path(report)
     return out
 
@@ -364,13 +386,15 @@ def emitted(name, params, prt):
     return emit(name, params, _work(name, params, prt), with_manifest=False)
 
 
-def counts(name, params, prt, progress=None, source=None):
+def counts(name, params, prt, progress=None, source=None, pins=(), library=None):
     """The synthesis that :func:`fit` places: (toolchain.Run, the netlist to
     place, read registers packed, the core's cells, {lut4, ff, bram, dsp}).
-    ``source``: the top's Verilog when already emitted (:func:`emitted`)."""
+    ``source``: the top's Verilog when already emitted (:func:`emitted`);
+    ``pins``, ``library``: :func:`synthesize`'s."""
     module = top_name(name, params)
     work = _work(name, params, prt)
-    _, syn, cells = synthesize(name, params, prt.synth, work, progress, source=source or emitted(name, params, prt))
+    _, syn, cells = synthesize(name, params, prt.synth, work, progress, source=source or emitted(name, params, prt),
+                               pins=pins, library=library)
     netlist = syn.dir / "netlist.json"
     packed = 0
     if prt.family == "ecp5":
@@ -386,21 +410,25 @@ def counts(name, params, prt, progress=None, source=None):
     return syn, netlist, packed, cells, res
 
 
-def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1", density=None, placer="heap"):
+def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1", density=None, placer="heap",
+        source=None, pins=(), library=None, lpf=None):
     """The fit of ``name`` at ``params`` on Part ``prt``: a JSON-ready dict
     (see scripts/fit.py).  Raises FlowError when a tool fails otherwise than
-    by the design's size, toolchain.ToolError when a tool is missing."""
+    by the design's size, toolchain.ToolError when a tool is missing.
+    A top outside the catalog: ``source`` (its Verilog, module
+    top_name(name, params)), with ``pins`` of its own, ``library`` and
+    ``lpf`` (:func:`synthesize`, :func:`place`)."""
     module = top_name(name, params)
-    source = emitted(name, params, prt)
+    source = source or emitted(name, params, prt)
     verilog_sha256 = toolchain.digest(source)      # what the figures are of, hashed before the tools read it
-    syn, netlist, packed, cells, res = counts(name, params, prt, progress, source)
+    syn, netlist, packed, cells, res = counts(name, params, prt, progress, source, pins, library)
     if progress:
         progress(f"{module}: nextpnr on {prt.name}, seed{'s' * (len(seeds) > 1)} {', '.join(map(str, seeds))}")
 
     def one(seed):
         if progress:
             progress(f"{module} on {prt.name}, seed {seed}: placing and routing")
-        r = place(netlist, prt, seed, progress, router, density, placer)
+        r = place(netlist, prt, seed, progress, router, density, placer, lpf)
         if progress:
             what = f"{r['fmax_mhz']:.1f} MHz" if "fmax_mhz" in r else "does not fit: " + shortfall(r)
             progress(f"{module} on {prt.name}, seed {seed}: {what}{_took(r)}")
@@ -425,7 +453,8 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
         **res,
         "fmax_mhz": fmax,
         "target_mhz": prt.target_mhz,
-        "seeds": [{"seed": r["seed"], "fmax_mhz": r["fmax_mhz"]} for r in runs] if fits else [],
+        "seeds": [{"seed": r["seed"], "fmax_mhz": r["fmax_mhz"], **({"clocks": r["clocks"]} if "clocks" in r else {})}
+                  for r in runs] if fits else [],
         "critical_path": {"seed": median_run["seed"], **median_run["critical_path"]}
         if median_run and median_run.get("critical_path") else None,
         "cells": dict(sorted(cells.items())),

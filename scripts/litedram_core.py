@@ -3,7 +3,7 @@
 ``python scripts/litedram_core.py [--sim] [--ports N]`` writes
 ``build/litedram/<key>/gateware/litedram_core.v`` (and ``csr.csv``) with
 ``litedram_gen`` from PyPI's litedram (``pip install -e .[dram]``): a
-32-bit DDR3 of two MT41K256M16 (the ECPIX-5's) on ECP5DDRPHY, no CPU,
+16-bit DDR3 of one MT41K256M16 (the ECPIX-5's) on ECP5DDRPHY, no CPU,
 ``--ports`` 128-bit native user ports, the system clock SYS_CLK_HZ.  ``--sim``
 replaces the PHY and the chips by LiteDRAM's SDRAMPHYModel (the DRAM
 timing in the controller is the same: the module's tRCD, tRP, CL, refresh
@@ -16,6 +16,7 @@ line when litedram is not installed.
 import argparse
 import hashlib
 import json
+import re
 import shutil
 import subprocess
 import sys
@@ -32,6 +33,9 @@ CONFIG = {
     "rtt_nom": "60ohm", "rtt_wr": "60ohm", "ron": "34ohm",
     "input_clk_freq": 100e6, "sys_clk_freq": SYS_CLK_HZ, "init_clk_freq": 25e6, "cmd_buffer_depth": 16,
 }
+
+# The part the PHY is generated for (without --sim): the ECPIX-5's.
+DEVICE = "LFE5UM5G-85F-8BG554I"
 
 # The controller's CSRs the start-up writes (byte addresses from the generated csr.csv).
 CSRS = ("sdram_dfii_control", "ddrctrl_init_done")
@@ -52,16 +56,18 @@ def _generator():
     return exe, version
 
 
-def config(ports=1):
-    """litedram_gen's configuration with ``ports`` native user ports (native_0 ...)."""
-    return {**CONFIG, "user_ports": {f"native_{i}": {"type": "native"} for i in range(ports)}}
+def config(ports=1, sim=True):
+    """litedram_gen's configuration with ``ports`` native user ports (native_0 ...); with the PHY
+    (``sim`` false) for :data:`DEVICE`."""
+    cfg = {**CONFIG, "user_ports": {f"native_{i}": {"type": "native"} for i in range(ports)}}
+    return cfg if sim else {**cfg, "device": DEVICE}
 
 
 def generate(sim=True, ports=1):
     """The generated core with ``ports`` native user ports: (path of litedram_core.v, {csr name: byte
     address})."""
     exe, version = _generator()
-    cfg = config(ports)
+    cfg = config(ports, sim)
     what = json.dumps({"config": cfg, "sim": sim, "litedram": version}, sort_keys=True)
     out = ROOT / "build" / "litedram" / hashlib.sha256(what.encode()).hexdigest()[:16]
     core, csv = out / "gateware" / "litedram_core.v", out / "csr.csv"
@@ -75,6 +81,13 @@ def generate(sim=True, ports=1):
         if done.returncode != 0 or not core.exists():
             (out / "litedram_gen.log").write_text(done.stdout + done.stderr)
             raise RuntimeError(f"litedram_gen failed (exit {done.returncode}): {out / 'litedram_gen.log'}")
+        if not sim:
+            # migen declares the DQ and DQS pads, which its TRELLIS_IO drive both ways, as inputs
+            text = core.read_text()
+            for pad in ("ddram_dq", "ddram_dqs_p"):
+                text = re.sub(rf"^(\s*)input(\s+wire\s+(?:\[\d+:0\]\s+)?{pad},)$", r"\1inout\2", text, count=1,
+                              flags=re.M)
+            core.write_text(text)
     csrs = {}
     for line in csv.read_text().splitlines():
         f = line.split(",")

@@ -142,8 +142,8 @@ class DramStore(wiring.Component):
     max_h : int
         Rows of the largest map.
     data_width : int
-        The native port's word (LiteDRAM: 128 for a 32-bit DDR3 at 1:2 rate,
-        64 for a 16-bit DDR3); a pixel's two groups must fit one word.
+        The native port's word (LiteDRAM: 128 for a 16-bit DDR3, a burst of
+        8, 64 for an 8-bit DDR3); a pixel's two groups must fit one word.
     max_reads : int
         Native reads unanswered at most: the depth of the FIFO that takes
         the answers (always ready: LiteDRAM's native port does not wait for

@@ -12,7 +12,7 @@ from .tile_layouts import TILE_CONSTRAINTS, TILE_PARAMS, tile_widths
 
 __all__ = ["DramStores", "DRAM_PORTS_PARAM", "SKIP_CLEAN_PARAM", "DRAM_WIDTH", "DRAM_FIFO"]
 
-DRAM_WIDTH = 128        # a native word of LiteDRAM's 1:2-rate PHY on a 32-bit DDR3 (2 x16 chips)
+DRAM_WIDTH = 128        # a native word of LiteDRAM's 1:2-rate PHY on a 16-bit DDR3 (a burst of 8)
 DRAM_FIFO = 16          # engine reads unanswered at most (the engine's crossing FIFOs' depth), each store's
                         # native reads unanswered at most (its answer FIFO's depth), the reads the router orders
 DRAM_PORTS_PARAM = Param("dram_ports", int, 1, choices=PORTS,

@@ -21,7 +21,7 @@ from amaranth.hdl import C, Cat, Mux, Signal, Value, signed
 
 from navcores.models.edt_bfs import OFFSETS
 
-__all__ = ["candidate", "inc", "min_select", "pick"]
+__all__ = ["candidate", "inc", "min_select", "pick", "winner_offset"]
 
 
 def candidate(m, i, d2, dx, dy, d2_shape, gate=None):
@@ -84,4 +84,17 @@ def pick(m, win, values, shape, name):
     out = Signal(shape, name=name)
     terms = [Mux(w, Value.cast(v).as_unsigned()[:len(out)], 0) for w, v in zip(win, values)]
     m.d.comb += out.eq(reduce(or_, terms))
+    return out
+
+
+def winner_offset(m, win, axis):
+    """The cell's offset from the winning neighbour along ``axis`` (0: rows, 1: columns), -1, 0 or 1.
+
+    ``win``: the one-hot winner over neighbours 1..8 (:func:`min_select`);
+    the offset ``p - p_i`` is ``-OFFSETS[i][axis]`` (0 when none wins).
+    """
+    pos = reduce(or_, [w for w, i in zip(win, OFFSETS) if -OFFSETS[i][axis] == 1])
+    neg = reduce(or_, [w for w, i in zip(win, OFFSETS) if -OFFSETS[i][axis] == -1])
+    out = Signal(signed(2), name=f"{'rc'[axis]}_m")
+    m.d.comb += out.eq(Cat(pos | neg, neg))     # 01: +1, 11: -1, 00: 0
     return out

@@ -111,7 +111,7 @@ class TileEngine(wiring.Component):
         maps whose state exceeds the part's block RAM (maze512-1-0: 13.9
         Mbit against the LFE5U-85F's 3.7), or a DRAM controller's native
         ports behind :class:`~hdl.edt_bfs.dram_stores.DramStores` (the
-        ``dram`` ports, 128-bit words: LiteDRAM's for a 32-bit DDR3).
+        ``dram`` ports, 128-bit words: LiteDRAM's for a 16-bit DDR3).
     dram_ports : 1, 2 or 4
         With ``store="dram"``: how many of the controller's native ports the
         engine uses (:class:`~hdl.edt_bfs.dram_stores.DramStores`: a

@@ -1,0 +1,128 @@
+"""The tile engine and LiteDRAM's controller placed as one top on the ECPIX-5's part (issue 18).
+
+    python scripts/fit_dram_top.py [--part LFE5UM5G-85F] [--seeds 1] [--first-seed 1]
+                                   [--router router1|router2] [--placer heap|static]
+
+The DRAM job's whole top: :class:`~hdl.edt_bfs.tile_litedram.TileLiteDram`
+at the catalog's ``edt_tile_dram`` parameters (the tile engine, its
+StateCdc and DramStores) with LiteDRAM's controller and PHY generated for
+the part (scripts/litedram_core.py without ``--sim``), in scripts/fmax.py's
+registered harness on the engine's clock ``clk``, the DDR3's pads and the
+controller's ``sys_clk`` (its PLL's 100 MHz input) the top's own pins at
+the ECPIX-5's sites (amaranth-boards' ``ddr3`` and ``clk100``: the LPF
+written here).  Synthesized with yosys and placed and routed with nextpnr
+as ``make fit`` does (scripts/fit.py's JSON, its results cached), into
+``build/fit/edt_tile_litedram_<params>--<part>.json``, with each clock's
+MHz per seed (``seeds[].clocks``: the engine's ``clk``; the controller's
+from its PLL, which must reach litedram_core.SYS_CLK_HZ).  Exit 2 on bad
+arguments or without litedram (``pip install -e .[dram]``), 1 when a tool
+fails.
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+os.environ.setdefault("AMARANTH_USE_YOSYS", "builtin")
+
+import fmax  # noqa: E402
+import litedram_core  # noqa: E402
+import toolchain  # noqa: E402
+from amaranth.back import verilog  # noqa: E402
+
+from navcores.hdl import catalog  # noqa: E402
+from navcores.hdl.edt_bfs.tile_litedram import DDR3_PINS, TileLiteDram  # noqa: E402
+
+PROG = "fit_dram_top"
+TOP = "edt_tile_litedram"
+PARAMS = {k: v for k, v in catalog.get("edt_tile_dram").params.items() if k != "store"}
+SYS_CLK_PIN = "sys_clk"
+# The ECPIX-5's pads (amaranth-boards' ddr3 resource) of each of LiteDRAM's ddram_* pins; cs_n and
+# reset_n are not in the resource (nextpnr places them).
+BOARD_NAMES = {"a": "a", "ba": "ba", "ras_n": "ras", "cas_n": "cas", "we_n": "we", "dm": "dm", "dq": "dq",
+               "dqs_p": "dqs", "clk_p": "clk", "cke": "clk_en", "odt": "odt"}
+
+
+def lpf():
+    """The LPF of the top's pins: sites and I/O standards from amaranth-boards' ECPIX-5, the PLL's input
+    frequency."""
+    from amaranth_boards.ecpix5 import ECPIX585Platform
+    res = {(r.name, r.number): r for r in ECPIX585Platform.resources}
+    ddr3, clk = res["ddr3", 0], res["clk100", 0]
+    common = dict(ddr3.attrs)
+    subs = {s.name: s for s in ddr3.ios}
+    lines = ["BLOCK RESETPATHS;", "BLOCK ASYNCPATHS;"]
+    for pin, name in BOARD_NAMES.items():
+        sub = subs[name]
+        io = sub.ios[0]
+        names = io.p.names if hasattr(io, "p") else io.names      # a differential pair: its p pads
+        attrs = {**common, **dict(sub.attrs)}
+        width = DDR3_PINS[pin][0]
+        assert len(names) == width, (pin, names)
+        for i, site in enumerate(names):
+            port = f"ddram_{pin}[{i}]" if width > 1 else f"ddram_{pin}"
+            lines.append(f'LOCATE COMP "{port}" SITE "{site}";')
+            lines.append(f'IOBUF PORT "{port}" ' + " ".join(f"{k}={v}" for k, v in attrs.items()) + ";")
+    site = clk.ios[0].names[0]
+    lines += [f'LOCATE COMP "{SYS_CLK_PIN}" SITE "{site}";',
+              f'IOBUF PORT "{SYS_CLK_PIN}" ' + " ".join(f"{k}={v}" for k, v in dict(clk.attrs).items()) + ";",
+              f'FREQUENCY PORT "{SYS_CLK_PIN}" {litedram_core.CONFIG["input_clk_freq"] / 1e6:g} MHZ;']
+    return "\n".join(lines) + "\n"
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
+    ap.add_argument("--part", default="LFE5UM5G-85F", help="an ECP5 part (default: the ECPIX-5's)")
+    ap.add_argument("--seeds", type=int, default=1, help="place-and-route runs (1..9, default 1)")
+    ap.add_argument("--first-seed", type=int, default=1)
+    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--router", choices=fmax.ROUTERS, default="router2")
+    ap.add_argument("--placer", choices=fmax.PLACERS, default="static")
+    args = ap.parse_args(argv)
+    try:
+        prt = fmax.part(args.part)
+    except ValueError as e:
+        toolchain.fail(PROG, str(e))
+    if prt.family != "ecp5" or not prt.name.endswith("85F"):
+        toolchain.fail(PROG, f"--part {args.part}: the DRAM top needs an 85F ECP5 (LFE5U-85F, LFE5UM5G-85F)")
+    if not 1 <= args.seeds <= 9:
+        toolchain.fail(PROG, f"--seeds {args.seeds}: must be 1..9")
+    try:
+        library, _ = litedram_core.generate(sim=False, ports=PARAMS["dram_ports"])
+    except litedram_core.NotInstalled as e:
+        toolchain.fail(PROG, str(e))
+    progress = toolchain.progress_printer("fit")
+    module = fmax.top_name(TOP, PARAMS)
+    work = fmax.ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
+    work.mkdir(parents=True, exist_ok=True)
+    source, constraints = work / f"{module}.v", work / f"{module}.lpf"
+    text = verilog.convert(TileLiteDram(**PARAMS, sim=False), name=module, emit_src=False)
+    for path, content in ((source, text), (constraints, lpf())):
+        if not path.exists() or path.read_text() != content:
+            path.write_text(content)
+    pins = {f"ddram_{k}" for k in DDR3_PINS} | {SYS_CLK_PIN}
+    t0 = time.time()
+    try:
+        out = fmax.fit(TOP, PARAMS, prt, seeds=tuple(range(args.first_seed, args.first_seed + args.seeds)),
+                       jobs=args.jobs, progress=progress, router=args.router, placer=args.placer,
+                       source=source, pins=pins, library=library, lpf=constraints)
+    except fmax.FlowError as e:
+        toolchain.fail(PROG, str(e), 1)
+    out.update({"litedram": str(library.relative_to(library.parents[3])), "lpf": constraints.name,
+                "generator": "python scripts/fit_dram_top.py " + " ".join(argv if argv is not None else sys.argv[1:]),
+                "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "seconds": round(time.time() - t0)})
+    dest = fmax.ROOT / "build" / "fit" / f"{module}--{prt.name}.json"
+    dest.write_text(json.dumps(out, indent=1) + "\n")
+    clocks = out["seeds"][0].get("clocks", {}) if out["seeds"] else {}
+    print(f"{module} on {prt.name}: " + (f"{out['lut4']} LUT4, {out['ff']} FF, {out['bram']} BRAM; "
+                                          + ", ".join(f"{k} {v} MHz" for k, v in clocks.items())
+                                          if out["fits"] else "does not fit") + f" ({dest})")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
