@@ -287,7 +287,7 @@ def manifest(name, params, component=None, factory=None):
 
 _TOP_ATTR = "(* top =  1  *)\n"          # as yosys' write_verilog prints the attribute
 
-_PORT = re.compile(r"^\s*(input|output)\s+(?:signed\s+)?(?:\[(\d+):(\d+)\]\s*)?(\S+)\s*;", re.M)
+_PORT = re.compile(r"^\s*(input|output|inout)\s+(?:signed\s+)?(?:\[(\d+):(\d+)\]\s*)?(\S+)\s*;", re.M)
 
 
 def verilog_ports(text, module):

@@ -28,7 +28,8 @@ results cached under build/cache), and writes ``build/fit/<module>--<part>.json`
   cells, utilisation, target_mhz, synthesis, harness, seconds
 
 and prints one summary line.  Parts (case-insensitive): LFE5U-12F / 25F /
-45F / 85F (CABGA381, speed 6: the ULX3S boards), iCE40-UP5K (SG48:
+45F / 85F (CABGA381, speed 6: the ULX3S boards), LFE5UM5G-85F (CABGA554,
+speed 8: the ECPIX-5), iCE40-UP5K (SG48:
 iCEBreaker), iCE40-HX8K (CT256).  A top that does not fit exits 0 with
 fits false; a bad TOP, parameter or PART exits 2, a tool failure 1, each
 with one line on stderr.

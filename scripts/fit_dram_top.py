@@ -41,10 +41,13 @@ PROG = "fit_dram_top"
 TOP = "edt_tile_litedram"
 PARAMS = {k: v for k, v in catalog.get("edt_tile_dram").params.items() if k != "store"}
 SYS_CLK_PIN = "sys_clk"
-# The ECPIX-5's pads (amaranth-boards' ddr3 resource) of each of LiteDRAM's ddram_* pins; cs_n and
-# reset_n are not in the resource (nextpnr places them).
+# The ECPIX-5's pads (amaranth-boards' ddr3 resource) of each of LiteDRAM's ddram_* pins.
 BOARD_NAMES = {"a": "a", "ba": "ba", "ras_n": "ras", "cas_n": "cas", "we_n": "we", "dm": "dm", "dq": "dq",
                "dqs_p": "dqs", "clk_p": "clk", "cke": "clk_en", "odt": "odt"}
+# The board does not wire cs_n and reset_n (neither amaranth-boards' resource nor LiteX-boards' ECPIX-5
+# platform has them), but litedram_gen always makes them, through output registers (IOLOGIC) that
+# nextpnr places only at a constrained pad: two pads of the DDR3's bank the board leaves free.
+SPARE_PADS = {"cs_n": "M4", "reset_n": "N2"}
 
 
 def lpf():
@@ -67,6 +70,8 @@ def lpf():
             port = f"ddram_{pin}[{i}]" if width > 1 else f"ddram_{pin}"
             lines.append(f'LOCATE COMP "{port}" SITE "{site}";')
             lines.append(f'IOBUF PORT "{port}" ' + " ".join(f"{k}={v}" for k, v in attrs.items()) + ";")
+    for pin, site in SPARE_PADS.items():
+        lines += [f'LOCATE COMP "ddram_{pin}" SITE "{site}";', f'IOBUF PORT "ddram_{pin}" IO_TYPE=SSTL15_I;']
     site = clk.ios[0].names[0]
     lines += [f'LOCATE COMP "{SYS_CLK_PIN}" SITE "{site}";',
               f'IOBUF PORT "{SYS_CLK_PIN}" ' + " ".join(f"{k}={v}" for k, v in dict(clk.attrs).items()) + ";",
@@ -91,6 +96,8 @@ def main(argv=None):
         toolchain.fail(PROG, f"--part {args.part}: the DRAM top needs an 85F ECP5 (LFE5U-85F, LFE5UM5G-85F)")
     if not 1 <= args.seeds <= 9:
         toolchain.fail(PROG, f"--seeds {args.seeds}: must be 1..9")
+    if args.first_seed < 1 or args.jobs < 1:
+        toolchain.fail(PROG, f"--first-seed {args.first_seed}, --jobs {args.jobs}: must be 1 or more")
     try:
         library, _ = litedram_core.generate(sim=False, ports=PARAMS["dram_ports"])
     except litedram_core.NotInstalled as e:

@@ -119,7 +119,7 @@ class TileArray(wiring.Component):
                          v.chg.eq(present & (px.hop == 0)), v.val.eq(px.hop), v.aux.eq(px.parent)]
         with m.Else():
             m.d.comb += [v.flag.eq(present & (px.di < self.k)), v.fresh.eq(present & (px.di == self.k)),
-                         v.val.eq(sq), v.aux.eq(px.di)]
+                         v.val.eq(sq), v.aux.eq(px.di), v.edt.eq(present)]
         return bits
 
     def elaborate(self, platform):
@@ -150,7 +150,7 @@ class TileArray(wiring.Component):
                         m.d.sync += bits.eq(lanes[b])
                     nbs[a, b], nb = flat(nb_layout(w), f"halo_nb_{a}_{b}")
                     m.d.comb += [nb.flag.eq(r.flag), nb.ram.eq(r.flag | r.fresh), nb.val.eq(r.val),
-                                 nb.dx.eq(r.dx), nb.dy.eq(r.dy)]
+                                 nb.dx.eq(r.dx), nb.dy.eq(r.dy), nb.edt.eq(r.edt)]
         for (a, b), cell in cells.items():
             for i, (dr, dc) in OFFSETS.items():
                 m.d.comb += getattr(cell, f"n{i}").eq(nbs[a + dr, b + dc])

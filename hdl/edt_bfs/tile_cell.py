@@ -6,7 +6,7 @@ from amaranth.lib.wiring import In, Out
 
 from navcores.models.edt_bfs import OFFSETS
 
-from .select import candidate, inc, min_select, pick, winner_offset
+from .select import candidate, inc, min_select_halves, pick, winner_offset
 from .tile_layouts import cell_layout, flat, nb_layout
 
 __all__ = ["TileCell"]
@@ -91,7 +91,9 @@ class TileCell(wiring.Component):
     load : In(1), ld : In(cell_layout's width)
         Load the register from the loader's lane (``clear`` and ``load`` win over ``step``).
     n1 .. n8 : In(nb_layout's width)
-        The neighbours' ``nb`` (``val``: d2 in the EDT, hop in the BFS).
+        The neighbours' ``nb`` (``val``: d2 in the EDT, hop in the BFS;
+        ``edt``: 1 in an EDT step and 0 in a BFS step wherever ``flag`` is
+        1, the ADD-SUB's gate; elsewhere any value).
     nb : Out(nb_layout's width)
         What the neighbours read.
     state : Out(cell_layout's width)
@@ -132,35 +134,36 @@ class TileCell(wiring.Component):
         r_bits, r = flat(cell_layout(w), "r")
         nb_out = nb_layout(w)(self.nb)
         m.d.comb += [self.state.eq(r_bits), nb_out.flag.eq(r.flag), nb_out.ram.eq(r.flag | r.fresh),
-                     nb_out.val.eq(r.val), nb_out.dx.eq(r.dx), nb_out.dy.eq(r.dy)]
+                     nb_out.val.eq(r.val), nb_out.dx.eq(r.dx), nb_out.dy.eq(r.dy), nb_out.edt.eq(r.edt)]
         n = {i: nb_layout(w)(getattr(self, f"n{i}")) for i in OFFSETS}
 
         # ADD-SUB and INC (eq. 1-3 in the d2 form): one candidate per neighbour.
         # The key is d2_i (EDT) or the hop (BFS: DX_i, DY_i gated to 0, so the
         # comparators take val as it is, a hop below 2^hop with the upper bits 0;
-        # one adder instead of an adder and a multiplexer in front of them).
+        # one adder instead of an adder and a multiplexer in front of them).  The
+        # gate is the neighbour's own ``edt`` flip-flop, not ``phase``: the same
+        # value wherever the key counts (a done / visited neighbour, loaded in
+        # this visit), from a register beside the adders.
         # d2_i cannot wrap where it counts (tile_layouts.tile_widths).
         cands = []
         for i in OFFSETS:
             nb = n[i]
-            key = candidate(m, i, nb.val, nb.dx, nb.dy, w["val"], gate=~self.phase)
+            key = candidate(m, i, nb.val, nb.dx, nb.dy, w["val"], gate=nb.edt)
             cands.append((nb.flag, key, nb.dx, nb.dy))
 
-        # MIN: flat, ties to the smallest index; the winner's d2 (EDT), vector, hop (BFS), index.
-        keys = [c[1] for c in cands]
-        win = min_select(m, [c[0] for c in cands], keys)
+        # MIN: two halves, ties to the smallest index; the winner's d2 (EDT), vector, hop (BFS), index.
+        win, km = min_select_halves(m, [c[0] for c in cands], [c[1] for c in cands], w["val"])
         if self.select_reg:
             # Written every cycle, read only in a step after a select cycle: no reset needed.
             win_q = Signal(len(win), name="win_q", reset_less=True)
-            keys_q = [Signal(len(k), name=f"key_q{i}", reset_less=True) for i, k in zip(OFFSETS, keys)]
-            m.d.sync += [win_q.eq(Cat(*win)), *(q.eq(k) for q, k in zip(keys_q, keys))]
-            win, keys = list(win_q), keys_q
+            km_q = Signal(len(km), name="key_m", reset_less=True)
+            m.d.sync += [win_q.eq(Cat(*win)), km_q.eq(km)]
+            win, km = list(win_q), km_q
         # INC after the MIN (eq. 1 on the winner only): the winner's vector plus
         # its offset p - p_m, one pair of adders instead of one per neighbour.
         xn = pick(m, win, [c[2] for c in cands], signed(w["dx"]), "x_n")
         yn = pick(m, win, [c[3] for c in cands], signed(w["dy"]), "y_n")
         xm, ym = inc(m, "m", xn, yn, winner_offset(m, win, 0), winner_offset(m, win, 1), w["dx"], w["dy"])
-        km = pick(m, win, keys, w["val"], "key_m")
         # The BFS's key is the neighbour's hop itself (the ADD-SUB gated off),
         # so the winner's key is its hop: no multiplexer of its own.
         hm = km[:hb]

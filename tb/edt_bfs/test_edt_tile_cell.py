@@ -11,7 +11,9 @@ between neighbours and drawn near p or anywhere in the map, so ties (equal
 d2_i, also from two obstacles mirrored about p, so different vectors: the
 smallest index must win), candidates up to d2_max (the widths'
 bound) and both sides of the third enable (k around |p - q|) all occur.
-BFS cycles draw hop counts with ties and unvisited neighbours (hop = NONE);
+BFS cycles draw hop counts with ties and unvisited neighbours (hop = NONE)
+and random vectors, which the neighbours' ``edt`` bit (0 where visited;
+random elsewhere, as in an EDT step where not done) keeps out of the keys;
 the model is the relaxation of models.edt_bfs_tiled.TileEngine.bfs_visit:
 the smallest visited neighbour hop m, ``hop = m + 1`` where lower, the
 parent the smallest index with ``hop = m + 1``.  Modes: clear, load (a
@@ -116,7 +118,8 @@ async def random_cycles(dut):
                 done = inside and rng.random() < 0.6
                 x, y = (r - q[0], c - q[1]) if done else (int(rng.integers(-H + 1, H)), int(rng.integers(-W + 1, W)))
                 nb[i] = {"flag": int(done), "ram": int(done or rng.random() < 0.1), "dx": x, "dy": y,
-                         "val": x * x + y * y if done else int(rng.integers(1 << w["val"]))}
+                         "val": x * x + y * y if done else int(rng.integers(1 << w["val"])),
+                         "edt": int(done or rng.random() < 0.5)}    # the gate: any value where not done
             d = [nb[i]["val"] + (2 * -dr * nb[i]["dx"] + 1 if dr else 0) + (2 * -dc * nb[i]["dy"] + 1 if dc else 0)
                  for i, (dr, dc) in OFFSETS.items() if nb[i]["flag"]]
             # k around the nearest candidate's distance: the third enable both ways
@@ -129,8 +132,10 @@ async def random_cycles(dut):
             base = max(base, 0)
             for i in OFFSETS:
                 vis = rng.random() < 0.6
-                nb[i] = {"flag": int(vis), "ram": int(rng.random() < 0.3), "dx": 0, "dy": 0,
-                         "val": base + int(rng.integers(0, 3)) if vis else none_hop}
+                nb[i] = {"flag": int(vis), "ram": int(rng.random() < 0.3),
+                         "dx": int(rng.integers(-H + 1, H)), "dy": int(rng.integers(-W + 1, W)),
+                         "val": base + int(rng.integers(0, 3)) if vis else none_hop,
+                         "edt": int(not vis and rng.random() < 0.5)}
             k = int(rng.integers(1, w["k_di"] + 2))
         for i, v in nb.items():
             getattr(dut, f"n{i}").value = pack(nl, v)
@@ -138,7 +143,7 @@ async def random_cycles(dut):
               "cfr": int(rng.random() < 0.8), "chg": int(rng.random() < 0.2),
               "val": int(rng.integers(0, 45)) if rng.random() < 0.8 else none_hop,
               "dx": int(rng.integers(-H + 1, H)), "dy": int(rng.integers(-W + 1, W)),
-              "aux": int(rng.integers(0, 9))}
+              "aux": int(rng.integers(0, 9)), "edt": int(rng.integers(2))}
         dut.phase.value = phase
         dut.k.value = k
         dut.kk.value = k_square(k)
