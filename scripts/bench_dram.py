@@ -8,8 +8,9 @@
 model: scripts/litedram_core.py) in Verilator, checks the results against
 models.edt_bfs_tiled (distances, vectors, cfr, parents, hop counts, path,
 tile visits and their trace: the same; cycles: the DRAM's), and reports
-the job's engine cycles and its time at the engine's clock (the same
-engine with store=external placed: :func:`engine_mhz`) with the controller
+the job's engine cycles and its time at the engine's clock (:func:`clock`:
+the whole top placed on the ECPIX-5's part by scripts/fit_dram_top.py, or
+else the same engine with store=external placed alone) with the controller
 at litedram_core.SYS_CLK_HZ (the two clocks in that ratio in the
 simulation), against scipy on the same machine in the same run.
 ``--md FILE`` writes the rows as BENCHMARKS.md's section (scripts/bench.py
@@ -30,6 +31,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import bench_edt_tiled as B  # noqa: E402
+import fit_dram_top  # noqa: E402
 import kept  # noqa: E402
 import litedram_core  # noqa: E402
 import software  # noqa: E402
@@ -51,7 +53,7 @@ PORTS = PARAMS["dram_ports"]
 NAME = f"{ARRAY[0]}x{ARRAY[1]} / {RAM[0]}x{RAM[1]}"
 ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", "dram_ports")}
 TIMING = model_timing(PARAMS.get("iter_cycles", 1))     # the model's cycle constants for that engine
-# The clocks' ratio in the simulation when the engine has not been placed (engine_mhz() is None):
+# The clocks' ratio in the simulation when the engine has not been placed (clock() gives None):
 # about what the 4x8 engines without the prefetch reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
 RATIO_MHZ = 22.0
 MAPS = ("room-64-64-8", "maze512-1-0")
@@ -104,11 +106,51 @@ def measure(name, core, csrs, work, mhz):
 
 
 def engine_mhz():
-    """The engine's clock: the catalog engine's logic with store=external placed on the part (its fit
-    JSON's median of seeds; the engine's logic is the same, the DramStore and StateCdc run on the
-    controller's clock), or None if it has not been placed (for its current Verilog)."""
+    """The engine's clock, if placed alone: the catalog engine's logic with store=external placed on the
+    part (its fit JSON's median of seeds; the engine's logic is the same, the DramStore and StateCdc run on
+    the controller's clock), or None if it has not been placed (for its current Verilog)."""
     fit = B.fit_result(ARRAY, RAM, store="external", extra=ENGINE)
     return fit["fmax_mhz"] if fit and fit["fits"] else None
+
+
+def top_fit():
+    """The whole top placed (scripts/fit_dram_top.py: the engine with its DRAM side and LiteDRAM's
+    controller and PHY on the ECPIX-5's part), for its current Verilog, or None."""
+    return B.fit_result(ARRAY, RAM, part=fit_dram_top.PART, top=fit_dram_top.TOP, store=None,
+                        extra={"dram_ports": PORTS, **ENGINE})
+
+
+def clock(sys_mhz):
+    """(the engine's MHz or None, the text saying where it comes from): the whole top's engine clock when
+    it is placed and its controller reaches ``sys_mhz``, else the engine placed alone (with its DRAM
+    side placed alone beside it)."""
+    top = top_fit()
+    if top is not None:
+        if not top["fits"]:
+            return None, f"the whole top does not fit the {fit_dram_top.PART} (scripts/fit_dram_top.py): no job times"
+        engine, controller = fit_dram_top.clocks(top)
+        where = (f"the whole top (the engine, its StateCdc and DramStores, LiteDRAM's controller and PHY, the "
+                 f"DDR3's pads at the board's pins) placed on the {fit_dram_top.PART} (the ECPIX-5's, speed "
+                 f"{top['speed_grade']}; scripts/fit_dram_top.py, median of {len(top['seeds'])} seed"
+                 f"{'s' * (len(top['seeds']) > 1)}): {top['lut4']:,} LUT4, {top['ff']:,} FF, {top['bram']} "
+                 f"DP16KD, the controller's clocks {controller:.1f} MHz or more")
+        if controller < sys_mhz:
+            return None, f"{where}, below its {sys_mhz:.0f} MHz: no job times"
+        return engine, f"the engine at {engine:.1f} MHz: {where}"
+    mhz = engine_mhz()
+    text = (f"the engine at {mhz:.1f} MHz (the {NAME} engine with store=external, prefetch and skip_clean "
+            f"placed on the {B.PART}: make fit; the same engine logic; the whole top not placed)" if mhz else
+            f"no engine clock (the {NAME} engine is not placed for its current Verilog: no job times)")
+    side = stores_fit()
+    if side and side["fits"]:
+        meets = "at least" if side["fmax_mhz"] >= sys_mhz else "BELOW"
+        text += (f"; its DRAM side (DramStores: {PORTS} DramStores and the RowRouter, on the controller's clock) "
+                 f"placed alone on the {B.PART} at {side['fmax_mhz']:.1f} MHz ({meets} the controller's "
+                 f"{sys_mhz:.0f} MHz), {side['lut4']:,} LUT4, {side['bram']} block RAMs (scripts/fit.py "
+                 "edt_dram_stores); the crossing between the two clocks was not placed")
+    else:
+        text += "; its DRAM side (DramStores) not placed for its current Verilog"
+    return mhz, text
 
 
 def stores_fit():
@@ -124,26 +166,14 @@ def section(maps=MAPS):
         core, csrs = litedram_core.generate(sim=True, ports=PORTS)
     except litedram_core.NotInstalled as e:
         return f"Not run on {stamp}: {e}.", []
-    mhz = engine_mhz()
+    sys_mhz = litedram_core.SYS_CLK_HZ / 1e6
+    mhz, where = clock(sys_mhz)
     rows = []
     for name in maps:
         work = WORK / name
         work.mkdir(parents=True, exist_ok=True)
         rows.append(measure(name, core, csrs, work, mhz))
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
-    side = stores_fit()
-    sys_mhz = litedram_core.SYS_CLK_HZ / 1e6
-    clock = (f"the engine at {mhz:.1f} MHz (the {NAME} engine with store=external, prefetch and skip_clean "
-             f"placed on the {B.PART}: make fit; the same engine logic)" if mhz else
-             f"no engine clock (the {NAME} engine is not placed for its current Verilog: no job times)")
-    if side and side["fits"]:
-        meets = "at least" if side["fmax_mhz"] >= sys_mhz else "BELOW"
-        clock += (f"; its DRAM side (DramStores: {PORTS} DramStores and the RowRouter, on the controller's clock) "
-                  f"placed alone on the {B.PART} at {side['fmax_mhz']:.1f} MHz ({meets} the controller's "
-                  f"{sys_mhz:.0f} MHz), {side['lut4']:,} LUT4, {side['bram']} block RAMs (scripts/fit.py "
-                  "edt_dram_stores); the crossing between the two clocks was not placed")
-    else:
-        clock += "; its DRAM side (DramStores) not placed for its current Verilog"
     text = (f"Measured by `python scripts/bench_dram.py` on {stamp}, load average {load} on {os.cpu_count()} "
             f"cores. The {ARRAY[0]}x{ARRAY[1]} tile engine over maps up to {RAM[0]}x{RAM[1]} with store=dram on "
             f"{PORTS} native ports "
@@ -152,7 +182,7 @@ def section(maps=MAPS):
             "MT41K256M16, on ECP5DDRPHY, the ECPIX-5's, system clock "
             f"{sys_mhz:.0f} MHz), simulated together on Verilator with LiteDRAM's model "
             "of the DRAM (`litedram_gen --sim`: the controller's timing, the model's PHY latency); "
-            f"{clock}; the two clocks in that ratio in the simulation. The job is the map's longest scenario "
+            f"{where}; the two clocks in that ratio in the simulation. The job is the map's longest scenario "
             "(load, EDT, cfr, BFS, path read-out; no map read-out); its results (distances, vectors, cfr, hop "
             "counts, parents, path, the visit trace, with the map read-out in a first run) equal the tiled "
             "model's. Cycles are the engine's; StateRam's timing is the model's cycle count (a store that "

@@ -114,12 +114,13 @@ def engine_ram(h, w):
 
 def fit_result(array, ram=RAM, part=PART, top="edt_tile_engine", store="bram", extra=None):
     """The fit flow's JSON for ``top`` (the tile engine, or its cell alone: ``edt_tile_cell``, from
-    scripts/tile_engine_size.py --cell-fit, or its DRAM side: ``edt_dram_stores``) with ``array``,
+    scripts/tile_engine_size.py --cell-fit, or its DRAM side: ``edt_dram_stores``, or the DRAM job's
+    whole top: ``edt_tile_litedram``, scripts/fit_dram_top.py, store None) with ``array``,
     ``ram``, ``store`` and the parameters ``extra`` on ``part``, or None:
     None too when it is stale, its verilog_sha256 (absent: stale) not the hash of the top's Verilog
     emitted now (one line on stderr says so, with the command that places it again)."""
     params = {"t_r": array[0], "t_c": array[1], "max_h": ram[0], "max_w": ram[1],
-              **({"store": store} if store != "bram" else {}), **(extra or {})}
+              **({"store": store} if store not in ("bram", None) else {}), **(extra or {})}
     path = ROOT / "build" / "fit" / f"{top_name(top, params)}--{part}.json"
     if not path.exists():
         return None
@@ -151,6 +152,9 @@ def verilog_sha256(top, params, part):
     if top == "edt_tile_cell":
         import tile_engine_size
         source = tile_engine_size.cell_verilog(dict(params), prt)
+    elif top == "edt_tile_litedram":
+        import fit_dram_top             # its parameters are the catalog's
+        source = fit_dram_top.source(prt)
     else:
         source = fmax.emitted(top, dict(params), prt)
     return toolchain.digest(source)

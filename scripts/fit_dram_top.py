@@ -22,6 +22,8 @@ fails.
 import argparse
 import json
 import os
+import re
+import statistics
 import sys
 import time
 from pathlib import Path
@@ -39,6 +41,7 @@ from navcores.hdl.edt_bfs.tile_litedram import DDR3_PINS, TileLiteDram  # noqa: 
 
 PROG = "fit_dram_top"
 TOP = "edt_tile_litedram"
+PART = "LFE5UM5G-85F"           # the ECPIX-5's
 PARAMS = {k: v for k, v in catalog.get("edt_tile_dram").params.items() if k != "store"}
 SYS_CLK_PIN = "sys_clk"
 # The ECPIX-5's pads (amaranth-boards' ddr3 resource) of each of LiteDRAM's ddram_* pins.
@@ -79,9 +82,36 @@ def lpf():
     return "\n".join(lines) + "\n"
 
 
+def source(prt):
+    """The top's Verilog for Part ``prt`` (TileLiteDram with the DRAM's pads, module top_name(TOP, PARAMS)),
+    written under build/fit/work only when its text changed: its path."""
+    module = fmax.top_name(TOP, PARAMS)
+    work = fmax.ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
+    work.mkdir(parents=True, exist_ok=True)
+    path = work / f"{module}.v"
+    text = verilog.convert(TileLiteDram(**PARAMS, sim=False), name=module, emit_src=False)
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+    return path
+
+
+def clocks(fit):
+    """(the engine's MHz, the controller's lowest MHz) of a fit JSON of this top: medians over its seeds.
+    The engine's clock is the harness's ``clk``; the others are the controller's PLL outputs."""
+    engine, other = [], []
+    for seed in fit["seeds"]:
+        mine = [k for k in seed["clocks"] if re.search(r"(^|\$)clk(\$|$)", k)]
+        theirs = [v for k, v in seed["clocks"].items() if k not in mine]
+        if len(mine) != 1 or not theirs:
+            raise ValueError(f"seed {seed['seed']}: not one engine clock and the controller's: {sorted(seed['clocks'])}")
+        engine.append(seed["clocks"][mine[0]])
+        other.append(min(theirs))
+    return statistics.median(engine), statistics.median(other)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog=PROG, description=__doc__.split("\n\n")[0])
-    ap.add_argument("--part", default="LFE5UM5G-85F", help="an ECP5 part (default: the ECPIX-5's)")
+    ap.add_argument("--part", default=PART, help=f"an ECP5 part (default: {PART}, the ECPIX-5's)")
     ap.add_argument("--seeds", type=int, default=1, help="place-and-route runs (1..9, default 1)")
     ap.add_argument("--first-seed", type=int, default=1)
     ap.add_argument("--jobs", type=int, default=1)
@@ -104,19 +134,16 @@ def main(argv=None):
         toolchain.fail(PROG, str(e))
     progress = toolchain.progress_printer("fit")
     module = fmax.top_name(TOP, PARAMS)
-    work = fmax.ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
-    work.mkdir(parents=True, exist_ok=True)
-    source, constraints = work / f"{module}.v", work / f"{module}.lpf"
-    text = verilog.convert(TileLiteDram(**PARAMS, sim=False), name=module, emit_src=False)
-    for path, content in ((source, text), (constraints, lpf())):
-        if not path.exists() or path.read_text() != content:
-            path.write_text(content)
+    top = source(prt)
+    constraints = top.with_suffix(".lpf")
+    if not constraints.exists() or constraints.read_text() != lpf():
+        constraints.write_text(lpf())
     pins = {f"ddram_{k}" for k in DDR3_PINS} | {SYS_CLK_PIN}
     t0 = time.time()
     try:
         out = fmax.fit(TOP, PARAMS, prt, seeds=tuple(range(args.first_seed, args.first_seed + args.seeds)),
                        jobs=args.jobs, progress=progress, router=args.router, placer=args.placer,
-                       source=source, pins=pins, library=library, lpf=constraints)
+                       source=top, pins=pins, library=library, lpf=constraints)
     except fmax.FlowError as e:
         toolchain.fail(PROG, str(e), 1)
     out.update({"litedram": str(library.relative_to(library.parents[3])), "lpf": constraints.name,
@@ -124,10 +151,13 @@ def main(argv=None):
                 "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "seconds": round(time.time() - t0)})
     dest = fmax.ROOT / "build" / "fit" / f"{module}--{prt.name}.json"
     dest.write_text(json.dumps(out, indent=1) + "\n")
-    clocks = out["seeds"][0].get("clocks", {}) if out["seeds"] else {}
-    print(f"{module} on {prt.name}: " + (f"{out['lut4']} LUT4, {out['ff']} FF, {out['bram']} BRAM; "
-                                          + ", ".join(f"{k} {v} MHz" for k, v in clocks.items())
-                                          if out["fits"] else "does not fit") + f" ({dest})")
+    if out["fits"]:
+        engine, controller = clocks(out)
+        what = (f"{out['lut4']} LUT4, {out['ff']} FF, {out['bram']} BRAM; the engine {engine:.1f} MHz, "
+                f"the controller's clocks {controller:.1f} MHz at least")
+    else:
+        what = "does not fit"
+    print(f"{module} on {prt.name}: {what} ({dest})")
     return 0
 
 

@@ -17,10 +17,12 @@ class TileCell(wiring.Component):
 
     Neighbour i = 1..8 as in Fig. 1 (``6 2 5 / 3 0 1 / 7 4 8``); at the
     tile's edge the neighbours are the halo's registers.  Both phases share
-    one flat MIN selection (:func:`~hdl.edt_bfs.select.min_select`: the 28
-    pairwise comparisons of the eight keys at once, a one-hot winner, the
-    smallest index among the smallest key; AND-OR multiplexers), as the
-    untiled :class:`~hdl.edt_bfs.cell.EdtCell`.
+    one MIN selection in two levels
+    (:func:`~hdl.edt_bfs.select.min_select_halves`: neighbours 1-4 and 5-8
+    each flat, 6 pairwise comparisons at once and a one-hot winner, then
+    the halves' smallest keys compared: 13 comparators where the untiled
+    :class:`~hdl.edt_bfs.cell.EdtCell`'s flat MIN has 28, the same winner,
+    the smallest index among the smallest key; AND-OR multiplexers).
 
     *EDT* (one iteration k per visit, :func:`models.edt_bfs.edt_step`, computed
     here as :func:`models.edt_bfs.edt_step_d2`): a neighbour shows ``d2`` =
@@ -60,12 +62,11 @@ class TileCell(wiring.Component):
     iteration, so the last one, which changes nothing, leaves the parent of
     the final values (:meth:`models.edt_bfs_tiled.TileEngine.bfs_visit`).
 
-    *Select register* (``select_reg``): the MIN's one-hot winner, the
-    eight candidates' keys (d2_i: the ADD-SUB's two adders) and "a
-    neighbour is done / visited" are registered every cycle, and the
-    iteration uses them: the clock's path from a neighbour's register
-    (or the engine's ``phase``, the adders' gate) through the ADD-SUB, the
-    28 comparators and the winner logic ends in those registers, and the
+    *Select register* (``select_reg``): the MIN's one-hot winner, its key
+    (d2_m or the hop) and "a neighbour is done / visited" are registered
+    every cycle, and the iteration uses them: the clock's path from a
+    neighbour's register through the ADD-SUB, the comparators and the
+    winner logic ends in those registers, and the
     step's starts there, through the AND-OR multiplexers and the
     threshold's comparator (EDT; the BFS: the multiplexed hop + 1 against
     the cell's) into the cell's register.  They hold what the step would

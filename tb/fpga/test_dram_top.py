@@ -88,3 +88,19 @@ def test_refusals():
                            text=True, cwd=ROOT, timeout=120)
         assert r.returncode == 2 and r.stdout == "", (args, r.returncode, r.stdout)
         assert len(r.stderr.splitlines()) == 1 and says in r.stderr, (args, r.stderr)
+
+
+def test_clocks():
+    """The engine's clock is the harness's clk (nextpnr names it by its net); the controller's the lowest of
+    the others; medians over the seeds."""
+    fit = {"seeds": [{"seed": s, "clocks": {"$glbnet$clk$TRELLIS_IO_IN": e, "$glbnet$crg_clkout": c,
+                                            "crg_sys2x_clk": 2 * c}}
+                     for s, (e, c) in enumerate([(25.0, 80.0), (27.0, 76.0), (26.0, 90.0)], 1)]}
+    assert fit_dram_top.clocks(fit) == (26.0, 80.0)
+    for bad in ({"sys_clk": 100.0, "crg_clkout": 80.0}, {"clk": 25.0}):
+        try:
+            fit_dram_top.clocks({"seeds": [{"seed": 1, "clocks": bad}]})
+        except ValueError as e:
+            assert "not one engine clock" in str(e)
+        else:
+            raise AssertionError(f"{bad}: accepted")
