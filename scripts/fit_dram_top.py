@@ -82,14 +82,14 @@ def lpf():
     return "\n".join(lines) + "\n"
 
 
-def source(prt):
-    """The top's Verilog for Part ``prt`` (TileLiteDram with the DRAM's pads, module top_name(TOP, PARAMS)),
-    written under build/fit/work only when its text changed: its path."""
-    module = fmax.top_name(TOP, PARAMS)
+def source(prt, params=PARAMS):
+    """The top's Verilog for Part ``prt`` (TileLiteDram at ``params`` with the DRAM's pads, module
+    top_name(TOP, params)), written under build/fit/work only when its text changed: its path."""
+    module = fmax.top_name(TOP, params)
     work = fmax.ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
     work.mkdir(parents=True, exist_ok=True)
     path = work / f"{module}.v"
-    text = verilog.convert(TileLiteDram(**PARAMS, sim=False), name=module, emit_src=False)
+    text = verilog.convert(TileLiteDram(**params, sim=False), name=module, emit_src=False)
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
     return path
@@ -117,7 +117,17 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--router", choices=fmax.ROUTERS, default="router2")
     ap.add_argument("--placer", choices=fmax.PLACERS, default="static")
+    ap.add_argument("--array", help="T_RxT_C instead of the catalog's (edt_tile_dram)")
     args = ap.parse_args(argv)
+    params = dict(PARAMS)
+    if args.array is not None:
+        if not re.fullmatch(r"\d+x\d+", args.array.lower()):
+            toolchain.fail(PROG, f"--array {args.array}: must be RxC (e.g. 3x8)")
+        params["t_r"], params["t_c"] = (int(v) for v in args.array.lower().split("x"))
+        try:
+            TileLiteDram(**params)              # its parameters checked
+        except ValueError as e:
+            toolchain.fail(PROG, f"--array {args.array}: {e}")
     try:
         prt = fmax.part(args.part)
     except ValueError as e:
@@ -129,19 +139,19 @@ def main(argv=None):
     if args.first_seed < 1 or args.jobs < 1:
         toolchain.fail(PROG, f"--first-seed {args.first_seed}, --jobs {args.jobs}: must be 1 or more")
     try:
-        library, _ = litedram_core.generate(sim=False, ports=PARAMS["dram_ports"])
+        library, _ = litedram_core.generate(sim=False, ports=params["dram_ports"])
     except litedram_core.NotInstalled as e:
         toolchain.fail(PROG, str(e))
     progress = toolchain.progress_printer("fit")
-    module = fmax.top_name(TOP, PARAMS)
-    top = source(prt)
+    module = fmax.top_name(TOP, params)
+    top = source(prt, params)
     constraints = top.with_suffix(".lpf")
     if not constraints.exists() or constraints.read_text() != lpf():
         constraints.write_text(lpf())
     pins = {f"ddram_{k}" for k in DDR3_PINS} | {SYS_CLK_PIN}
     t0 = time.time()
     try:
-        out = fmax.fit(TOP, PARAMS, prt, seeds=tuple(range(args.first_seed, args.first_seed + args.seeds)),
+        out = fmax.fit(TOP, params, prt, seeds=tuple(range(args.first_seed, args.first_seed + args.seeds)),
                        jobs=args.jobs, progress=progress, router=args.router, placer=args.placer,
                        source=top, pins=pins, library=library, lpf=constraints)
     except fmax.FlowError as e:

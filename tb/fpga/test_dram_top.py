@@ -83,7 +83,8 @@ def test_lpf_ecpix5():
 
 def test_refusals():
     for args, says in ((["--part", "LFE5U-25F"], "needs an 85F ECP5"), (["--part", "XC7A35T"], "unknown part"),
-                       (["--seeds", "0"], "--seeds 0: must be 1..9"), (["--first-seed", "0"], "must be 1 or more")):
+                       (["--seeds", "0"], "--seeds 0: must be 1..9"), (["--first-seed", "0"], "must be 1 or more"),
+                       (["--array", "3y8"], "must be RxC"), (["--array", "1x8"], "t_r 1")):
         r = subprocess.run([sys.executable, str(ROOT / "scripts" / "fit_dram_top.py"), *args], capture_output=True,
                            text=True, cwd=ROOT, timeout=120)
         assert r.returncode == 2 and r.stdout == "", (args, r.returncode, r.stdout)
