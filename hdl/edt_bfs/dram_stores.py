@@ -5,6 +5,7 @@ from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
 from ..params import Param, check, checked_init
+from ..skid_buffer import SkidBuffer
 from .dram_store import PORTS, DramStore, NativePortSignature, dram_layout, port_of_row
 from .row_router import RowRouter
 from .state_ram import StateSignature
@@ -52,7 +53,12 @@ class DramStores(wiring.Component):
     ``rd``, ``rd_data``, ``wr``: :class:`~hdl.edt_bfs.state_ram.StateSignature`
     (the engine's store); ``dram`` : Out(:func:`~hdl.edt_bfs.dram_store.NativePortSignature`)
     .array(``dram_ports``): the controller's ports (128-bit words,
-    ``addr_width`` from :func:`~hdl.edt_bfs.dram_store.dram_layout`).
+    ``addr_width`` from :func:`~hdl.edt_bfs.dram_store.dram_layout`),
+    each stream through a :class:`~hdl.skid_buffer.SkidBuffer`: the
+    controller's ready and the stores' valid meet only at flip-flops (in
+    the whole top on the ECPIX-5's part the paths from LiteDRAM's
+    crossbar into a store's command logic and back set the controller's
+    clock); a command and its answer a cycle later each way.
     One clock (``sync``: the controller's), reset with the controller.
     """
 
@@ -88,5 +94,13 @@ class DramStores(wiring.Component):
             for name in ("rd", "rd_data", "wr"):
                 ours = getattr(side, name)
                 wiring.connect(m, wiring.flipped(ours) if side is self else ours, getattr(store, name))
-            wiring.connect(m, store.dram, wiring.flipped(port))
+            for name in ("cmd", "wdata", "rdata"):
+                store_side, port_side = getattr(store.dram, name), getattr(port, name)
+                buf = m.submodules[f"{name}{i}"] = SkidBuffer(store_side.payload.shape())
+                if name == "rdata":             # the controller's answers to the store
+                    wiring.connect(m, wiring.flipped(port_side), buf.i)
+                    wiring.connect(m, buf.o, store_side)
+                else:
+                    wiring.connect(m, store_side, buf.i)
+                    wiring.connect(m, buf.o, wiring.flipped(port_side))
         return m
