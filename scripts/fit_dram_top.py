@@ -1,17 +1,19 @@
 """The tile engine and LiteDRAM's controller placed as one top on the ECPIX-5's part (issue 18).
 
-    python scripts/fit_dram_top.py [--part LFE5UM5G-85F] [--seeds 1] [--first-seed 1]
-                                   [--router router1|router2] [--placer heap|static]
+    python scripts/fit_dram_top.py [--part LFE5UM5G-85F] [--seeds 1] [--first-seed 1] [--jobs 1]
+                                   [--router router2|router1] [--placer static|heap] [--array RxC]
 
 The DRAM job's whole top: :class:`~hdl.edt_bfs.tile_litedram.TileLiteDram`
 at the catalog's ``edt_tile_dram`` parameters (the tile engine, its
-StateCdc and DramStores) with LiteDRAM's controller and PHY generated for
+StateCdc and DramStores; ``--array``: another T_r x T_c) with LiteDRAM's
+controller and PHY generated for
 the part (scripts/litedram_core.py without ``--sim``), in scripts/fmax.py's
 registered harness on the engine's clock ``clk``, the DDR3's pads and the
 controller's ``sys_clk`` (its PLL's 100 MHz input) the top's own pins at
 the ECPIX-5's sites (amaranth-boards' ``ddr3`` and ``clk100``: the LPF
 written here).  Synthesized with yosys and placed and routed with nextpnr
-as ``make fit`` does (scripts/fit.py's JSON, its results cached), into
+as ``make fit`` does (router2 and the static placer by default: what
+routes the largest engines; scripts/fit.py's JSON, its results cached), into
 ``build/fit/edt_tile_litedram_<params>--<part>.json``, with each clock's
 MHz per seed (``seeds[].clocks``: the engine's ``clk``; the controller's
 from its PLL, which must reach litedram_core.SYS_CLK_HZ).  Exit 2 on bad

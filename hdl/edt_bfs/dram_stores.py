@@ -54,11 +54,13 @@ class DramStores(wiring.Component):
     (the engine's store); ``dram`` : Out(:func:`~hdl.edt_bfs.dram_store.NativePortSignature`)
     .array(``dram_ports``): the controller's ports (128-bit words,
     ``addr_width`` from :func:`~hdl.edt_bfs.dram_store.dram_layout`),
-    each stream through a :class:`~hdl.skid_buffer.SkidBuffer`: the
-    controller's ready and the stores' valid meet only at flip-flops (in
-    the whole top on the ECPIX-5's part the paths from LiteDRAM's
-    crossbar into a store's command logic and back set the controller's
-    clock); a command and its answer a cycle later each way.
+    each stream through a :class:`~hdl.skid_buffer.SkidBuffer`, and so
+    are ``rd``, ``wr`` and ``rd_data``: the controller's ready, the stores'
+    and the router's logic and the crossing's FIFO pointers meet only at
+    flip-flops (in the whole top on the ECPIX-5's part the path from
+    LiteDRAM's crossbar through a store's command logic into the
+    crossing's read pointer set the controller's clock at 46 MHz); each
+    stage a cycle more each way.
     One clock (``sync``: the controller's), reset with the controller.
     """
 
@@ -81,26 +83,25 @@ class DramStores(wiring.Component):
         n = self.ports
         stores = [DramStore(self.w, self.t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO, changed=self.changed)
                   for _ in range(n)]
-        if n == 1:
-            sides = [self]
-        else:
+        for i, store in enumerate(stores):
+            m.submodules[f"store{i}"] = store
+        if n > 1:
             m.submodules.rows = rows = RowRouter(self.w, self.t_c, n, lambda row: port_of_row(row, n),
                                                  depth=DRAM_FIFO, changed=self.changed)
-            for name in ("rd", "rd_data", "wr"):
-                wiring.connect(m, wiring.flipped(getattr(self, name)), getattr(rows, name))
-            sides = list(rows.stores)
-        for i, (store, side, port) in enumerate(zip(stores, sides, self.dram)):
-            m.submodules[f"store{i}"] = store
-            for name in ("rd", "rd_data", "wr"):
-                ours = getattr(side, name)
-                wiring.connect(m, wiring.flipped(ours) if side is self else ours, getattr(store, name))
-            for name in ("cmd", "wdata", "rdata"):
-                store_side, port_side = getattr(store.dram, name), getattr(port, name)
-                buf = m.submodules[f"{name}{i}"] = SkidBuffer(store_side.payload.shape())
-                if name == "rdata":             # the controller's answers to the store
-                    wiring.connect(m, wiring.flipped(port_side), buf.i)
-                    wiring.connect(m, buf.o, store_side)
-                else:
-                    wiring.connect(m, store_side, buf.i)
-                    wiring.connect(m, buf.o, wiring.flipped(port_side))
+            for store, side in zip(stores, rows.stores):
+                for name in ("rd", "rd_data", "wr"):
+                    wiring.connect(m, getattr(side, name), getattr(store, name))
+        # Every stream between the crossing and the stores, and between the stores and the controller's
+        # ports, through a SkidBuffer: (producer, consumer) pairs.
+        target = rows if n > 1 else stores[0]
+        links = {f"{name}_buf": (wiring.flipped(getattr(self, name)), getattr(target, name)) for name in ("rd", "wr")}
+        links["rd_data_buf"] = (target.rd_data, wiring.flipped(self.rd_data))
+        for i, (store, port) in enumerate(zip(stores, self.dram)):
+            links[f"cmd{i}"] = (store.dram.cmd, wiring.flipped(port.cmd))
+            links[f"wdata{i}"] = (store.dram.wdata, wiring.flipped(port.wdata))
+            links[f"rdata{i}"] = (wiring.flipped(port.rdata), store.dram.rdata)      # the controller's answers
+        for name, (producer, consumer) in links.items():
+            buf = m.submodules[name] = SkidBuffer(producer.payload.shape())
+            wiring.connect(m, producer, buf.i)
+            wiring.connect(m, buf.o, consumer)
         return m

@@ -56,7 +56,8 @@ DRAM = os.environ.get("TILE_STORE") == "dram"
 PREFETCH = int(os.environ.get("TILE_PREFETCH", "0"))     # visits read ahead
 SKIP_CLEAN = os.environ.get("TILE_SKIP_CLEAN") == "1"    # rows the visit did not change not written
 ITER = int(os.environ.get("TILE_ITER", "1"))              # cycles an array iteration takes (iter_cycles)
-DRAM_PORTS = 4          # the DRAM test's native ports: rows of a window on different ports (BANK_AT)
+# the DRAM test's native ports (rows of a window on different ports: BANK_AT); one in the 1port case
+DRAM_PORTS = int(os.environ.get("TILE_DRAM_PORTS", 4))
 MAPS = Path(__file__).resolve().parents[2] / "maps"
 
 
@@ -420,14 +421,17 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
 # winner registered (iter_cycles 2).
 STORE_CASES = {"external": (4, "external", 0, 0, 1), "external-prefetch1": (4, "external", 1, 0, 1),
                "external-prefetch2-skip": (4, "external", 2, 1, 1), "dram-prefetch2-skip": (4, "dram", 2, 1, 1),
-               "2x8-dram-prefetch2-skip": (2, "dram", 2, 1, 1), "external-prefetch2-skip-iter2": (4, "external", 2, 1, 2)}
+               "2x8-dram-prefetch2-skip": (2, "dram", 2, 1, 1), "external-prefetch2-skip-iter2": (4, "external", 2, 1, 2),
+               "2x8-dram-1port": (2, "dram", 0, 0, 1, 1)}
 
 
-@pytest.mark.parametrize("t_r, store, prefetch, skip_clean, iter_cycles", STORE_CASES.values(), ids=STORE_CASES)
+@pytest.mark.parametrize("case", STORE_CASES.values(), ids=STORE_CASES)
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
-def test_edt_tile_engine_store(sim, t_r, store, prefetch, skip_clean, iter_cycles):
-    params = (t_r, 8, 21, 35, store, DRAM_PORTS if store == "dram" else 1, prefetch, skip_clean, iter_cycles)
+def test_edt_tile_engine_store(sim, case):
+    t_r, store, prefetch, skip_clean, iter_cycles, *ports = case      # ports: the DRAM's (default 4)
+    ports = ports[0] if ports else 4 if store == "dram" else 1
+    params = (t_r, 8, 21, 35, store, ports, prefetch, skip_clean, iter_cycles)
     env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": store,
            "TILE_PREFETCH": prefetch, "TILE_SKIP_CLEAN": skip_clean, "TILE_ITER": iter_cycles,
-           "COCOTB_TEST_FILTER": f"{store}_store"}
+           "TILE_DRAM_PORTS": ports, "COCOTB_TEST_FILTER": f"{store}_store"}
     assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1
