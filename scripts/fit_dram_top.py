@@ -90,11 +90,8 @@ def source(prt, params=PARAMS):
     module = fmax.top_name(TOP, params)
     work = fmax.ROOT / "build" / "fit" / "work" / f"{module}--{prt.name}"
     work.mkdir(parents=True, exist_ok=True)
-    path = work / f"{module}.v"
-    text = verilog.convert(TileLiteDram(**params, sim=False), name=module, emit_src=False)
-    if not path.exists() or path.read_text() != text:
-        path.write_text(text)
-    return path
+    return fmax.write_changed(work / f"{module}.v",
+                              verilog.convert(TileLiteDram(**params, sim=False), name=module, emit_src=False))
 
 
 def clocks(fit):
@@ -147,9 +144,7 @@ def main(argv=None):
     progress = toolchain.progress_printer("fit")
     module = fmax.top_name(TOP, params)
     top = source(prt, params)
-    constraints = top.with_suffix(".lpf")
-    if not constraints.exists() or constraints.read_text() != lpf():
-        constraints.write_text(lpf())
+    constraints = fmax.write_changed(top.with_suffix(".lpf"), lpf())
     pins = {f"ddram_{k}" for k in DDR3_PINS} | {SYS_CLK_PIN}
     t0 = time.time()
     try:

@@ -50,6 +50,7 @@ from navcores.hdl.params import parse  # noqa: E402,F401
 ROOT = toolchain.ROOT
 
 __all__ = ["Part", "PARTS", "part", "ports", "harness", "RESOURCES", "resources", "synthesize", "FlowError",
+           "write_changed",
            "utilisation", "critical_path", "place", "pack_ecp5", "emitted", "fit",
            # the project's code, for fit.py, synth.py and bench.py
            "TOPS", "emit", "manifest", "params_of", "parse", "top_name"]
@@ -194,7 +195,7 @@ def _error_line(text, tool):
     return tail[-1].strip() if tail else f"{tool} failed without a message"
 
 
-def _write_changed(path, text):
+def write_changed(path, text):
     """Write ``text`` to ``path`` unless it already holds it (its time stamp stays); returns path."""
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
@@ -219,8 +220,8 @@ def synthesize(name, params, family_synth, work, progress=None, source=None, pin
     # parts, and yosys' read_verilog stalls on them (hdl/ram_init.strip_zero_init).
     synth_core = strip_zero_init(core)
     if synth_core != core:
-        source = _write_changed(work / f"synth_{module}.v", synth_core)
-    _write_changed(wrap, text)
+        source = write_changed(work / f"synth_{module}.v", synth_core)
+    write_changed(wrap, text)
     inputs = {"core": source, "harness": wrap, **({"library": library} if library is not None else {})}
     script = (f"read_verilog {' '.join('{' + k + '}' for k in inputs)}; "
               f"setattr -mod -set keep_hierarchy 1 {module}; "
