@@ -16,7 +16,7 @@ as ``make fit`` does (router2 and the static placer by default: what
 routes the largest engines; scripts/fit.py's JSON, its results cached), into
 ``build/fit/edt_tile_litedram_<params>--<part>.json``, with each clock's
 MHz per seed (``seeds[].clocks``: the engine's ``clk``; the controller's
-from its PLL, which must reach litedram_core.SYS_CLK_HZ).  Exit 2 on bad
+from its PLL, each with its target: ``seeds[].clock_targets``).  Exit 2 on bad
 arguments or without litedram (``pip install -e .[dram]``), 1 when a tool
 fails.
 """
@@ -94,18 +94,34 @@ def source(prt, params=PARAMS):
                               verilog.convert(TileLiteDram(**params, sim=False), name=module, emit_src=False))
 
 
+def clock_name(net):
+    """A clock's short name from nextpnr's global net (``$glbnet$core.dram.sys_clk`` -> ``sys_clk``)."""
+    return re.sub(r"\$TRELLIS_IO_IN$", " (pin)", net.split("$glbnet$")[-1].split(".")[-1])
+
+
 def clocks(fit):
-    """(the engine's MHz, the controller's lowest MHz) of a fit JSON of this top: medians over its seeds.
-    The engine's clock is the harness's ``clk``; the others are the controller's PLL outputs."""
-    engine, other = [], []
+    """(the engine's MHz, {each other clock's short name: (its MHz, its target MHz)}) of a fit JSON of this
+    top, medians over its seeds.  The engine's clock is the harness's ``clk``; the others are the
+    controller's (its PLL's outputs and its input pin), each checked against its own target (the LPF's
+    100 MHz input, from which nextpnr derives each PLL output's)."""
+    engine, other = [], {}
     for seed in fit["seeds"]:
         mine = [k for k in seed["clocks"] if re.search(r"(^|\$)clk(\$|$)", k)]
-        theirs = [v for k, v in seed["clocks"].items() if k not in mine]
+        theirs = [k for k in seed["clocks"] if k not in mine]
         if len(mine) != 1 or not theirs:
             raise ValueError(f"seed {seed['seed']}: not one engine clock and the controller's: {sorted(seed['clocks'])}")
+        if "clock_targets" not in seed:
+            raise ValueError(f"seed {seed['seed']}: no clock targets (a fit before they were kept: run it again)")
         engine.append(seed["clocks"][mine[0]])
-        other.append(min(theirs))
-    return statistics.median(engine), statistics.median(other)
+        for k in theirs:
+            other.setdefault(clock_name(k), []).append((seed["clocks"][k], seed["clock_targets"][k]))
+    return statistics.median(engine), {k: (statistics.median(a for a, _ in v), v[0][1]) for k, v in other.items()}
+
+
+def missed(others):
+    """The clocks of clocks()' second item below their targets, as text ('' when none)."""
+    return ", ".join(f"{k} {mhz:.1f} MHz of {target:g}" for k, (mhz, target) in sorted(others.items())
+                     if mhz < target)
 
 
 def main(argv=None):
@@ -159,9 +175,11 @@ def main(argv=None):
     dest = fmax.ROOT / "build" / "fit" / f"{module}--{prt.name}.json"
     dest.write_text(json.dumps(out, indent=1) + "\n")
     if out["fits"]:
-        engine, controller = clocks(out)
-        what = (f"{out['lut4']} LUT4, {out['ff']} FF, {out['bram']} BRAM; the engine {engine:.1f} MHz, "
-                f"the controller's clocks {controller:.1f} MHz at least")
+        engine, others = clocks(out)
+        short = missed(others)
+        what = (f"{out['lut4']} LUT4, {out['ff']} FF, {out['bram']} BRAM; the engine {engine:.1f} MHz; "
+                + (f"below their targets: {short}" if short else "the controller's clocks at their targets: "
+                   + ", ".join(f"{k} {mhz:.1f} MHz" for k, (mhz, _) in sorted(others.items()))))
     else:
         what = "does not fit"
     print(f"{module} on {prt.name}: {what} ({dest})")

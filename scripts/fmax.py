@@ -312,7 +312,10 @@ def place(netlist, prt, seed, progress=None, router="router1", density=None, pla
     field, for designs the heap placer leaves too crowded to route).
     ``lpf``: an ECP5 constraint file (pins, clocks' frequencies) for a top
     with pins of its own (:func:`harness`'s ``pins``); ``clocks`` in the
-    result then holds each clock's achieved MHz (fmax_mhz is the lowest)."""
+    result then holds each clock's achieved MHz (fmax_mhz is the lowest) and
+    ``clock_targets`` each one's constraint in MHz (the LPF's, a PLL
+    output's derived from its input; ``--freq``'s for a clock without one),
+    so that each is checked against its own."""
     if router not in ROUTERS:
         raise ValueError(f"router {router!r}: one of {', '.join(ROUTERS)}")
     if placer not in PLACERS:
@@ -350,6 +353,7 @@ def place(netlist, prt, seed, progress=None, router="router1", density=None, pla
     out["fmax_mhz"] = round(min(c["achieved"] for c in report["fmax"].values()), 2)
     if lpf is not None:
         out["clocks"] = {k: round(c["achieved"], 2) for k, c in report["fmax"].items()}
+        out["clock_targets"] = {k: round(c["constraint"], 2) for k, c in report["fmax"].items()}
     out["critical_path"] = critical_path(report)
     return out
 

@@ -92,12 +92,26 @@ def test_refusals():
 
 
 def test_clocks():
-    """The engine's clock is the harness's clk (nextpnr names it by its net); the controller's the lowest of
-    the others; medians over the seeds."""
-    fit = {"seeds": [{"seed": s, "clocks": {"$glbnet$clk$TRELLIS_IO_IN": e, "$glbnet$crg_clkout": c,
-                                            "crg_sys2x_clk": 2 * c}}
-                     for s, (e, c) in enumerate([(25.0, 80.0), (27.0, 76.0), (26.0, 90.0)], 1)]}
-    assert fit_dram_top.clocks(fit) == (26.0, 80.0)
+    """The engine's clock is the harness's clk (nextpnr names it by its net); each other clock is checked
+    against its own target (the PLL's 25 MHz init clock against 25, not against the system clock's 75);
+    medians over the seeds."""
+    def seed(s, e, c, init):
+        return {"seed": s, "clocks": {"$glbnet$clk$TRELLIS_IO_IN": e, "$glbnet$core.dram.sys_clk": c,
+                                      "$glbnet$core.dram.crg_clkout1": init, "$glbnet$sys_clk$TRELLIS_IO_IN": 300.0},
+                "clock_targets": {"$glbnet$clk$TRELLIS_IO_IN": 300, "$glbnet$core.dram.sys_clk": 75.0,
+                                  "$glbnet$core.dram.crg_clkout1": 25, "$glbnet$sys_clk$TRELLIS_IO_IN": 100}}
+    fit = {"seeds": [seed(s, e, c, i) for s, (e, c, i) in enumerate([(25.0, 80.0, 60.0), (27.0, 76.0, 50.0),
+                                                                     (26.0, 90.0, 40.0)], 1)]}
+    engine, others = fit_dram_top.clocks(fit)
+    assert engine == 26.0 and others == {"sys_clk": (80.0, 75.0), "crg_clkout1": (50.0, 25),
+                                         "sys_clk (pin)": (300.0, 100)}, others
+    assert fit_dram_top.missed(others) == ""
+    fit["seeds"][0]["clocks"]["$glbnet$core.dram.sys_clk"] = 70.0
+    fit["seeds"][1]["clocks"]["$glbnet$core.dram.crg_clkout1"] = 20.0
+    fit["seeds"][2]["clocks"]["$glbnet$core.dram.crg_clkout1"] = 20.0
+    assert fit_dram_top.missed(fit_dram_top.clocks(fit)[1]) == "crg_clkout1 20.0 MHz of 25"
+    fit["seeds"][2]["clocks"]["$glbnet$core.dram.sys_clk"] = 74.0
+    assert fit_dram_top.missed(fit_dram_top.clocks(fit)[1]) == "crg_clkout1 20.0 MHz of 25, sys_clk 74.0 MHz of 75"
     for bad in ({"sys_clk": 100.0, "crg_clkout": 80.0}, {"clk": 25.0}):
         try:
             fit_dram_top.clocks({"seeds": [{"seed": 1, "clocks": bad}]})
@@ -105,3 +119,10 @@ def test_clocks():
             assert "not one engine clock" in str(e)
         else:
             raise AssertionError(f"{bad}: accepted")
+    old = {"seeds": [{"seed": 1, "clocks": {"clk": 25.0, "sys_clk": 80.0}}]}
+    try:
+        fit_dram_top.clocks(old)
+    except ValueError as e:
+        assert "no clock targets" in str(e)
+    else:
+        raise AssertionError("a fit without clock targets accepted")
