@@ -5,11 +5,13 @@
 ``litedram_gen`` from PyPI's litedram (``pip install -e .[dram]``): a
 16-bit DDR3 of one MT41K256M16 (the ECPIX-5's) on ECP5DDRPHY, no CPU,
 ``--ports`` 128-bit native user ports, the system clock SYS_CLK_HZ.  ``--sim``
-replaces the PHY and the chips by LiteDRAM's SDRAMPHYModel (the DRAM
-timing in the controller is the same: the module's tRCD, tRP, CL, refresh
-at the system clock; the PHY's own I/O latency is the model's): what
-scripts/bench_dram.py simulates.  The key hashes the configuration and
-litedram's version, so a second run reads the cache.  Exit 2 with one
+replaces the PHY and the chips by LiteDRAM's SDRAMPHYModel, through
+scripts/litedram_gen_sim.py, which keeps the controller's timing the
+ECP5DDRPHY's (its 1:2 rate: a native word every 2 system cycles, tRCD, tRP,
+refresh in its cycles; its read and write latencies): what
+scripts/bench_dram.py simulates (litedram_gen's own --sim is a 1:4 PHY,
+twice the bandwidth).  The key hashes the configuration, litedram's
+version and litedram_gen_sim.py, so a second run reads the cache.  Exit 2 with one
 line when litedram is not installed.
 """
 
@@ -25,6 +27,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 SYS_CLK_HZ = 75e6       # the ECPIX-5's LiteX system clock: DDR3 at 300 MHz (ECP5DDRPHY is 1:2 rate, sys x 4)
+# A native word (128 bits: a burst of 8 on the 16-bit DDR3) holds the DDR3's data bus 4 of its 150 MHz clocks:
+# 2 cycles of the system clock.  So the controller moves a native word every 2 cycles at most, whichever ports.
+BURST_SYS_CYCLES = 2
 
 # litedram_gen's configuration (its YAML: JSON is YAML)
 CONFIG = {
@@ -68,7 +73,10 @@ def generate(sim=True, ports=1):
     address})."""
     exe, version = _generator()
     cfg = config(ports, sim)
-    what = json.dumps({"config": cfg, "sim": sim, "litedram": version}, sort_keys=True)
+    # the simulation core from litedram_gen_sim.py (ECP5DDRPHY's rate and latencies): its text in the key
+    gen_sim = Path(__file__).with_name("litedram_gen_sim.py")
+    what = json.dumps({"config": cfg, "sim": sim, "litedram": version,
+                       **({"gen_sim": gen_sim.read_text()} if sim else {})}, sort_keys=True)
     out = ROOT / "build" / "litedram" / hashlib.sha256(what.encode()).hexdigest()[:16]
     core, csv = out / "gateware" / "litedram_core.v", out / "csr.csv"
     if not (core.exists() and csv.exists()):
@@ -76,7 +84,7 @@ def generate(sim=True, ports=1):
         (out / "config.yml").write_text(json.dumps(cfg, indent=1) + "\n")
         cmd = [exe, str(out / "config.yml"), "--output-dir", str(out), "--no-compile", "--soc-csv", str(csv)]
         if sim:
-            cmd.append("--sim")
+            cmd = [sys.executable, str(gen_sim), *cmd[1:], "--sim"]
         done = subprocess.run(cmd, cwd=out, capture_output=True, text=True)
         if done.returncode != 0 or not core.exists():
             (out / "litedram_gen.log").write_text(done.stdout + done.stderr)

@@ -12,7 +12,9 @@ also names the controller's clock (``sys_period_ns``, against the engine's
 PERIOD_NS) and CSRs (``csrs``), and the controller starts first.  With
 ``path_only_too`` the same job runs again without the map read-out (the
 whole job up to the path, as the benches time it): ``path_only`` in the
-result holds its cycles, path and trace.
+result holds its cycles, path and trace, and behind LiteDRAM ``native``:
+the native reads and writes the controller took in that job and its
+clock's cycles (:class:`.litedram.NativeCount`).
 """
 
 import json
@@ -23,7 +25,7 @@ import cocotb
 import numpy as np
 
 from .edt_tile_driver import TileEngineDriver
-from .litedram import start_litedram
+from .litedram import NativeCount, start_litedram
 
 
 @cocotb.test()
@@ -36,7 +38,8 @@ async def edt_tile_job(dut):
             if visits % 64 == 0:
                 Path(progress).write_text(f"{visits} {drv.streams.cycle}\n")
         drv.on_visit = show
-    if hasattr(dut, "wb_ctrl_cyc"):         # the engine with LiteDRAM (hdl/edt_bfs/tile_litedram.py)
+    litedram = hasattr(dut, "wb_ctrl_cyc")  # the engine with LiteDRAM (hdl/edt_bfs/tile_litedram.py)
+    if litedram:
         await start_litedram(dut, job["sys_period_ns"], job["csrs"])
     await drv.start()
     start = tuple(job["start"]) if job["start"] is not None else None
@@ -49,8 +52,16 @@ async def edt_tile_job(dut):
     out["trace"] = [list(t) for t in res.trace]
     if job.get("path_only_too"):            # the same job again without the map read-out: its cycles and path
         img = np.array(job["obstacle"], dtype=bool)
+        native = NativeCount(dut) if litedram else None     # counting only this job (it costs time)
+        if native is not None:
+            native.on = True
+            native.start()
         raw = await drv.job(img, [tuple(g) for g in job["goals"]], start, job["dfar"], readout=False)
         got = drv.decode(raw, img.shape, readout=False)
         out["path_only"] = {"cycles": got["cycles"], "path": [list(p) for p in got["path"]],
                             "trace": [list(t) for t in got["trace"]]}
+        if native is not None:
+            native.on = False
+            out["path_only"]["native"] = {"reads": native.reads, "writes": native.writes,
+                                          "controller_cycles": native.cycles}
     Path(os.environ["EDT_RESULT"]).write_text(json.dumps(out))

@@ -13,7 +13,7 @@ import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, ReadOnly, RisingEdge
 
-__all__ = ["start_litedram"]
+__all__ = ["NativeCount", "start_litedram"]
 
 DFII_HARDWARE = 0x0F
 
@@ -47,3 +47,39 @@ async def start_litedram(dut, period_ns, csrs):
     await ReadOnly()
     assert dut.init_done.value == 1, "LiteDRAM: init_done did not rise"
     await RisingEdge(dut.sys_clk)
+
+
+class NativeCount:
+    """The native commands LiteDRAM's controller takes from the top's user ports (``dram__<i>__cmd``:
+    valid and ready at a rising edge of ``dram_clk``, its user clock), and its clock's cycles, while
+    ``on``: ``reads``, ``writes`` (each a 128-bit word over the DDR3's data bus), ``cycles``.  Started
+    with :meth:`start` (a coroutine sampling every cycle: it slows the simulation)."""
+
+    def __init__(self, dut):
+        self.dut, self.on = dut, False
+        self.reads = self.writes = self.cycles = 0
+        self.ports = []
+        while hasattr(dut, f"dram__{len(self.ports)}__cmd__valid"):
+            i = len(self.ports)
+            self.ports.append(tuple(getattr(dut, f"dram__{i}__cmd__{n}") for n in ("valid", "ready", "payload")))
+        if not self.ports:
+            raise ValueError("no dram__<i>__cmd port on the top")
+
+    def start(self):
+        cocotb.start_soon(self._count())
+
+    async def _count(self):
+        clk = self.dut.dram_clk
+        while True:
+            await RisingEdge(clk)
+            await ReadOnly()                # the values the next rising edge takes
+            if not self.on:
+                continue
+            self.cycles += 1
+            for valid, ready, payload in self.ports:
+                if valid.value == 1 and ready.value == 1:
+                    # the command's payload: Cat(addr, we), we its top bit
+                    if payload.value.to_unsigned() >> (len(payload) - 1):
+                        self.writes += 1
+                    else:
+                        self.reads += 1

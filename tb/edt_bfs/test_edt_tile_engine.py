@@ -37,13 +37,14 @@ from pathlib import Path
 import cocotb
 import numpy as np
 import pytest
-from cocotb.triggers import ReadOnly, RisingEdge
+from cocotb.triggers import ClockCycles, ReadOnly, RisingEdge
 
 from images import FAMILIES, free_cells
 from navcores.hdl.edt_bfs.tile_engine import model_timing
 from navcores.models.edt_bfs_tiled import Timing, plan_path_tiled
 from navcores.models.maps import load_grid
 from navcores.sim.rtl.edt_tile_driver import TileEngineDriver, compare
+from navcores.sim.rtl.litedram import NativeCount
 from navcores.sim.rtl.runner import run, seed_from_env
 
 T_R, T_C, MAX_H, MAX_W = (int(v) for v in os.environ.get("TILE_PARAMS", "8,8,64,64").split(","))
@@ -334,6 +335,9 @@ async def dram_store(dut):
     drv, rng = await _setup(dut)
     st = drv.store
     assert st is not None and hasattr(st, "ports"), "the top has no dram port"
+    count = NativeCount(dut)        # the bench's count of native commands (scripts/bench_dram.py), checked here
+    count.on = True
+    count.start()
 
     jobs = 0
     for shape in (MID, (_partial(2, MAX_H, T_R), _partial(2, MAX_W, T_C))):
@@ -365,6 +369,9 @@ async def dram_store(dut):
     dut._log.info(f"{jobs} jobs compared, {st.reads} reads, {st.writes} writes, {st.late} late answers; "
                   f"{resets} resets, {owed_reads} with answers owed")
     assert owed_reads >= 2 and st.reads > 1000 and st.writes > 100
+    await ClockCycles(dut.dram_clk, 100)            # the last writes reach the DRAM
+    assert (count.reads, count.writes) == (st.reads, st.writes), (count.reads, count.writes, st.reads, st.writes)
+    assert count.cycles * len(count.ports) > st.reads + st.writes
     # each read reads its edge word; with skip_clean the BFS visits' and the goals' skip the A words
     lay = drv.dram_layout
     first, edge = (sum(n for addr, n in st.read_at.items() if addr & ((1 << lay["kb"]) - 1) == k)
