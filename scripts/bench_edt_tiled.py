@@ -153,8 +153,8 @@ def verilog_sha256(top, params, part):
         import tile_engine_size
         source = tile_engine_size.cell_verilog(dict(params), prt)
     elif top == "edt_tile_litedram":
-        import fit_dram_top             # its parameters are the catalog's
-        source = fit_dram_top.source(prt)
+        import fit_dram_top             # its parameters are the catalog's; the hash covers LiteDRAM's core
+        return fit_dram_top.current_sha256(prt)
     else:
         source = fmax.emitted(top, dict(params), prt)
     return toolchain.digest(source)

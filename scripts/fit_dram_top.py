@@ -16,12 +16,14 @@ as ``make fit`` does (router2 and the static placer by default: what
 routes the largest engines; scripts/fit.py's JSON, its results cached), into
 ``build/fit/edt_tile_litedram_<params>--<part>.json``, with each clock's
 MHz per seed (``seeds[].clocks``: the engine's ``clk``; the controller's
-from its PLL, each with its target: ``seeds[].clock_targets``).  Exit 2 on bad
+from its PLL, each with its target: ``seeds[].clock_targets``) and a
+``verilog_sha256`` of the top's Verilog and LiteDRAM's core together.  Exit 2 on bad
 arguments or without litedram (``pip install -e .[dram]``), 1 when a tool
 fails.
 """
 
 import argparse
+import hashlib
 import json
 import os
 import re
@@ -92,6 +94,18 @@ def source(prt, params=PARAMS):
     work.mkdir(parents=True, exist_ok=True)
     return fmax.write_changed(work / f"{module}.v",
                               verilog.convert(TileLiteDram(**params, sim=False), name=module, emit_src=False))
+
+
+def verilog_sha256(top, library):
+    """What the fit is of: the SHA-256 of the top's Verilog's and LiteDRAM's core's hashes (a new
+    controller, e.g. another litedram_core.CONFIG, voids a fit as a new top does)."""
+    return hashlib.sha256((toolchain.digest(top) + toolchain.digest(library)).encode()).hexdigest()
+
+
+def current_sha256(prt):
+    """verilog_sha256 of the catalog's top and the controller generated now for Part ``prt``."""
+    library, _ = litedram_core.generate(sim=False, ports=PARAMS["dram_ports"])
+    return verilog_sha256(source(prt), library)
 
 
 def clock_name(net):
@@ -169,7 +183,8 @@ def main(argv=None):
                        source=top, pins=pins, library=library, lpf=constraints)
     except fmax.FlowError as e:
         toolchain.fail(PROG, str(e), 1)
-    out.update({"litedram": str(library.relative_to(library.parents[3])), "lpf": constraints.name,
+    out.update({"verilog_sha256": verilog_sha256(top, library),
+                "litedram": str(library.relative_to(library.parents[3])), "lpf": constraints.name,
                 "generator": "python scripts/fit_dram_top.py " + " ".join(argv if argv is not None else sys.argv[1:]),
                 "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "seconds": round(time.time() - t0)})
     dest = fmax.ROOT / "build" / "fit" / f"{module}--{prt.name}.json"

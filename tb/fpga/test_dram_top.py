@@ -126,3 +126,16 @@ def test_clocks():
         assert "no clock targets" in str(e)
     else:
         raise AssertionError("a fit without clock targets accepted")
+
+
+def test_verilog_sha256_covers_the_controller(tmp_path):
+    """A fit of the whole top is of its Verilog and LiteDRAM's core: either changed voids it."""
+    top, core = tmp_path / "top.v", tmp_path / "litedram_core.v"
+    top.write_text("module top; endmodule\n")
+    core.write_text("module litedram_core; endmodule\n")
+    first = fit_dram_top.verilog_sha256(top, core)
+    assert first == fit_dram_top.verilog_sha256(top, core) and len(first) == 64
+    core.write_text("module litedram_core; wire w; endmodule\n")
+    second = fit_dram_top.verilog_sha256(top, core)
+    top.write_text("module top; wire w; endmodule\n")
+    assert len({first, second, fit_dram_top.verilog_sha256(top, core)}) == 3
