@@ -3,7 +3,7 @@
 ``python scripts/bench_dram.py [MAP ...] [--md FILE]`` runs each map's job
 (scripts/bench_edt_tiled.job: the map's longest scenario) on
 :class:`~hdl.edt_bfs.tile_litedram.TileLiteDram` (the catalog's
-``edt_tile_dram``: a 4x8 engine over maps up to 512x512 with
+``edt_tile_dram``: a 3x8 engine over maps up to 512x512 with
 ``store="dram"``, and LiteDRAM's generated controller with its DRAM
 model: scripts/litedram_core.py) in Verilator, checks the results against
 models.edt_bfs_tiled (distances, vectors, cfr, parents, hop counts, path,
@@ -44,7 +44,7 @@ from navcores.sim.rtl.clock import PERIOD_NS  # noqa: E402
 from navcores.sim.rtl.runner import run  # noqa: E402
 
 WORK = B.ROOT / "build" / "bench_dram"
-# The engine: the catalog's edt_tile_dram (a 4x8 array over maps up to 512x512, four native ports, prefetch,
+# The engine: the catalog's edt_tile_dram (a 3x8 array over maps up to 512x512, four native ports, prefetch,
 # skip_clean)
 PARAMS = dict(catalog.get("edt_tile_dram").params)
 ARRAY = (PARAMS["t_r"], PARAMS["t_c"])
@@ -53,9 +53,10 @@ PORTS = PARAMS["dram_ports"]
 NAME = f"{ARRAY[0]}x{ARRAY[1]} / {RAM[0]}x{RAM[1]}"
 ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", "dram_ports")}
 TIMING = model_timing(PARAMS.get("iter_cycles", 1))     # the model's cycle constants for that engine
-# The clocks' ratio in the simulation when the engine has not been placed (clock() gives None):
-# about what the 4x8 engines without the prefetch reach on the LFE5U-85F (BENCHMARKS.md); no job time is given then.
-RATIO_MHZ = 22.0
+# The clocks' ratio in the simulation when the engine has no current clock (clock() gives None): what the
+# 3x8 engine reached in the whole top on the ECPIX-5's part before the skid buffers (2026-12-06, BENCHMARKS.md;
+# fit_dram_top.ENGINE_MHZ is its target there); no job time is given then.
+RATIO_MHZ = 37.2
 MAPS = ("room-64-64-8", "maze512-1-0")
 SECTION = "EDT/BFS tile engine through LiteDRAM's DDR3 controller, simulated (issue 18)"
 KEYS = ("distance", "nearest", "cfr", "parent", "visited", "path", "iterations_edt", "iterations_bfs",
@@ -176,6 +177,8 @@ def section(maps=MAPS):
         return f"Not run on {stamp}: {e}.", []
     sys_mhz = litedram_core.SYS_CLK_HZ / 1e6
     mhz, where = clock(sys_mhz)
+    if mhz is None:
+        where += f"; the simulation's engine clock {RATIO_MHZ} MHz (bench_dram.RATIO_MHZ)"
     rows = []
     for name in maps:
         work = WORK / name

@@ -55,11 +55,17 @@ BOARD_NAMES = {"a": "a", "ba": "ba", "ras_n": "ras", "cas_n": "cas", "we_n": "we
 # platform has them), but litedram_gen always makes them, through output registers (IOLOGIC) that
 # nextpnr places only at a constrained pad: two pads of the DDR3's bank the board leaves free.
 SPARE_PADS = {"cs_n": "M4", "reset_n": "N2"}
+# The engine's clock (the harness's ``clk``) constrained at about what the 3x8 engine reaches in this top
+# (37.2 MHz placed, 2026-12-06): with the fit flow's --freq (300 MHz) on it the timing-driven placer
+# weighs the engine's paths, hopeless at that target, over the controller's, which then miss their 75 MHz
+# (the placer's estimate 66.9-68.9 MHz with the engine's at 300).
+ENGINE_MHZ = 36
+ENGINE_CLK_PIN = "clk"
 
 
 def lpf():
     """The LPF of the top's pins: sites and I/O standards from amaranth-boards' ECPIX-5, the PLL's input
-    frequency."""
+    frequency, the engine's clock's target (ENGINE_MHZ)."""
     from amaranth_boards.ecpix5 import ECPIX585Platform
     res = {(r.name, r.number): r for r in ECPIX585Platform.resources}
     ddr3, clk = res["ddr3", 0], res["clk100", 0]
@@ -82,7 +88,8 @@ def lpf():
     site = clk.ios[0].names[0]
     lines += [f'LOCATE COMP "{SYS_CLK_PIN}" SITE "{site}";',
               f'IOBUF PORT "{SYS_CLK_PIN}" ' + " ".join(f"{k}={v}" for k, v in dict(clk.attrs).items()) + ";",
-              f'FREQUENCY PORT "{SYS_CLK_PIN}" {litedram_core.CONFIG["input_clk_freq"] / 1e6:g} MHZ;']
+              f'FREQUENCY PORT "{SYS_CLK_PIN}" {litedram_core.CONFIG["input_clk_freq"] / 1e6:g} MHZ;',
+              f'FREQUENCY PORT "{ENGINE_CLK_PIN}" {ENGINE_MHZ} MHZ;']
     return "\n".join(lines) + "\n"
 
 

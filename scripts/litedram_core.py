@@ -37,6 +37,11 @@ CONFIG = {
     "sdram_module": "MT41K256M16", "sdram_module_nb": 2, "sdram_rank_nb": 1, "sdram_phy": "ECP5DDRPHY",
     "rtt_nom": "60ohm", "rtt_wr": "60ohm", "ron": "34ohm",
     "input_clk_freq": 100e6, "sys_clk_freq": SYS_CLK_HZ, "init_clk_freq": 25e6, "cmd_buffer_depth": 16,
+    # The controller's longest run of reads (of writes) while the other kind waits: LiteDRAM's 32 (16)
+    # cycles, 4x.  Each switch costs a turnaround (read to write: the read latency, 12 cycles at ECP5DDRPHY's
+    # 13); the tile engine's reads (the next visits') and writes (this one's) come mixed.  room-64-64-8
+    # through the simulated controller (3x8 at 37.2 MHz): 36,215 engine cycles -> 33,600 (4x); 8x 33,394.
+    "read_time": 128, "write_time": 64,
 }
 
 # The part the PHY is generated for (without --sim): the ECPIX-5's.

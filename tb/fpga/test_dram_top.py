@@ -74,6 +74,7 @@ def test_lpf_ecpix5():
     assert "IO_TYPE=SSTL15D_I" in iobuf["ddram_dqs_p[1]"] and "IO_TYPE=SSTL15D_I" in iobuf["ddram_clk_p"]
     assert located["sys_clk"] == board["clk100", 0].ios[0].names[0] == "K23"
     assert 'FREQUENCY PORT "sys_clk" 100 MHZ;' in lpf
+    assert f'FREQUENCY PORT "clk" {fit_dram_top.ENGINE_MHZ} MHZ;' in lpf      # the engine's, not --freq's
     # the pins the board does not wire, at spare pads
     assert set(DDR3_PINS) - set(fit_dram_top.BOARD_NAMES) == set(fit_dram_top.SPARE_PADS) == {"cs_n", "reset_n"}
     for pin, site in fit_dram_top.SPARE_PADS.items():
