@@ -23,7 +23,6 @@ fails.
 """
 
 import argparse
-import hashlib
 import json
 import os
 import re
@@ -103,16 +102,11 @@ def source(prt, params=PARAMS):
                               verilog.convert(TileLiteDram(**params, sim=False), name=module, emit_src=False))
 
 
-def verilog_sha256(top, library):
-    """What the fit is of: the SHA-256 of the top's Verilog's and LiteDRAM's core's hashes (a new
-    controller, e.g. another litedram_core.CONFIG, voids a fit as a new top does)."""
-    return hashlib.sha256((toolchain.digest(top) + toolchain.digest(library)).encode()).hexdigest()
-
-
 def current_sha256(prt):
-    """verilog_sha256 of the catalog's top and the controller generated now for Part ``prt``."""
+    """The fit's verilog_sha256 (fmax.sources_sha256: the top's Verilog and LiteDRAM's core) of the
+    catalog's top and the controller generated now for Part ``prt``."""
     library, _ = litedram_core.generate(sim=False, ports=PARAMS["dram_ports"])
-    return verilog_sha256(source(prt), library)
+    return fmax.sources_sha256(source(prt), library)
 
 
 def clock_name(net):
@@ -190,8 +184,7 @@ def main(argv=None):
                        source=top, pins=pins, library=library, lpf=constraints)
     except fmax.FlowError as e:
         toolchain.fail(PROG, str(e), 1)
-    out.update({"verilog_sha256": verilog_sha256(top, library),
-                "litedram": str(library.relative_to(library.parents[3])), "lpf": constraints.name,
+    out.update({"litedram": str(library.relative_to(library.parents[3])), "lpf": constraints.name,
                 "generator": "python scripts/fit_dram_top.py " + " ".join(argv if argv is not None else sys.argv[1:]),
                 "date": time.strftime("%Y-%m-%dT%H:%M:%SZ", time.gmtime()), "seconds": round(time.time() - t0)})
     dest = fmax.ROOT / "build" / "fit" / f"{module}--{prt.name}.json"

@@ -29,6 +29,7 @@ The command is scripts/fit.py (``make fit``); scripts/bench.py and
 scripts/synth.py call :func:`fit` and :func:`synthesize`.
 """
 
+import hashlib
 import json
 import os
 import re
@@ -415,6 +416,15 @@ def counts(name, params, prt, progress=None, source=None, pins=(), library=None)
     return syn, netlist, packed, cells, res
 
 
+def sources_sha256(source, library=None):
+    """What a fit is of (its JSON's ``verilog_sha256``): the toolchain.digest of the top's Verilog, or
+    with a ``library`` (a core the top instances, read with it: LiteDRAM's) the SHA-256 of both
+    digests, so that a new library voids the fit as a new top does."""
+    if library is None:
+        return toolchain.digest(source)
+    return hashlib.sha256((toolchain.digest(source) + toolchain.digest(library)).encode()).hexdigest()
+
+
 def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="router1", density=None, placer="heap",
         source=None, pins=(), library=None, lpf=None):
     """The fit of ``name`` at ``params`` on Part ``prt``: a JSON-ready dict
@@ -425,7 +435,7 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
     ``lpf`` (:func:`synthesize`, :func:`place`)."""
     module = top_name(name, params)
     source = source or emitted(name, params, prt)
-    verilog_sha256 = toolchain.digest(source)      # what the figures are of, hashed before the tools read it
+    verilog_sha256 = sources_sha256(source, library)    # what the figures are of, hashed before the tools read it
     syn, netlist, packed, cells, res = counts(name, params, prt, progress, source, pins, library)
     if progress:
         progress(f"{module}: nextpnr on {prt.name}, seed{'s' * (len(seeds) > 1)} {', '.join(map(str, seeds))}")

@@ -19,6 +19,7 @@ sys.path.insert(0, str(ROOT / "scripts"))
 
 import fit_dram_top  # noqa: E402
 import fmax  # noqa: E402
+import toolchain  # noqa: E402
 from amaranth_boards.ecpix5 import ECPIX585Platform  # noqa: E402
 
 from navcores.hdl.edt_bfs.tile_litedram import DDR3_PINS  # noqa: E402
@@ -134,9 +135,10 @@ def test_verilog_sha256_covers_the_controller(tmp_path):
     top, core = tmp_path / "top.v", tmp_path / "litedram_core.v"
     top.write_text("module top; endmodule\n")
     core.write_text("module litedram_core; endmodule\n")
-    first = fit_dram_top.verilog_sha256(top, core)
-    assert first == fit_dram_top.verilog_sha256(top, core) and len(first) == 64
+    first = fmax.sources_sha256(top, core)
+    assert first == fmax.sources_sha256(top, core) and len(first) == 64
     core.write_text("module litedram_core; wire w; endmodule\n")
-    second = fit_dram_top.verilog_sha256(top, core)
+    second = fmax.sources_sha256(top, core)
     top.write_text("module top; wire w; endmodule\n")
-    assert len({first, second, fit_dram_top.verilog_sha256(top, core)}) == 3
+    assert len({first, second, fmax.sources_sha256(top, core)}) == 3
+    assert fmax.sources_sha256(top) == toolchain.digest(top)       # a top without a library: its own digest
