@@ -142,3 +142,17 @@ def test_verilog_sha256_covers_the_controller(tmp_path):
     top.write_text("module top; wire w; endmodule\n")
     assert len({first, second, fmax.sources_sha256(top, core)}) == 3
     assert fmax.sources_sha256(top) == toolchain.digest(top)       # a top without a library: its own digest
+
+
+def test_buffered_command_buffers_refused(monkeypatch):
+    """LiteDRAM's buffered command buffers gave wrong results through the tile engine: refused."""
+    import litedram_core
+    monkeypatch.setitem(litedram_core.CONFIG, "cmd_buffer_buffered", True)
+    try:
+        litedram_core.config(4)
+    except ValueError as e:
+        assert "cmd_buffer_buffered" in str(e)
+    else:
+        raise AssertionError("cmd_buffer_buffered accepted")
+    monkeypatch.setitem(litedram_core.CONFIG, "cmd_buffer_buffered", False)
+    assert litedram_core.config(4)["user_ports"].keys() == {f"native_{i}" for i in range(4)}
