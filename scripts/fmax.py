@@ -468,7 +468,8 @@ def fit(name, params, prt, seeds=(1, 2, 3), jobs=2, progress=None, router="route
         **res,
         "fmax_mhz": fmax,
         "target_mhz": prt.target_mhz,
-        "seeds": [{"seed": r["seed"], "fmax_mhz": r["fmax_mhz"], **({"clocks": r["clocks"]} if "clocks" in r else {})}
+        "seeds": [{"seed": r["seed"], "fmax_mhz": r["fmax_mhz"],
+                   **{k: r[k] for k in ("clocks", "clock_targets") if k in r}}
                   for r in runs] if fits else [],
         "critical_path": {"seed": median_run["seed"], **median_run["critical_path"]}
         if median_run and median_run.get("critical_path") else None,
