@@ -12,6 +12,7 @@ comparison can see it).  Needs litedram (``pip install -e .[dram]``): skipped
 without it.
 """
 
+import json
 import re
 import subprocess
 import sys
@@ -52,7 +53,7 @@ def test_sim_core_has_the_ecpix5_timing(tmp_path):
     plain = tmp_path / "plain"
     plain.mkdir()
     cfg = plain / "config.yml"
-    cfg.write_text(__import__("json").dumps(litedram_core.config(1, True)))
+    cfg.write_text(json.dumps(litedram_core.config(1, True)))
     exe, _ = litedram_core._generator()
     subprocess.run([exe, str(cfg), "--output-dir", str(plain), "--no-compile", "--sim"], cwd=plain, check=True,
                    capture_output=True)
