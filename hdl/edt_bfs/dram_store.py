@@ -12,10 +12,12 @@ from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFO, SyncFIFOBuffered
 from amaranth.lib.wiring import In, Out
 
+from ..ram_init import undefined_memory
 from .state_ram import StateSignature
 from .tile_layouts import BFS_FIELDS, EDT_FIELDS, bfs_layout, edt_layout, pixel_layout
 
-__all__ = ["DramStore", "NativePortSignature", "dram_layout", "port_of_row", "BANK_AT", "PORTS"]
+__all__ = ["DramStore", "NativePortSignature", "dram_layout", "port_of_row", "local_row", "load_bits",
+           "BANK_AT", "PORTS"]
 
 DESCRIPTORS = 4         # reads in flight between the command side and the answer side
 BEATS = 16              # write data beats given and not yet taken by the controller
@@ -41,6 +43,23 @@ def port_of_row(row, ports):
     lo, bits = BANK_AT - ROW_BITS_AT, (ports - 1).bit_length()
     assert ports in PORTS and 0 <= lo and lo + bits <= 3, (ports, lo)
     return row[lo:lo + bits] if bits else 0
+
+
+def local_row(row, ports):
+    """Map row ``row`` (an Amaranth value or an int) among the rows of its port's store: without the bits
+    :func:`port_of_row` takes (they are the same for every row a store holds)."""
+    lo, bits = BANK_AT - ROW_BITS_AT, (ports - 1).bit_length()
+    if isinstance(row, int):
+        return (row & ((1 << lo) - 1)) | ((row >> (lo + bits)) << lo)
+    return Cat(row[:lo], row[lo + bits:]) if bits else row
+
+
+def load_bits(w, p, max_h, ports, data_width=128):
+    """A store's on-chip bits with ``changed`` (:class:`DramStore`: the load's obstacle bits and the
+    written bits of the A and B words), for each of ``ports`` stores: (depth, width)."""
+    lay = dram_layout(w, p, max_h, data_width)
+    rows = max(local_row(r, ports) for r in range(max_h)) + 1
+    return rows << lay["wb"], p + lay["a"] + lay["b"]
 
 
 def NativePortSignature(addr_width, data_width):
@@ -159,7 +178,19 @@ class DramStore(wiring.Component):
         BFS group without the vector (the BFS visits', the goals') skips the
         ``a`` words: its answer's di is ``none`` for a pixel in the cfr, 0
         for one outside (all the engine reads di for there), the edge
-        pixels' di as stored (the slot holds it).
+        pixels' di as stored (the slot holds it).  And the load (a write of
+        both groups: the map's initial state, di 0 or none, vector 0, hop
+        none, parent 0) writes no A or B word: the store keeps the word's
+        obstacle bits (di = 0) on chip and a *written* bit per A and B word,
+        cleared by the load; a read of a word not written since is answered
+        from the obstacle bits, and the first write to it is a whole word,
+        the bytes it does not enable from the same initial state.  So the
+        DRAM holds what it would had the load written the word: a load
+        costs its two edge slots (maze512-1-0: 196,608 native writes fewer
+        on the 3x8 array), and a word no visit changed is never read.
+    ports : int
+        The stores the map rows are spread over (:func:`port_of_row`): this
+        store's on-chip bits hold only its rows (:func:`load_bits`).
 
     Ports
     -----
@@ -190,10 +221,13 @@ class DramStore(wiring.Component):
     latency.
     """
 
-    def __init__(self, w, p, max_h, data_width=128, max_reads=16, changed=False):
+    def __init__(self, w, p, max_h, data_width=128, max_reads=16, changed=False, ports=1):
         if not 1 <= max_reads <= 256:
             raise ValueError(f"max_reads {max_reads}: must be 1..256")
+        if ports not in PORTS:
+            raise ValueError(f"ports {ports}: must be one of {PORTS}")
         self.w, self.p, self.max_h, self.max_reads, self.changed = w, p, max_h, max_reads, changed
+        self.ports = ports
         self.lay = dram_layout(w, p, max_h, data_width)
         super().__init__({
             **StateSignature(w, p, changed).members,
@@ -249,13 +283,38 @@ class DramStore(wiring.Component):
         rest = Signal(n)
         m.d.comb += rest.eq(Mux(step_done, busy_mask & ~hot, busy_mask))
 
-        # reads in flight: which of the n_rd steps each one issued
-        m.submodules.desc = desc = SyncFIFOBuffered(width=n_rd, depth=DESCRIPTORS)
+        # reads in flight: which of the n_rd steps each one issued (with ``changed``: also whether it
+        # asked for the A words, which of its A and B words come from the obstacle bits, and those bits)
+        n_ab = a + b
+        m.submodules.desc = desc = SyncFIFOBuffered(width=n_rd + (1 + n_ab + p if self.changed else 0),
+                                                    depth=DESCRIPTORS)
         free = rest == 0
-        take_wr = self.wr.valid & free
-        take_rd = self.rd.valid & free & ~self.wr.valid & desc.w_rdy
-        m.d.comb += [self.wr.ready.eq(free), self.rd.ready.eq(free & ~self.wr.valid & desc.w_rdy)]
         rcmd, wcmd = self.rd.payload, self.wr.payload
+        if self.changed:
+            # The load's obstacle bits and the A and B words' written bits (the class's docstring),
+            # looked up a cycle before a command is taken: the read ports are addressed by the
+            # command on offer (a write before a read, as they are taken), and a command is taken
+            # only when the lookup of the cycle before was its own; the ports are transparent to the
+            # writes of the command taken in that cycle, the only ones in between.
+            depth, _ = load_bits(w, p, self.max_h, self.ports, dw)
+            # (undefined until the load writes them: the engine reads only words of the map it loaded)
+            m.submodules.obst = obst = undefined_memory(shape=p, depth=depth)
+            m.submodules.written = written = undefined_memory(shape=n_ab, depth=depth)
+            o_wp, w_wp = obst.write_port(), written.write_port()
+            o_rp, w_rp = obst.read_port(transparent_for=(o_wp,)), written.read_port(transparent_for=(w_wp,))
+            on_wr = self.wr.valid
+            key = Signal(len(o_rp.addr))
+            m.d.comb += key.eq(Cat(Mux(on_wr, wcmd.wcol, rcmd.wcol)[:lay["wb"]],
+                                   local_row(Mux(on_wr, wcmd.row, rcmd.row), self.ports)))
+            looked_key, looked_ok = Signal(len(key) + 1), Signal()
+            m.d.sync += [looked_key.eq(Cat(key, on_wr)), looked_ok.eq(1)]
+            looked = looked_ok & (looked_key == Cat(key, on_wr))
+            m.d.comb += [o_rp.addr.eq(key), w_rp.addr.eq(key), o_wp.addr.eq(key), w_wp.addr.eq(key)]
+        else:
+            looked = Const(1)
+        take_wr = self.wr.valid & free & looked
+        take_rd = self.rd.valid & free & ~self.wr.valid & desc.w_rdy & looked
+        m.d.comb += [self.wr.ready.eq(free & looked), self.rd.ready.eq(free & ~self.wr.valid & desc.w_rdy & looked)]
         # with the cfr bits in the B words, di alone for a BFS group read is not a reason to read A
         need_a = (rcmd.nnt | (rcmd.di & ~rcmd.bfs)) if self.changed else (rcmd.di | rcmd.nnt)
         rd_steps = Cat(*([need_a] * a), *([rcmd.bfs] * b), *([Const(1)] * e))
@@ -282,7 +341,23 @@ class DramStore(wiring.Component):
                            right_ok & wcmd.changed[p - 1], left_ok & wcmd.changed[0])
         else:
             wr_steps = Cat(*([wcmd.edt] * a), *([wcmd.bfs] * b), right_ok, left_ok)
-        m.d.comb += [desc.w_data.eq(rd_steps), desc.w_en.eq(take_rd)]
+        rd_go, desc_data = rd_steps, rd_steps
+        if self.changed:
+            # the load (both groups) writes its neighbours' edge slots only, its obstacle bits and
+            # clears its written bits; another write sets the written bits of the words it issues
+            is_load = wcmd.edt & wcmd.bfs
+            wr_steps = Mux(is_load, wr_steps & ~((1 << n_ab) - 1), wr_steps)
+            m.d.comb += [w_wp.en.eq(take_wr), w_wp.data.eq(Mux(is_load, 0, w_rp.data | wr_steps[:n_ab])),
+                         o_wp.en.eq(take_wr & is_load), o_wp.data.eq(Cat(*[wcmd.word[j].di == 0 for j in range(p)]))]
+            # a read's A and B words not written since the load come from the obstacle bits
+            fresh = rd_steps[:n_ab] & ~w_rp.data
+            rd_go = rd_steps & ~Cat(fresh, Const(0, e))
+            desc_data = Cat(rd_go, rd_steps[0], fresh, o_rp.data)
+            wr_fresh = Signal(n_ab)         # the write's words not written since the load
+            wr_obst = Signal(p)             # and its obstacle bits
+            with m.If(take_wr):
+                m.d.sync += [wr_fresh.eq(~w_rp.data), wr_obst.eq(o_rp.data)]
+        m.d.comb += [desc.w_data.eq(desc_data), desc.w_en.eq(take_rd)]
         m.d.sync += busy_mask.eq(rest)
         with m.If(take_wr):
             m.d.sync += [busy_mask.eq(wr_steps), is_wr.eq(1), row.eq(wcmd.row), wcol.eq(wcmd.wcol),
@@ -290,18 +365,40 @@ class DramStore(wiring.Component):
             if self.changed:
                 m.d.sync += cfr.eq(wcmd.cfr)
         with m.Elif(take_rd):
-            m.d.sync += [busy_mask.eq(rd_steps), is_wr.eq(0), row.eq(rcmd.row), wcol.eq(rcmd.wcol)]
+            m.d.sync += [busy_mask.eq(rd_go), is_wr.eq(0), row.eq(rcmd.row), wcol.eq(rcmd.wcol)]
 
         # the step's native word: block (row, wcol or a neighbour), offset
         kb, wb = lay["kb"], lay["wb"]
         col = Signal(range(w["words"] + 1))
         off = Signal(max(kb, 1))
         pix = data.ArrayLayout(px, p)(word)
-        edt_bits = Cat(*[pix[j].as_value()[px["di"].offset:px["dy"].offset + px["dy"].width] for j in range(p)])
-        bfs_bits = Cat(*[pix[j].as_value()[px["hop"].offset:] for j in range(p)])
         assert px["di"].offset == 0 and px["hop"].offset == px["dy"].offset + px["dy"].width
-        b_region = Cat(bfs_bits, Const(0, lay["cfr_byte"] * 8 - len(bfs_bits)), cfr,
-                       Const(0, b * dw - lay["cfr_byte"] * 8 - p))
+
+        def regions(pix, cfr):
+            """A word of pixels ``pix`` with cfr bits ``cfr`` as its A words and its B words (dram_layout)."""
+            edt_bits = Cat(*[pix[j].as_value()[:px["hop"].offset] for j in range(p)])
+            bfs_bits = Cat(*[pix[j].as_value()[px["hop"].offset:] for j in range(p)])
+            return (Cat(edt_bits, Const(0, a * dw - len(edt_bits))),
+                    Cat(bfs_bits, Const(0, lay["cfr_byte"] * 8 - len(bfs_bits)), cfr,
+                        Const(0, b * dw - lay["cfr_byte"] * 8 - p)))
+
+        def initial(obst, name):
+            """The A and B words the load would have written for obstacle bits ``obst``: the
+            engine's initial state (di 0 or none, hop none, the rest 0; cfr: not an obstacle)."""
+            v = Signal(data.ArrayLayout(px, p), name=name)
+            for j in range(p):
+                m.d.comb += [v[j].di.eq(Mux(obst[j], 0, (1 << w["di"]) - 1)), v[j].hop.eq((1 << w["hop"]) - 1)]
+            return regions(v, ~obst)
+
+        edt_bits, b_region = regions(pix, cfr)
+        if self.changed:
+            b_initial = initial(wr_obst, "wr_initial")[1]
+
+        def whole(raw, init, be):
+            """A word not written since the load, written whole: ``raw``'s bytes enabled by ``be``,
+            the rest ``init``."""
+            bits = Cat(*[Mux(be[i], Const(0xFF, 8), 0) for i in range(nb)])
+            return (raw & bits) | (init & ~bits)
         m.d.comb += col.eq(wcol)
         with m.Switch(step):
             for s in range(n):
@@ -311,9 +408,13 @@ class DramStore(wiring.Component):
                     elif s < a + b:                             # B word s - a
                         k = s - a
                         m.d.comb += [off.eq(s), wd.eq(b_region[k * dw:(k + 1) * dw])]
-                        if self.changed:                        # BFS group bytes; cfr bytes (EDT, load)
+                        if self.changed:                        # BFS group bytes; cfr bytes (EDT)
                             cmask = cfr_bytes(k)
-                            m.d.comb += wbe.eq(Mux(wmask[1], ((1 << nb) - 1) & ~cmask, 0) | Mux(wmask[0], cmask, 0))
+                            be = Mux(wmask[1], ((1 << nb) - 1) & ~cmask, 0) | Mux(wmask[0], cmask, 0)
+                            raw = b_region[k * dw:(k + 1) * dw]
+                            # a word not written since the load goes whole (the A words always do)
+                            m.d.comb += [wbe.eq(Mux(wr_fresh[s], (1 << nb) - 1, be)),
+                                         wd.eq(Mux(wr_fresh[s], whole(raw, b_initial[k * dw:(k + 1) * dw], be), raw))]
                         else:
                             m.d.comb += wbe.eq((1 << nb) - 1)
                     else:
@@ -346,13 +447,22 @@ class DramStore(wiring.Component):
         word_go = rf.r_rdy & rf.r_en
         m.d.sync += in_flight.eq(in_flight + issued - word_go)
         last = collecting & (amask & ~ahot == 0)
-        m.d.comb += [rf.r_en.eq(collecting & (~out.valid | out.ready)), desc.r_en.eq(~collecting)]
-        with m.If(~collecting & desc.r_rdy & desc.r_en):
-            m.d.sync += amask.eq(desc.r_data)
+        # the next read's description taken when the window row before is (its words from the
+        # obstacle bits go into the buffers then)
+        pop = ~collecting & desc.r_rdy & (~out.valid | out.ready)
+        m.d.comb += [rf.r_en.eq(collecting & (~out.valid | out.ready)), desc.r_en.eq(pop)]
+        with m.If(pop):
+            m.d.sync += amask.eq(desc.r_data[:n_rd])
         if self.changed:
-            got_a = Signal()            # the read being collected brings the A words
-            with m.If(~collecting & desc.r_rdy & desc.r_en):
-                m.d.sync += got_a.eq(desc.r_data[0])
+            got_a = Signal()            # the read being collected asked for the A words
+            d_fresh, d_obst = desc.r_data[n_rd + 1:n_rd + 1 + n_ab], desc.r_data[n_rd + 1 + n_ab:]
+            a_init, b_init = initial(d_obst, "rd_initial")
+            init = Cat(a_init, b_init)
+            with m.If(pop):
+                m.d.sync += got_a.eq(desc.r_data[n_rd])
+                for s in range(n_ab):
+                    with m.If(d_fresh[s]):
+                        m.d.sync += buf[s].eq(init[s * dw:(s + 1) * dw])
         with m.If(word_go):
             m.d.sync += amask.eq(amask & ~ahot)
             with m.Switch(astep):

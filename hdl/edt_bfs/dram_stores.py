@@ -4,14 +4,15 @@ from amaranth.hdl import Module
 from amaranth.lib import wiring
 from amaranth.lib.wiring import Out
 
-from ..params import Param, check, checked_init
+from ..params import Constraint, Param, check, checked_init
 from ..skid_buffer import SkidBuffer
-from .dram_store import PORTS, DramStore, NativePortSignature, dram_layout, port_of_row
+from .dram_store import PORTS, DramStore, NativePortSignature, dram_layout, load_bits, port_of_row
 from .row_router import RowRouter
 from .state_ram import StateSignature
 from .tile_layouts import TILE_CONSTRAINTS, TILE_PARAMS, tile_widths
 
-__all__ = ["DramStores", "DRAM_PORTS_PARAM", "SKIP_CLEAN_PARAM", "DRAM_WIDTH", "DRAM_FIFO"]
+__all__ = ["DramStores", "DRAM_PORTS_PARAM", "SKIP_CLEAN_PARAM", "DRAM_CONSTRAINTS", "DRAM_WIDTH", "DRAM_FIFO",
+           "LOAD_BITS_MAX"]
 
 DRAM_WIDTH = 128        # a native word of LiteDRAM's 1:2-rate PHY on a 16-bit DDR3 (a burst of 8)
 DRAM_FIFO = 16          # engine reads unanswered at most (the engine's crossing FIFOs' depth), each store's
@@ -23,8 +24,30 @@ DRAM_PORTS_PARAM = Param("dram_ports", int, 1, choices=PORTS,
 SKIP_CLEAN_PARAM = Param("skip_clean", bool, False,
                          doc="a store outside: write back only what a visit changed (the tile rows; to a DRAM, "
                              "the native words holding a changed pixel; a BFS read without di's words, from a cfr bit "
-                             "the EDT's writes keep): the same cycles, less bandwidth",
+                             "the EDT's writes keep; the load's obstacle bits on chip, a word no write changed "
+                             "answered from them): the same cycles, less bandwidth",
                          message="skip_clean {value!r}: must be 0 or 1")
+
+
+# The stores' on-chip bits with skip_clean (DramStore: the load's obstacle bits, the A and B words' written
+# bits), at most: 2 Mbit, over half the LFE5U-85F's 3.7 Mbit of block RAM (maze512-1-0 on the 3x8 array, 4
+# ports: 384 Kbit).
+LOAD_BITS_MAX = 2 << 20
+
+
+def _load_bits(p):
+    depth, width = load_bits(tile_widths(p["t_r"], p["t_c"], p["max_h"], p["max_w"]), p["t_c"], p["max_h"],
+                             p["dram_ports"], DRAM_WIDTH)
+    return p["dram_ports"] * depth * width
+
+
+DRAM_CONSTRAINTS = (
+    Constraint(f"on-chip bits <= {LOAD_BITS_MAX} (skip_clean, store=dram)",
+               lambda p: not p["skip_clean"] or p.get("store", "dram") != "dram" or _load_bits(p) <= LOAD_BITS_MAX,
+               "largest map {max_h}x{max_w} with skip_clean: the DRAM stores' obstacle and written bits are {n} "
+               "Kbit, at most " + str(LOAD_BITS_MAX >> 10) + " Kbit on chip (a smaller map, or skip_clean 0)",
+               lambda p: {"n": _load_bits(p) >> 10}),
+)
 
 
 class DramStores(wiring.Component):
@@ -46,7 +69,11 @@ class DramStores(wiring.Component):
     skip_clean : bool
         The engine's writes carry the pixels they change
         (:func:`~hdl.edt_bfs.state_ram.write_layout`): the stores issue
-        only the native words holding one of them.
+        only the native words holding one of them, and keep the load's
+        obstacle bits on chip (:class:`~hdl.edt_bfs.dram_store.DramStore`:
+        a word no write changed is answered from them, not read; the load
+        writes its edge slots only): ``p + a + b`` bits a DRAM block, at
+        most :data:`LOAD_BITS_MAX` over the stores.
 
     Ports
     -----
@@ -65,7 +92,7 @@ class DramStores(wiring.Component):
     """
 
     PARAMS = TILE_PARAMS + (DRAM_PORTS_PARAM, SKIP_CLEAN_PARAM)
-    CONSTRAINTS = TILE_CONSTRAINTS
+    CONSTRAINTS = TILE_CONSTRAINTS + DRAM_CONSTRAINTS
 
     @checked_init
     def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, skip_clean=False):
@@ -81,8 +108,8 @@ class DramStores(wiring.Component):
     def elaborate(self, platform):
         m = Module()
         n = self.ports
-        stores = [DramStore(self.w, self.t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO, changed=self.changed)
-                  for _ in range(n)]
+        stores = [DramStore(self.w, self.t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO, changed=self.changed,
+                            ports=n) for _ in range(n)]
         for i, store in enumerate(stores):
             m.submodules[f"store{i}"] = store
         if n > 1:

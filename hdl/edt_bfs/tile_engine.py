@@ -11,7 +11,7 @@ from navcores.models.edt_bfs_tiled import Timing
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
 from .dram_store import NativePortSignature, dram_layout
-from .dram_stores import DRAM_FIFO, DRAM_PORTS_PARAM, DRAM_WIDTH, SKIP_CLEAN_PARAM, DramStores
+from .dram_stores import DRAM_CONSTRAINTS, DRAM_FIFO, DRAM_PORTS_PARAM, DRAM_WIDTH, SKIP_CLEAN_PARAM, DramStores
 from .state_cdc import StateCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
@@ -267,7 +267,7 @@ class TileEngine(wiring.Component):
         Constraint("not prefetch or store != 'bram'", lambda p: not p["prefetch"] or p["store"] != "bram",
                    "prefetch with store=bram: the block-RAM engine runs the model's cycle counts (its 2-cycle "
                    "latency leaves little to hide); prefetch is for a store outside (external, dram)"),
-    )
+    ) + DRAM_CONSTRAINTS
 
     @checked_init
     def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1, prefetch=0, skip_clean=False,

@@ -70,6 +70,7 @@ class _Port:
         assert port == self.index, f"word {addr:#x} (port {port}) came on port {self.index} at cycle {cycle}"
         if we:
             d.writes += 1
+            d.write_at[addr] += 1
             self._awaiting.append(addr)
             return
         self.timing.schedule(cycle)
@@ -88,7 +89,7 @@ class NativeDram:
     ``dut.clk``).
 
     ``rng``: a ``random.Random``.  ``reads`` / ``writes`` count the commands
-    served (``read_at``: the reads by address), ``late`` the answers that waited beyond ``latency``, ``paused``
+    served (``read_at``, ``write_at``: by address), ``late`` the answers that waited beyond ``latency``, ``paused``
     the cycles a port held ``cmd`` or ``wdata`` back, ``held_back`` those it
     found an answer not taken, ``answered`` the answers taken.  Its streams
     have a :class:`~.stream.Streams` of their own without a reset: the
@@ -102,6 +103,7 @@ class NativeDram:
         self.words = {}
         self.reads = self.writes = 0
         self.read_at = Counter()
+        self.write_at = Counter()
         self.addr_mask = (1 << addr_width) - 1
         self.ports = [_Port(self, streams, f"dram__{i}", i) for i in range(ports)]
 
