@@ -10,6 +10,7 @@ native user port (:class:`NativePortSignature`: LiteDRAM's ``cmd`` /
 from amaranth.hdl import Cat, Const, Module, Mux, Signal
 from amaranth.lib import data, stream, wiring
 from amaranth.lib.fifo import SyncFIFO, SyncFIFOBuffered
+from amaranth.lib.memory import Memory
 from amaranth.lib.wiring import In, Out
 
 from ..ram_init import undefined_memory
@@ -55,11 +56,11 @@ def local_row(row, ports):
 
 
 def load_bits(w, p, max_h, ports, data_width=128):
-    """A store's on-chip bits with ``changed`` (:class:`DramStore`: the load's obstacle bits and the
-    written bits of the A and B words), for each of ``ports`` stores: (depth, width)."""
+    """Each of ``ports`` stores' on-chip bits with ``changed`` (:class:`DramStore`: the load's obstacle
+    bits, the edge slots' and the written bits of the A, B and E words): (blocks, bits a block)."""
     lay = dram_layout(w, p, max_h, data_width)
     rows = max(local_row(r, ports) for r in range(max_h)) + 1
-    return rows << lay["wb"], p + lay["a"] + lay["b"]
+    return rows << lay["wb"], p + 2 + lay["a"] + lay["b"] + lay["e"] * (1 if lay["wb"] > 1 else 2)
 
 
 def NativePortSignature(addr_width, data_width):
@@ -180,14 +181,15 @@ class DramStore(wiring.Component):
         for one outside (all the engine reads di for there), the edge
         pixels' di as stored (the slot holds it).  And the load (a write of
         both groups: the map's initial state, di 0 or none, vector 0, hop
-        none, parent 0) writes no A or B word: the store keeps the word's
-        obstacle bits (di = 0) on chip and a *written* bit per A and B word,
-        cleared by the load; a read of a word not written since is answered
-        from the obstacle bits, and the first write to it is a whole word,
-        the bytes it does not enable from the same initial state.  So the
-        DRAM holds what it would had the load written the word: a load
-        costs its two edge slots (maze512-1-0: 196,608 native writes fewer
-        on the 3x8 array), and a word no visit changed is never read.
+        none, parent 0) issues nothing: the store keeps the block's
+        obstacle bits (di = 0) on chip, the obstacle bits of the pixels its
+        edge slots copy, and a *written* bit per A, B and E word, cleared by
+        the load; a read of a word not written since is answered from the
+        obstacle bits, and the first write to it is a whole word, the bytes
+        it does not enable from the same initial state.  So the DRAM holds
+        what it would had the load written the word: the load costs no
+        native command (maze512-1-0 on the 3x8 array: 262,144 writes), and
+        a word no visit changed is never read.
     ports : int
         The stores the map rows are spread over (:func:`port_of_row`): this
         store's on-chip bits hold only its rows (:func:`load_bits`).
@@ -199,7 +201,10 @@ class DramStore(wiring.Component):
     the controller's port (``addr_width`` = ``dram_layout(...)["addr_width"]``:
     the DRAM must hold ``2**addr_width`` native words).
 
-    Operation: one engine command at a time becomes its native commands,
+    Operation (with ``changed``: the on-chip bits of the command on offer
+    are looked up a cycle before it is taken, and its words not written
+    since the load are not read, or written whole): one engine command at
+    a time becomes its native commands,
     lowest offset first (a read: the groups it asks for, then the edge
     words; a write: its group's words, then the right neighbour's left slot
     and the left neighbour's right slot, byte-masked; a neighbour outside
@@ -286,7 +291,7 @@ class DramStore(wiring.Component):
         # reads in flight: which of the n_rd steps each one issued (with ``changed``: also whether it
         # asked for the A words, which of its A and B words come from the obstacle bits, and those bits)
         n_ab = a + b
-        m.submodules.desc = desc = SyncFIFOBuffered(width=n_rd + (1 + n_ab + p if self.changed else 0),
+        m.submodules.desc = desc = SyncFIFOBuffered(width=n_rd + (1 + n_rd + p + 2 if self.changed else 0),
                                                     depth=DESCRIPTORS)
         free = rest == 0
         rcmd, wcmd = self.rd.payload, self.wr.payload
@@ -297,22 +302,64 @@ class DramStore(wiring.Component):
             # only when the lookup of the cycle before was its own; the ports are transparent to the
             # writes of the command taken in that cycle, the only ones in between.
             depth, _ = load_bits(w, p, self.max_h, self.ports, dw)
-            # (undefined until the load writes them: the engine reads only words of the map it loaded)
+            wb = lay["wb"]
+            # Block k's: ``obst`` its pixels' obstacle bits, ``written`` its A and B words' written
+            # bits (undefined until the load writes them: the engine reads and writes only words of
+            # the map it loaded); ``l_obst`` / ``r_obst`` the obstacle bit of the pixel its left /
+            # right edge slot copies (the load of block k - 1 / k + 1 writes it) and its E words'
+            # written bits in ``e_written[bank]``, bank: bit 1 of the word column (a write looks up
+            # both its neighbours' at once, and k - 1 and k + 1 differ there); these three are zero
+            # until written (a write's neighbour may lie outside the map: its slot is written all
+            # the same, from defined bits).
             m.submodules.obst = obst = undefined_memory(shape=p, depth=depth)
             m.submodules.written = written = undefined_memory(shape=n_ab, depth=depth)
-            o_wp, w_wp = obst.write_port(), written.write_port()
-            o_rp, w_rp = obst.read_port(transparent_for=(o_wp,)), written.read_port(transparent_for=(w_wp,))
+            m.submodules.l_obst = l_obst = Memory(shape=1, depth=depth, init=[])
+            m.submodules.r_obst = r_obst = Memory(shape=1, depth=depth, init=[])
+            e_written = [Memory(shape=e, depth=depth >> 1 if wb > 1 else depth, init=[]) for _ in range(2)]
+            ports = {}
+            for name, mem in (("o", obst), ("w", written), ("l", l_obst), ("r", r_obst),
+                              ("e0", e_written[0]), ("e1", e_written[1])):
+                if name.startswith("e"):
+                    m.submodules[f"e_written{name[1]}"] = mem
+                wp = mem.write_port()
+                ports[name] = (mem.read_port(transparent_for=(wp,)), wp)
+            (o_rp, o_wp), (w_rp, w_wp), (l_rp, l_wp), (r_rp, r_wp) = (ports[n] for n in "owlr")
             on_wr = self.wr.valid
-            key = Signal(len(o_rp.addr))
-            m.d.comb += key.eq(Cat(Mux(on_wr, wcmd.wcol, rcmd.wcol)[:lay["wb"]],
-                                   local_row(Mux(on_wr, wcmd.row, rcmd.row), self.ports)))
-            looked_key, looked_ok = Signal(len(key) + 1), Signal()
-            m.d.sync += [looked_key.eq(Cat(key, on_wr)), looked_ok.eq(1)]
-            looked = looked_ok & (looked_key == Cat(key, on_wr))
-            m.d.comb += [o_rp.addr.eq(key), w_rp.addr.eq(key), o_wp.addr.eq(key), w_wp.addr.eq(key)]
+            c_col = Signal(wb)              # the command on offer: its block's word column, local row
+            c_row = Signal(len(local_row(wcmd.row, self.ports)))
+            m.d.comb += [c_col.eq(Mux(on_wr, wcmd.wcol, rcmd.wcol)),
+                         c_row.eq(local_row(Mux(on_wr, wcmd.row, rcmd.row), self.ports))]
+
+            def key(dc):
+                """The on-chip address of the block ``dc`` word columns right of the one on offer."""
+                return Cat((c_col + dc)[:wb], c_row)
+
+            def bank(dc):
+                return (c_col + dc)[1] if wb > 1 else Const(0)
+
+            def e_key(dc):
+                """That block's address in its ``e_written`` bank (the word column without its bank bit)."""
+                col = (c_col + dc)[:wb]
+                return Cat(col[0], col[2:], c_row) if wb > 1 else key(dc)
+
+            looked_key, looked_ok = Signal(wb + len(c_row) + 1), Signal()
+            m.d.sync += [looked_key.eq(Cat(key(0), on_wr)), looked_ok.eq(1)]
+            looked = looked_ok & (looked_key == Cat(key(0), on_wr))
+            r_ok = c_col != w["words"] - 1          # the block on offer has a right / left neighbour
+            l_ok = c_col != 0
+            m.d.comb += [o_rp.addr.eq(key(0)), w_rp.addr.eq(key(0)), o_wp.addr.eq(key(0)), w_wp.addr.eq(key(0)),
+                         l_rp.addr.eq(Mux(on_wr, key(-1), key(0))), r_rp.addr.eq(Mux(on_wr, key(1), key(0))),
+                         l_wp.addr.eq(key(1)), r_wp.addr.eq(key(-1))]
+            # a write looks up its neighbours' E words' written bits, a read its own
+            e_rd = []
+            for i in range(2):
+                rp, wp = ports[f"e{i}"]
+                m.d.comb += rp.addr.eq(Mux(on_wr, Mux(r_ok & (bank(1) == i), e_key(1), e_key(-1)), e_key(0)))
+                e_rd.append(rp.data)
+            e_right, e_left, e_own = (Mux(bank(dc), e_rd[1], e_rd[0]) for dc in (1, -1, 0))
         else:
             looked = Const(1)
-        take_wr = self.wr.valid & free & looked
+        take_wr = self.wr.valid & free & (looked | (wcmd.edt & wcmd.bfs if self.changed else 0))
         take_rd = self.rd.valid & free & ~self.wr.valid & desc.w_rdy & looked
         m.d.comb += [self.wr.ready.eq(free & looked), self.rd.ready.eq(free & ~self.wr.valid & desc.w_rdy & looked)]
         # with the cfr bits in the B words, di alone for a BFS group read is not a reason to read A
@@ -343,20 +390,37 @@ class DramStore(wiring.Component):
             wr_steps = Cat(*([wcmd.edt] * a), *([wcmd.bfs] * b), right_ok, left_ok)
         rd_go, desc_data = rd_steps, rd_steps
         if self.changed:
-            # the load (both groups) writes its neighbours' edge slots only, its obstacle bits and
-            # clears its written bits; another write sets the written bits of the words it issues
+            # The load (both groups) issues nothing: it writes its obstacle bits (its first and last
+            # into its neighbours' l_obst and r_obst) and clears its written bits.  Another write sets
+            # the written bits of the words it issues (its neighbours' E words for its slots).
             is_load = wcmd.edt & wcmd.bfs
-            wr_steps = Mux(is_load, wr_steps & ~((1 << n_ab) - 1), wr_steps)
+            wr_steps = Mux(is_load, 0, wr_steps)
+            obst_bits = Cat(*[wcmd.word[j].di == 0 for j in range(p)])
             m.d.comb += [w_wp.en.eq(take_wr), w_wp.data.eq(Mux(is_load, 0, w_rp.data | wr_steps[:n_ab])),
-                         o_wp.en.eq(take_wr & is_load), o_wp.data.eq(Cat(*[wcmd.word[j].di == 0 for j in range(p)]))]
-            # a read's A and B words not written since the load come from the obstacle bits
-            fresh = rd_steps[:n_ab] & ~w_rp.data
-            rd_go = rd_steps & ~Cat(fresh, Const(0, e))
-            desc_data = Cat(rd_go, rd_steps[0], fresh, o_rp.data)
+                         o_wp.en.eq(take_wr & is_load), o_wp.data.eq(obst_bits),
+                         l_wp.en.eq(take_wr & is_load & r_ok), l_wp.data.eq(obst_bits[p - 1]),
+                         r_wp.en.eq(take_wr & is_load & l_ok), r_wp.data.eq(obst_bits[0])]
+            slot_bit = [1 << lay["slot_at"](sl)[0] for sl in range(2)]        # a slot's E word
+            for i in range(2):
+                _, wp = ports[f"e{i}"]
+                right, left = wr_steps[n_ab], wr_steps[n_ab + 1]
+                with m.If(take_wr & is_load & (bank(0) == i)):
+                    m.d.comb += [wp.en.eq(1), wp.addr.eq(e_key(0)), wp.data.eq(0)]
+                with m.Elif(take_wr & right & (bank(1) == i)):
+                    m.d.comb += [wp.en.eq(1), wp.addr.eq(e_key(1)), wp.data.eq(e_right | slot_bit[0])]
+                with m.Elif(take_wr & left & (bank(-1) == i)):
+                    m.d.comb += [wp.en.eq(1), wp.addr.eq(e_key(-1)), wp.data.eq(e_left | slot_bit[1])]
+            # a read's words not written since the load come from the obstacle bits
+            fresh = rd_steps & ~Cat(w_rp.data, e_own)
+            rd_go = rd_steps & ~fresh
+            desc_data = Cat(rd_go, rd_steps[0], fresh, o_rp.data, l_rp.data, r_rp.data)
             wr_fresh = Signal(n_ab)         # the write's words not written since the load
             wr_obst = Signal(p)             # and its obstacle bits
+            slot_fresh = [Signal(e, name=f"slot{sl}_fresh") for sl in range(2)]   # the neighbours' E words
+            slot_other = [Signal(name=f"slot{sl}_other") for sl in range(2)]      # and their other edge pixel
             with m.If(take_wr):
-                m.d.sync += [wr_fresh.eq(~w_rp.data), wr_obst.eq(o_rp.data)]
+                m.d.sync += [wr_fresh.eq(~w_rp.data), wr_obst.eq(o_rp.data), slot_fresh[0].eq(~e_right),
+                             slot_fresh[1].eq(~e_left), slot_other[0].eq(r_rp.data), slot_other[1].eq(l_rp.data)]
         m.d.comb += [desc.w_data.eq(desc_data), desc.w_en.eq(take_rd)]
         m.d.sync += busy_mask.eq(rest)
         with m.If(take_wr):
@@ -390,9 +454,32 @@ class DramStore(wiring.Component):
                 m.d.comb += [v[j].di.eq(Mux(obst[j], 0, (1 << w["di"]) - 1)), v[j].hop.eq((1 << w["hop"]) - 1)]
             return regions(v, ~obst)
 
+        def edge_initial(left, right, name):
+            """The E words the load would have written for edge pixels of obstacle bits ``left`` and
+            ``right`` (both groups of each slot; bytes outside the slots 0)."""
+            v = Signal(e * dw, name=name)
+            for sl, ob in ((0, left), (1, right)):
+                ew, byte = lay["slot_at"](sl)
+                init = Signal(px, name=f"{name}_{sl}")
+                m.d.comb += [init.di.eq(Mux(ob, 0, (1 << w["di"]) - 1)), init.hop.eq((1 << w["hop"]) - 1)]
+                at_e, at_b = ew * dw + (byte + lay["edt_byte"]) * 8, ew * dw + (byte + lay["bfs_byte"]) * 8
+                cut = px["hop"].offset
+                m.d.comb += [v[at_e:at_e + cut].eq(init.as_value()[:cut]),
+                             v[at_b:at_b + px.size - cut].eq(init.as_value()[cut:])]
+            return v
+
         edt_bits, b_region = regions(pix, cfr)
         if self.changed:
             b_initial = initial(wr_obst, "wr_initial")[1]
+            # the right neighbour's E words (slot 0: our last pixel), the left one's (slot 1: our first)
+            slot_initial = [edge_initial(wr_obst[p - 1], slot_other[0], "right_initial"),
+                            edge_initial(slot_other[1], wr_obst[0], "left_initial")]
+            slot_data = []                  # each slot's write as it would go into a word written before
+            for slot in range(2):
+                swd, swbe = Signal(dw, name=f"slot{slot}_wd"), Signal(nb, name=f"slot{slot}_be")
+                m.d.comb += _slot_write(swd, swbe, pix[p - 1 if slot == 0 else 0].as_value(),
+                                        lay["slot_at"](slot)[1], lay, px, wmask)
+                slot_data.append((swd, swbe))
 
         def whole(raw, init, be):
             """A word not written since the load, written whole: ``raw``'s bytes enabled by ``be``,
@@ -429,7 +516,14 @@ class DramStore(wiring.Component):
                             ew, byte = lay["slot_at"](slot)
                             with m.If(is_wr):
                                 m.d.comb += [col.eq(wcol + 1 if slot == 0 else wcol - 1), off.eq(a + b + ew)]
-                                m.d.comb += _slot_write(wd, wbe, src, byte, lay, px, wmask)
+                                if self.changed:    # an E word not written since the load goes whole
+                                    swd, swbe = slot_data[slot]
+                                    fresh_e = slot_fresh[slot][ew]
+                                    init = slot_initial[slot][ew * dw:(ew + 1) * dw]
+                                    m.d.comb += [wbe.eq(Mux(fresh_e, (1 << nb) - 1, swbe)),
+                                                 wd.eq(Mux(fresh_e, whole(swd, init, swbe), swd))]
+                                else:
+                                    m.d.comb += _slot_write(wd, wbe, src, byte, lay, px, wmask)
         # the block's address ((row << wb) | wcol) << kb | off with the map row's 3 low bits moved
         # down to bit ROW_BITS_AT (dram_layout)
         lin = Cat(off[:kb] if kb else Const(0, 0), col[:wb], Const(0, max(0, ROW_BITS_AT - kb - wb)))
@@ -455,12 +549,12 @@ class DramStore(wiring.Component):
             m.d.sync += amask.eq(desc.r_data[:n_rd])
         if self.changed:
             got_a = Signal()            # the read being collected asked for the A words
-            d_fresh, d_obst = desc.r_data[n_rd + 1:n_rd + 1 + n_ab], desc.r_data[n_rd + 1 + n_ab:]
-            a_init, b_init = initial(d_obst, "rd_initial")
-            init = Cat(a_init, b_init)
+            d_fresh = desc.r_data[n_rd + 1:2 * n_rd + 1]
+            d_obst, d_left, d_right = desc.r_data[2 * n_rd + 1:][:p], desc.r_data[-2], desc.r_data[-1]
+            init = Cat(*initial(d_obst, "rd_initial"), edge_initial(d_left, d_right, "rd_edge_initial"))
             with m.If(pop):
                 m.d.sync += got_a.eq(desc.r_data[n_rd])
-                for s in range(n_ab):
+                for s in range(n_rd):
                     with m.If(d_fresh[s]):
                         m.d.sync += buf[s].eq(init[s * dw:(s + 1) * dw])
         with m.If(word_go):
@@ -473,6 +567,9 @@ class DramStore(wiring.Component):
             m.d.sync += out.valid.eq(0)
         with m.If(word_go & last):
             m.d.sync += out.valid.eq(1)
+        if self.changed:
+            with m.If(pop & (desc.r_data[:n_rd] == 0)):     # every word from the obstacle bits: ready now
+                m.d.sync += out.valid.eq(1)
         # the window row from the buffers (fields not asked for: whatever the buffer holds)
         a_bits, b_bits, e_bits = Cat(*buf[:a]), Cat(*buf[a:a + b]), Cat(*buf[a + b:])
         ans = out.payload

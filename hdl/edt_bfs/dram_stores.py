@@ -29,9 +29,9 @@ SKIP_CLEAN_PARAM = Param("skip_clean", bool, False,
                          message="skip_clean {value!r}: must be 0 or 1")
 
 
-# The stores' on-chip bits with skip_clean (DramStore: the load's obstacle bits, the A and B words' written
-# bits), at most: 2 Mbit, over half the LFE5U-85F's 3.7 Mbit of block RAM (maze512-1-0 on the 3x8 array, 4
-# ports: 384 Kbit).
+# The stores' on-chip bits with skip_clean (DramStore: the load's obstacle bits, the edge slots' and the A, B
+# and E words' written bits), at most: 2 Mbit, over half the LFE5U-85F's 3.7 Mbit of block RAM (maze512-1-0 on
+# the 3x8 array, 4 ports: 480 Kbit).
 LOAD_BITS_MAX = 2 << 20
 
 
@@ -72,8 +72,8 @@ class DramStores(wiring.Component):
         only the native words holding one of them, and keep the load's
         obstacle bits on chip (:class:`~hdl.edt_bfs.dram_store.DramStore`:
         a word no write changed is answered from them, not read; the load
-        writes its edge slots only): ``p + a + b`` bits a DRAM block, at
-        most :data:`LOAD_BITS_MAX` over the stores.
+        issues no native command): :func:`~hdl.edt_bfs.dram_store.load_bits`
+        a DRAM block, at most :data:`LOAD_BITS_MAX` over the stores.
 
     Ports
     -----
