@@ -151,6 +151,9 @@ BAD = [
     (["harmonic_counters", "p_max=2000000"], "p_max must be an integer in 2..1048574"),
     (["harmonic_planner", "e_max=70000", "block_exponents=1"], "e_max=70000: must be an integer in 1..65535"),
     (["harmonic_cluster", "depth=2000000"], "RAM depth must be an integer in 4..1048576"),
+    # the DRAM stores' on-chip bits with skip_clean (the load's obstacle bits): 2048x2048 is 8.5 Mbit
+    (["edt_dram_stores", "t_r=8", "t_c=8", "max_h=2048", "max_w=2048", "dram_ports=4", "skip_clean=1"],
+     "largest map 2048x2048 with skip_clean: the DRAM stores' obstacle and written bits are 8704 Kbit, at most 2048"),
     (["nosuch_top"], "unknown top 'nosuch_top'"),
 ]
 
