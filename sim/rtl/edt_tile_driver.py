@@ -19,7 +19,6 @@ decodes the results into the fields of
 start and d_far in; the model's result object out.
 """
 
-import itertools
 import random
 
 import cocotb
@@ -36,7 +35,7 @@ from navcores.models.edt_bfs_tiled import EdtBfsTiledResult
 
 from .clock import PERIOD_NS
 from .edt_bfs_driver import compare_fields
-from .native_dram import NativeDram
+from .native_dram import NativeDram, native_ports
 from .state_store import StateStore
 from .stream import Streams, pauses, unpack
 
@@ -79,11 +78,10 @@ class TileEngineDriver:
                       if hasattr(dut, "state__rd__valid") else None)
         # store="dram": the DRAM on its native port (not reset with the engine); not when the top
         # holds its own controller (hdl/edt_bfs/tile_litedram.py, whose inner wires have those names)
-        if hasattr(dut, "dram__0__cmd__valid") and not hasattr(dut, "wb_ctrl_cyc"):
+        if native_ports(dut) and not hasattr(dut, "wb_ctrl_cyc"):
             lay = self.dram_layout = dram_layout(w, t_c, max_h, DRAM_WIDTH)
-            ports = next(i for i in itertools.count() if not hasattr(dut, f"dram__{i}__cmd__valid"))
             self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed), clock=dut.dram_clk,
-                                    ports=ports)
+                                    ports=native_ports(dut))
         self.on_visit = None
 
     def set_stalls(self, rng=None, idle=0.0, back_pressure=0.0):

@@ -13,6 +13,8 @@ import cocotb
 from cocotb.clock import Clock
 from cocotb.triggers import ClockCycles, ReadOnly, RisingEdge
 
+from .native_dram import native_ports
+
 __all__ = ["NativeCount", "start_litedram"]
 
 DFII_HARDWARE = 0x0F
@@ -58,10 +60,8 @@ class NativeCount:
     def __init__(self, dut):
         self.dut, self.on = dut, False
         self.reads = self.writes = self.cycles = 0
-        self.ports = []
-        while hasattr(dut, f"dram__{len(self.ports)}__cmd__valid"):
-            i = len(self.ports)
-            self.ports.append(tuple(getattr(dut, f"dram__{i}__cmd__{n}") for n in ("valid", "ready", "payload")))
+        self.ports = [tuple(getattr(dut, f"dram__{i}__cmd__{n}") for n in ("valid", "ready", "payload"))
+                      for i in range(native_ports(dut))]
         if not self.ports:
             raise ValueError("no dram__<i>__cmd port on the top")
 

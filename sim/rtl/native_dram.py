@@ -33,7 +33,12 @@ from navcores.hdl.edt_bfs.dram_store import BANK_AT
 from .state_store import AnswerTiming
 from .stream import Streams, pauses
 
-__all__ = ["NativeDram"]
+__all__ = ["NativeDram", "native_ports"]
+
+
+def native_ports(dut):
+    """The native user ports on ``dut``'s top: ``dram__0__cmd`` ... (0 if none)."""
+    return next(i for i in itertools.count() if not hasattr(dut, f"dram__{i}__cmd__valid"))
 
 
 class _Port:
