@@ -173,9 +173,11 @@ class DramStore(wiring.Component):
         (:func:`~hdl.edt_bfs.state_ram.write_layout`): a write issues only
         the native words holding a changed pixel (a group word any of whose
         pixels changed; a neighbour's edge slot when the pixel it copies
-        changed); an EDT write (or the load) also writes the word's cfr
-        bits (:func:`dram_layout`: a byte-masked write of the B word holding
-        them, which a BFS write leaves out), and a read asking for di and the
+        changed); an EDT write also writes the word's cfr bits when one of
+        its changed pixels left the cfr (:func:`dram_layout`: a byte-masked
+        write of the B word holding them, which a BFS write leaves out; the
+        EDT changes a pixel once, from not done, in the cfr, to done, in the
+        cfr iff its di exceeds d_far), and a read asking for di and the
         BFS group without the vector (the BFS visits', the goals') skips the
         ``a`` words: its answer's di is ``none`` for a pixel in the cfr, 0
         for one outside (all the engine reads di for there), the edge
@@ -289,15 +291,14 @@ class DramStore(wiring.Component):
         m.d.comb += rest.eq(Mux(step_done, busy_mask & ~hot, busy_mask))
 
         # reads in flight: which of the n_rd steps each one issued (with ``changed``: also whether it
-        # asked for the A words, which of its A and B words come from the obstacle bits, and those bits)
+        # asked for the A words, which of its words come from the on-chip bits, and those bits)
         n_ab = a + b
         m.submodules.desc = desc = SyncFIFOBuffered(width=n_rd + (1 + n_rd + p + 2 if self.changed else 0),
                                                     depth=DESCRIPTORS)
         free = rest == 0
         rcmd, wcmd = self.rd.payload, self.wr.payload
         if self.changed:
-            # The load's obstacle bits and the A and B words' written bits (the class's docstring),
-            # looked up a cycle before a command is taken: the read ports are addressed by the
+            # The on-chip bits (the class's docstring), looked up a cycle before a command is taken: the read ports are addressed by the
             # command on offer (a write before a read, as they are taken), and a command is taken
             # only when the lookup of the cycle before was its own; the ports are transparent to the
             # writes of the command taken in that cycle, the only ones in between.
@@ -379,11 +380,13 @@ class DramStore(wiring.Component):
             touched = [Cat(*[wcmd.changed[j] for j in range(p)
                              if j * bits < (s + 1) * dw and (j + 1) * bits > s * dw]).any()
                        for bits, count in ((e_bits, a), (b_bits, b)) for s in range(count)]
-            # an EDT write (with any pixel changed) also writes the B word(s) holding the cfr bits
+            # an EDT write also writes the B word(s) holding the cfr bits when a pixel left the cfr:
+            # the EDT changes a pixel once, from not done (in the cfr) to done at di = k, in the cfr
+            # iff k > d_far (its ``cfr`` bit), so a changed pixel with its cfr bit 0 is one that left
             cfr_word = [cfr_bytes(s) != 0 for s in range(b)]
-            anyc = wcmd.changed.any()
+            left_cfr = (wcmd.changed & ~wcmd.cfr).any()
             wr_steps = Cat(*[wcmd.edt & t for t in touched[:a]],
-                           *[(wcmd.bfs & t) | (wcmd.edt & anyc) if cw else wcmd.bfs & t
+                           *[(wcmd.bfs & t) | (wcmd.edt & left_cfr) if cw else wcmd.bfs & t
                              for t, cw in zip(touched[a:], cfr_word)],
                            right_ok & wcmd.changed[p - 1], left_ok & wcmd.changed[0])
         else:
@@ -446,12 +449,17 @@ class DramStore(wiring.Component):
                     Cat(bfs_bits, Const(0, lay["cfr_byte"] * 8 - len(bfs_bits)), cfr,
                         Const(0, b * dw - lay["cfr_byte"] * 8 - p)))
 
+        def load_pixel(v, obst):
+            """``v`` <- the pixel the load writes for obstacle bit ``obst``: the engine's initial state
+            (di 0 or none, hop none, the rest 0)."""
+            return [v.di.eq(Mux(obst, 0, (1 << w["di"]) - 1)), v.hop.eq((1 << w["hop"]) - 1)]
+
         def initial(obst, name):
-            """The A and B words the load would have written for obstacle bits ``obst``: the
-            engine's initial state (di 0 or none, hop none, the rest 0; cfr: not an obstacle)."""
+            """The A and B words the load would have written for obstacle bits ``obst`` (cfr: not an
+            obstacle)."""
             v = Signal(data.ArrayLayout(px, p), name=name)
             for j in range(p):
-                m.d.comb += [v[j].di.eq(Mux(obst[j], 0, (1 << w["di"]) - 1)), v[j].hop.eq((1 << w["hop"]) - 1)]
+                m.d.comb += load_pixel(v[j], obst[j])
             return regions(v, ~obst)
 
         def edge_initial(left, right, name):
@@ -461,7 +469,7 @@ class DramStore(wiring.Component):
             for sl, ob in ((0, left), (1, right)):
                 ew, byte = lay["slot_at"](sl)
                 init = Signal(px, name=f"{name}_{sl}")
-                m.d.comb += [init.di.eq(Mux(ob, 0, (1 << w["di"]) - 1)), init.hop.eq((1 << w["hop"]) - 1)]
+                m.d.comb += load_pixel(init, ob)
                 at_e, at_b = ew * dw + (byte + lay["edt_byte"]) * 8, ew * dw + (byte + lay["bfs_byte"]) * 8
                 cut = px["hop"].offset
                 m.d.comb += [v[at_e:at_e + cut].eq(init.as_value()[:cut]),
