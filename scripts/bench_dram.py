@@ -113,9 +113,10 @@ def measure(name, core, csrs, work, mhz):
 
 def engine_mhz():
     """The engine's clock, if placed alone: the catalog engine's logic with store=external placed on the
-    part (its fit JSON's median of seeds; the engine's logic is the same, the DramStore and StateCdc run on
-    the controller's clock), or None if it has not been placed (for its current Verilog)."""
-    fit = B.fit_result(ARRAY, RAM, store="external", extra=ENGINE)
+    ECPIX-5's part, the whole top's (its fit JSON's median of seeds; the engine's logic is the same, the
+    DramStore and StateCdc run on the controller's clock), or None if it has not been placed (for its
+    current Verilog)."""
+    fit = B.fit_result(ARRAY, RAM, part=fit_dram_top.PART, store="external", extra=ENGINE)
     return fit["fmax_mhz"] if fit and fit["fits"] else None
 
 
@@ -148,13 +149,14 @@ def clock(sys_mhz):
         return engine, f"the engine at {engine:.1f} MHz: {where}"
     mhz = engine_mhz()
     text = (f"the engine at {mhz:.1f} MHz (the {NAME} engine with store=external, prefetch and skip_clean "
-            f"placed on the {B.PART}: make fit; the same engine logic; the whole top not placed)" if mhz else
+            f"placed alone on the {fit_dram_top.PART}, the ECPIX-5's: make fit; the same engine logic; the whole "
+            "top not placed for its current Verilog)" if mhz else
             f"no engine clock (the {NAME} engine is not placed for its current Verilog: no job times)")
     side = stores_fit()
     if side and side["fits"]:
         meets = "at least" if side["fmax_mhz"] >= sys_mhz else "BELOW"
         text += (f"; its DRAM side (DramStores: {PORTS} DramStores and the RowRouter, on the controller's clock) "
-                 f"placed alone on the {B.PART} at {side['fmax_mhz']:.1f} MHz ({meets} the controller's "
+                 f"placed alone on the {fit_dram_top.PART} at {side['fmax_mhz']:.1f} MHz ({meets} the controller's "
                  f"{sys_mhz:.0f} MHz), {side['lut4']:,} LUT4, {side['bram']} block RAMs (scripts/fit.py "
                  "edt_dram_stores); the crossing between the two clocks was not placed")
     else:
@@ -165,7 +167,8 @@ def clock(sys_mhz):
 def stores_fit():
     """The DRAM side (hdl/edt_bfs/dram_stores.py: a DramStore per port and the RowRouter) placed alone at its
     own clock (scripts/fit.py edt_dram_stores ...: its fit JSON), or None if it has not been placed."""
-    return B.fit_result(ARRAY, RAM, top="edt_dram_stores", extra={k: PARAMS[k] for k in ("dram_ports", "skip_clean")})
+    return B.fit_result(ARRAY, RAM, part=fit_dram_top.PART, top="edt_dram_stores",
+                        extra={k: PARAMS[k] for k in ("dram_ports", "skip_clean")})
 
 
 def section(maps=MAPS):
