@@ -38,18 +38,24 @@ BANK_AT = 7
 PORTS = (1, 2, 4)
 
 
+def _port_bits(ports):
+    """Where the port's bits sit in a map row with ``ports`` ports, and how many: (first, count)."""
+    lo, bits = BANK_AT - ROW_BITS_AT, (ports - 1).bit_length()
+    assert ports in PORTS and 0 <= lo and lo + bits <= 3, (ports, lo)
+    return lo, bits
+
+
 def port_of_row(row, ports):
     """The native port whose store holds map row ``row`` (an Amaranth value) with ``ports`` ports: the
     low bits of its words' bank (``BANK_AT``), which are row bits (``ROW_BITS_AT``)."""
-    lo, bits = BANK_AT - ROW_BITS_AT, (ports - 1).bit_length()
-    assert ports in PORTS and 0 <= lo and lo + bits <= 3, (ports, lo)
+    lo, bits = _port_bits(ports)
     return row[lo:lo + bits] if bits else 0
 
 
 def local_row(row, ports):
     """Map row ``row`` (an Amaranth value or an int) among the rows of its port's store: without the bits
     :func:`port_of_row` takes (they are the same for every row a store holds)."""
-    lo, bits = BANK_AT - ROW_BITS_AT, (ports - 1).bit_length()
+    lo, bits = _port_bits(ports)
     if isinstance(row, int):
         return (row & ((1 << lo) - 1)) | ((row >> (lo + bits)) << lo)
     return Cat(row[:lo], row[lo + bits:]) if bits else row
