@@ -219,8 +219,9 @@ class DramStore(wiring.Component):
     the widest map is skipped), one a cycle while the port is ready; the
     next engine command is accepted in the cycle its predecessor's last
     native command loads while the command register is empty (else in the
-    cycle after: the port's ``ready`` does not reach the engine side).  A write's data beat waits in a FIFO of ``BEATS``
-    until the controller asks for it (LiteDRAM: some cycles after the
+    cycle after: the port's ``ready`` does not reach the engine side).  A
+    write's data beat waits in a FIFO of ``BEATS`` until the controller asks
+    for it (LiteDRAM: some cycles after the
     command), so writes go one a cycle too.  Reads in flight are
     described in a FIFO of ``DESCRIPTORS`` (which words each brings); the
     answers enter a FIFO of ``max_reads`` words, and the answer side
@@ -306,10 +307,10 @@ class DramStore(wiring.Component):
         # registers alone (the command register empty, room for its beat or answer), not from the
         # port's ready: that path (the controller's arbitration -> this take -> the on-chip bits'
         # writes and the engine side's ready) set the controller's clock in the whole top.
-        last = Signal()                 # one step to go, and it loads in this cycle
-        m.d.comb += last.eq(((busy_mask & (busy_mask - 1)) == 0) & ~c_valid
-                            & Mux(is_wr, beats.w_rdy, in_flight < self.max_reads))
-        free = ~active | last
+        last_step = Signal()            # one step to go, and it loads in this cycle
+        m.d.comb += last_step.eq(((busy_mask & (busy_mask - 1)) == 0) & ~c_valid
+                                 & Mux(is_wr, beats.w_rdy, in_flight < self.max_reads))
+        free = ~active | last_step
         rcmd, wcmd = self.rd.payload, self.wr.payload
         if self.changed:
             # The on-chip bits (the class's docstring), looked up a cycle before a command is taken: the read ports are addressed by the
