@@ -221,8 +221,8 @@ class DramStore(wiring.Component):
     native command loads while the command register is empty (else in the
     cycle after: the port's ``ready`` does not reach the engine side).  A
     write's data beat waits in a FIFO of ``BEATS`` until the controller asks
-    for it (LiteDRAM: some cycles after the
-    command), so writes go one a cycle too.  Reads in flight are
+    for it (LiteDRAM: some cycles after the command), so writes go one a
+    cycle too.  Reads in flight are
     described in a FIFO of ``DESCRIPTORS`` (which words each brings); the
     answers enter a FIFO of ``max_reads`` words, and the answer side
     collects them into one window row and holds it until taken.  The whole
