@@ -51,7 +51,9 @@ ARRAY = (PARAMS["t_r"], PARAMS["t_c"])
 RAM = (PARAMS["max_h"], PARAMS["max_w"])
 PORTS = PARAMS["dram_ports"]
 NAME = f"{ARRAY[0]}x{ARRAY[1]} / {RAM[0]}x{RAM[1]}"
-ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", "dram_ports")}
+# the DRAM side's own parameters (an engine with store=external has none of them), and the engine's others
+SIDE = {k: PARAMS[k] for k in ("dram_ports", "bfs_slots") if k in PARAMS}
+ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", *SIDE)}
 TIMING = model_timing(PARAMS.get("iter_cycles", 1))     # the model's cycle constants for that engine
 # The clocks' ratio in the simulation when the engine has no current clock (clock() gives None): what the
 # 3x8 engine reached in the whole top on the ECPIX-5's part before the skid buffers (2026-12-06, BENCHMARKS.md;
@@ -124,7 +126,7 @@ def top_fit():
     """The whole top placed (scripts/fit_dram_top.py: the engine with its DRAM side and LiteDRAM's
     controller and PHY on the ECPIX-5's part), for its current Verilog, or None."""
     return B.fit_result(ARRAY, RAM, part=fit_dram_top.PART, top=fit_dram_top.TOP, store=None,
-                        extra={"dram_ports": PORTS, **ENGINE})
+                        extra={**SIDE, **ENGINE})
 
 
 def clock(sys_mhz):
@@ -168,7 +170,7 @@ def stores_fit():
     """The DRAM side (hdl/edt_bfs/dram_stores.py: a DramStore per port and the RowRouter) placed alone at its
     own clock (scripts/fit.py edt_dram_stores ...: its fit JSON), or None if it has not been placed."""
     return B.fit_result(ARRAY, RAM, part=fit_dram_top.PART, top="edt_dram_stores",
-                        extra={k: PARAMS[k] for k in ("dram_ports", "skip_clean")})
+                        extra={**SIDE, "skip_clean": PARAMS["skip_clean"]})
 
 
 def section(maps=MAPS):

@@ -61,12 +61,14 @@ def local_row(row, ports):
     return Cat(row[:lo], row[lo + bits:]) if bits else row
 
 
-def load_bits(w, p, max_h, ports, data_width=128):
+def load_bits(w, p, max_h, ports, data_width=128, bfs_slots=False):
     """Each of ``ports`` stores' on-chip bits with ``changed`` (:class:`DramStore`: the load's obstacle
-    bits, the edge slots' and the written bits of the A, B and E words): (blocks, bits a block)."""
-    lay = dram_layout(w, p, max_h, data_width)
+    bits, the edge slots' and the written bits of the A, B and E words; with ``bfs_slots`` the B slot
+    word's again, in the banks its neighbours' writes look up): (blocks, bits a block)."""
+    lay = dram_layout(w, p, max_h, data_width, bfs_slots)
     rows = max(local_row(r, ports) for r in range(max_h)) + 1
-    return rows << lay["wb"], p + 2 + lay["a"] + lay["b"] + lay["e"] * (1 if lay["wb"] > 1 else 2)
+    return rows << lay["wb"], (p + 2 + lay["a"] + lay["b"] + lay["e"] * (1 if lay["wb"] > 1 else 2)
+                               + (1 if bfs_slots else 0))
 
 
 def NativePortSignature(addr_width, data_width):
@@ -87,7 +89,7 @@ def _bytes(bits):
     return -(-bits // 8)
 
 
-def dram_layout(w, p, max_h, data_width=128):
+def dram_layout(w, p, max_h, data_width=128, bfs_slots=False):
     """Where :class:`DramStore` keeps word (``row``, ``wcol``): a block of
     ``2**kb`` native words at address ``((row << wb) | wcol) << kb``, with
     the three low bits of ``row`` moved down to bit ``ROW_BITS_AT`` (the
@@ -107,19 +109,40 @@ def dram_layout(w, p, max_h, data_width=128):
       byte-masked write).  Both slots in one native word when they fit
       (``e = 1``), else one each.
 
+    With ``bfs_slots`` the B words also hold, from byte ``bslot`` of the
+    region (all in B word ``bslot_word``), the edge slots' BFS groups (slot
+    0 then slot 1, ``b_slot`` bytes each) and a byte per slot whose bit 0
+    says the pixel it copies *left* the cfr (the EDT made it di <= d_far);
+    the cfr bits of the word's own pixels are kept the same way (1: left;
+    the cfr is then: not an obstacle and not left), so the load's B words
+    do not depend on the map: a BFS read needs no E word.
+
     So a window row (the word and one pixel either side) is ``a`` + ``e``
-    reads for an EDT visit, ``b + e`` for a BFS visit with the cfr bits,
+    reads for an EDT visit, ``b + e`` for a BFS visit with the cfr bits
+    (``b`` with ``bfs_slots``),
     ``a + b + e`` for the rest, all in one block (one
     DRAM row); a write of one group is its ``a`` (or ``b``) words plus one
     byte-masked write into each neighbour's edge word.  Returns a dict of
-    those numbers, ``cfr_byte``, ``slot`` (the slot's size in bytes), ``edt_byte`` /
+    those numbers, ``cfr_byte``, ``slot`` (the slot's size in bytes), ``bslot``, ``b_slot``,
+    ``bslot_word`` (None without ``bfs_slots``), ``edt_byte`` /
     ``bfs_byte`` (each group's first byte in a slot), ``slot_at(s)`` ->
     (edge word, first byte) and ``addr_width``.
     """
     e_bits, b_bits = edt_layout(w).size, bfs_layout(w).size
     assert data_width % 8 == 0 and data_width >= 32, data_width
     cfr_byte = _bytes(p * b_bits)
-    a, b = -(-p * e_bits // data_width), -(-(cfr_byte + _bytes(p)) * 8 // data_width)
+    nb = data_width // 8
+    b_end = cfr_byte + _bytes(p)                # the B region's bytes
+    bslot = b_slot = None
+    if bfs_slots:
+        b_slot = _bytes(b_bits)
+        span = 2 * b_slot + 2                   # both slots' BFS groups, then their "left" bytes
+        if span > nb:
+            raise ValueError(f"the edge slots' BFS groups ({span} bytes) are wider than a native word "
+                             f"({data_width} bits)")
+        bslot = b_end if b_end // nb == (b_end + span - 1) // nb else -(-b_end // nb) * nb     # in one word
+        b_end = bslot + span
+    a, b = -(-p * e_bits // data_width), -(-b_end // nb)
     slot = _bytes(e_bits) + _bytes(b_bits)
     if slot > data_width // 8:
         raise ValueError(f"a pixel's state ({slot} bytes) is wider than a native word ({data_width} bits)")
@@ -130,7 +153,9 @@ def dram_layout(w, p, max_h, data_width=128):
     # the row's low bits at ROW_BITS_AT even when a row's blocks take fewer address bits (a small map)
     return {"a": a, "b": b, "e": e, "kb": kb, "wb": wb, "rb": rb, "addr_width": rb + max(wb + kb, ROW_BITS_AT),
             "cfr_byte": cfr_byte, "slot": slot, "edt_byte": 0, "bfs_byte": _bytes(e_bits), "data_width": data_width,
-            "slot_at": (lambda s: (s, 0) if e == 2 else (0, s * slot))}
+            "slot_at": (lambda s: (s, 0) if e == 2 else (0, s * slot)),
+            "bfs_slots": bfs_slots, "bslot": bslot, "b_slot": b_slot,
+            "bslot_word": bslot // nb if bfs_slots else None}
 
 
 def _slot_write(wd, wbe, src, byte, lay, px, groups):
@@ -201,6 +226,15 @@ class DramStore(wiring.Component):
     ports : int
         The stores the map rows are spread over (:func:`port_of_row`): this
         store's on-chip bits hold only its rows (:func:`load_bits`).
+    bfs_slots : bool
+        With ``changed``: the edge slots' BFS groups, and whether the pixel
+        each copies left the cfr, in the B words (:func:`dram_layout`): a
+        BFS read is ``b`` native words, not ``b + e``.  A BFS write puts its
+        edge pixels into its neighbours' B words instead of their E words,
+        and an EDT write whose edge pixel left the cfr says so there too
+        (byte-masked; the first write to a B word goes whole, and the load's
+        B words are the same for every map, so that needs no obstacle bit
+        of the neighbour's).
 
     Ports
     -----
@@ -236,14 +270,16 @@ class DramStore(wiring.Component):
     latency.
     """
 
-    def __init__(self, w, p, max_h, data_width=128, max_reads=16, changed=False, ports=1):
+    def __init__(self, w, p, max_h, data_width=128, max_reads=16, changed=False, ports=1, bfs_slots=False):
         if not 1 <= max_reads <= 256:
             raise ValueError(f"max_reads {max_reads}: must be 1..256")
         if ports not in PORTS:
             raise ValueError(f"ports {ports}: must be one of {PORTS}")
+        if bfs_slots and not changed:
+            raise ValueError("bfs_slots needs changed (the cfr bits and the on-chip written bits)")
         self.w, self.p, self.max_h, self.max_reads, self.changed = w, p, max_h, max_reads, changed
-        self.ports = ports
-        self.lay = dram_layout(w, p, max_h, data_width)
+        self.ports, self.bfs_slots = ports, bfs_slots
+        self.lay = dram_layout(w, p, max_h, data_width, bfs_slots)
         super().__init__({
             **StateSignature(w, p, changed).members,
             "dram": Out(NativePortSignature(self.lay["addr_width"], data_width)),
@@ -256,7 +292,8 @@ class DramStore(wiring.Component):
         nb = dw // 8
         px = pixel_layout(w)
         n_rd = a + b + e            # a read's steps: A words, B words, edge words
-        n_wr = a + b + 2            # a write's: A words, B words, the two neighbours' slots
+        # a write's: A words, B words, the two neighbours' E slots (and with bfs_slots their B slots)
+        n_wr = a + b + 2 + (2 if self.bfs_slots else 0)
         n = max(n_rd, n_wr)
         e_lay, b_lay = edt_layout(w), bfs_layout(w)
 
@@ -301,7 +338,8 @@ class DramStore(wiring.Component):
         # reads in flight: which of the n_rd steps each one issued (with ``changed``: also whether it
         # asked for the A words, which of its words come from the on-chip bits, and those bits)
         n_ab = a + b
-        m.submodules.desc = desc = SyncFIFOBuffered(width=n_rd + (1 + n_rd + p + 2 if self.changed else 0),
+        m.submodules.desc = desc = SyncFIFOBuffered(width=n_rd + (1 + n_rd + p + 2 + self.bfs_slots if self.changed
+                                                                 else 0),
                                                     depth=DESCRIPTORS)
         # The next command is taken when the last step of this one loads in this cycle, judged from
         # registers alone (the command register empty, room for its beat or answer), not from the
@@ -373,6 +411,28 @@ class DramStore(wiring.Component):
                 m.d.comb += rp.addr.eq(Mux(on_wr, Mux(r_ok & (bank(1) == i), e_key(1), e_key(-1)), e_key(0)))
                 e_rd.append(rp.data)
             e_right, e_left, e_own = (Mux(bank(dc), e_rd[1], e_rd[0]) for dc in (1, -1, 0))
+            if self.bfs_slots:
+                # The B slot word's written bits in banks by the word column's low bits: a write looks
+                # up its own and both its neighbours' at once (three columns in a row: three banks;
+                # with two columns of blocks, the one neighbour inside).  Zero until written, as
+                # e_written.
+                sb = min(2, wb)
+                bs_ports = []
+                for i in range(1 << sb):
+                    mem = m.submodules[f"bs_written{i}"] = Memory(shape=1, depth=depth >> sb, init=[])
+                    wp = mem.write_port()
+                    bs_ports.append((mem.read_port(transparent_for=(wp,)), wp))
+
+                def bs_bank(dc):
+                    return (c_col + dc)[:sb]
+
+                def bs_key(dc):
+                    return Cat((c_col + dc)[sb:wb], c_row)
+                for i, (rp, _) in enumerate(bs_ports):
+                    m.d.comb += rp.addr.eq(Mux(bs_bank(0) == i, bs_key(0),
+                                               Mux(on_wr & r_ok & (bs_bank(1) == i), bs_key(1), bs_key(-1))))
+                bs_rd = Cat(*[rp.data for rp, _ in bs_ports])
+                bs_own, bs_right, bs_left = (bs_rd.bit_select(bs_bank(dc), 1) for dc in (0, 1, -1))
         else:
             looked = Const(1)
         take_wr = self.wr.valid & free & (looked | (wcmd.edt & wcmd.bfs if self.changed else 0))
@@ -380,7 +440,9 @@ class DramStore(wiring.Component):
         m.d.comb += [self.wr.ready.eq(free & looked), self.rd.ready.eq(free & ~self.wr.valid & desc.w_rdy & looked)]
         # with the cfr bits in the B words, di alone for a BFS group read is not a reason to read A
         need_a = (rcmd.nnt | (rcmd.di & ~rcmd.bfs)) if self.changed else (rcmd.di | rcmd.nnt)
-        rd_steps = Cat(*([need_a] * a), *([rcmd.bfs] * b), *([Const(1)] * e))
+        # with bfs_slots the edge pixels' BFS groups and cfr come with the B words: E only for A's fields
+        e_need = (need_a | ~rcmd.bfs) if self.bfs_slots else Const(1)
+        rd_steps = Cat(*([need_a] * a), *([rcmd.bfs] * b), *([e_need] * e))
         right_ok = wcmd.wcol != w["words"] - 1
         left_ok = wcmd.wcol != 0
 
@@ -400,10 +462,17 @@ class DramStore(wiring.Component):
             # iff k > d_far (its ``cfr`` bit), so a changed pixel with its cfr bit 0 is one that left
             cfr_word = [cfr_bytes(s) != 0 for s in range(b)]
             left_cfr = (wcmd.changed & ~wcmd.cfr).any()
-            wr_steps = Cat(*[wcmd.edt & t for t in touched[:a]],
-                           *[(wcmd.bfs & t) | (wcmd.edt & left_cfr) if cw else wcmd.bfs & t
-                             for t, cw in zip(touched[a:], cfr_word)],
-                           right_ok & wcmd.changed[p - 1], left_ok & wcmd.changed[0])
+            group_go = [*[wcmd.edt & t for t in touched[:a]],
+                        *[(wcmd.bfs & t) | (wcmd.edt & left_cfr) if cw else wcmd.bfs & t
+                          for t, cw in zip(touched[a:], cfr_word)]]
+            edge_go = [right_ok & wcmd.changed[p - 1], left_ok & wcmd.changed[0]]
+            b_slot_go = []
+            if self.bfs_slots:
+                # the E slots take the EDT group alone; the B slots a BFS write's group, and an EDT
+                # write's "left" byte when the edge pixel left the cfr
+                b_slot_go = [g & (wcmd.bfs | (wcmd.edt & ~wcmd.cfr[j])) for g, j in zip(edge_go, (p - 1, 0))]
+                edge_go = [wcmd.edt & g for g in edge_go]
+            wr_steps = Cat(*group_go, *edge_go, *b_slot_go)
         else:
             wr_steps = Cat(*([wcmd.edt] * a), *([wcmd.bfs] * b), right_ok, left_ok)
         rd_go, desc_data = rd_steps, rd_steps
@@ -428,17 +497,33 @@ class DramStore(wiring.Component):
                     m.d.comb += [wp.en.eq(1), wp.addr.eq(e_key(1)), wp.data.eq(e_right | slot_bit[0])]
                 with m.Elif(take_wr & left & (bank(-1) == i)):
                     m.d.comb += [wp.en.eq(1), wp.addr.eq(e_key(-1)), wp.data.eq(e_left | slot_bit[1])]
+            own_written = w_rp.data
+            if self.bfs_slots:          # the B slot word's bit from its banks
+                bw = a + lay["bslot_word"]
+                own_written = Cat(w_rp.data[:bw], bs_own, w_rp.data[bw + 1:])
+                for i, (_, wp) in enumerate(bs_ports):
+                    with m.If(take_wr & (bs_bank(0) == i) & (is_load | wr_steps[bw])):
+                        m.d.comb += [wp.en.eq(1), wp.addr.eq(bs_key(0)), wp.data.eq(~is_load)]
+                    with m.Elif(take_wr & wr_steps[n_ab + 2] & (bs_bank(1) == i)):
+                        m.d.comb += [wp.en.eq(1), wp.addr.eq(bs_key(1)), wp.data.eq(1)]
+                    with m.Elif(take_wr & wr_steps[n_ab + 3] & (bs_bank(-1) == i)):
+                        m.d.comb += [wp.en.eq(1), wp.addr.eq(bs_key(-1)), wp.data.eq(1)]
             # a read's words not written since the load come from the obstacle bits
-            fresh = rd_steps & ~Cat(w_rp.data, e_own)
+            fresh = rd_steps & ~Cat(own_written, e_own)
             rd_go = rd_steps & ~fresh
-            desc_data = Cat(rd_go, rd_steps[0], fresh, o_rp.data, l_rp.data, r_rp.data)
+            desc_data = Cat(rd_go, rd_steps[0], fresh, o_rp.data, l_rp.data, r_rp.data,
+                            *([rd_steps[n_ab]] if self.bfs_slots else []))
             wr_fresh = Signal(n_ab)         # the write's words not written since the load
             wr_obst = Signal(p)             # and its obstacle bits
             slot_fresh = [Signal(e, name=f"slot{sl}_fresh") for sl in range(2)]   # the neighbours' E words
             slot_other = [Signal(name=f"slot{sl}_other") for sl in range(2)]      # and their other edge pixel
             with m.If(take_wr):
-                m.d.sync += [wr_fresh.eq(~w_rp.data), wr_obst.eq(o_rp.data), slot_fresh[0].eq(~e_right),
+                m.d.sync += [wr_fresh.eq(~own_written), wr_obst.eq(o_rp.data), slot_fresh[0].eq(~e_right),
                              slot_fresh[1].eq(~e_left), slot_other[0].eq(r_rp.data), slot_other[1].eq(l_rp.data)]
+            if self.bfs_slots:          # the neighbours' B slot words
+                slot_bfresh = [Signal(name=f"slot{sl}_bfresh") for sl in range(2)]
+                with m.If(take_wr):
+                    m.d.sync += [slot_bfresh[0].eq(~bs_right), slot_bfresh[1].eq(~bs_left)]
         m.d.comb += [desc.w_data.eq(desc_data), desc.w_en.eq(take_rd)]
         m.d.sync += busy_mask.eq(rest)
         with m.If(take_wr):
@@ -469,13 +554,22 @@ class DramStore(wiring.Component):
             (di 0 or none, hop none, the rest 0)."""
             return [v.di.eq(Mux(obst, 0, (1 << w["di"]) - 1)), v.hop.eq((1 << w["hop"]) - 1)]
 
+        b_load = None
+        if self.bfs_slots:
+            # the load's B words with bfs_slots, the same for every map: each pixel's and each slot's
+            # BFS group at hop none, parent 0, no pixel left the cfr
+            g = ((1 << w["hop"]) - 1) << b_lay["hop"].offset
+            at = [j * b_lay.size for j in range(p)] + [(lay["bslot"] + sl * lay["b_slot"]) * 8 for sl in range(2)]
+            b_load = Const(sum(g << i for i in at), b * dw)
+
         def initial(obst, name):
             """The A and B words the load would have written for obstacle bits ``obst`` (cfr: not an
             obstacle)."""
             v = Signal(data.ArrayLayout(px, p), name=name)
             for j in range(p):
                 m.d.comb += load_pixel(v[j], obst[j])
-            return regions(v, ~obst)
+            a_words, b_words = regions(v, ~obst)
+            return a_words, b_load if self.bfs_slots else b_words
 
         def edge_initial(left, right, name):
             """The E words the load would have written for edge pixels of obstacle bits ``left`` and
@@ -491,7 +585,7 @@ class DramStore(wiring.Component):
                              v[at_b:at_b + px.size - cut].eq(init.as_value()[cut:])]
             return v
 
-        edt_bits, b_region = regions(pix, cfr)
+        edt_bits, b_region = regions(pix, ~cfr if self.bfs_slots else cfr)     # bfs_slots: "left" bits
         if self.changed:
             b_initial = initial(wr_obst, "wr_initial")[1]
             # the right neighbour's E words (slot 0: our last pixel), the left one's (slot 1: our first)
@@ -503,6 +597,19 @@ class DramStore(wiring.Component):
                 m.d.comb += _slot_write(swd, swbe, pix[p - 1 if slot == 0 else 0].as_value(),
                                         lay["slot_at"](slot)[1], lay, px, wmask)
                 slot_data.append((swd, swbe))
+            if self.bfs_slots:
+                # each neighbour's B slot word: our edge pixel's BFS group (a BFS write), whether it left
+                # the cfr (an EDT write)
+                bslot_data = []
+                for sl, j in ((0, p - 1), (1, 0)):
+                    swd, swbe = Signal(dw, name=f"bslot{sl}_wd"), Signal(nb, name=f"bslot{sl}_be")
+                    at = lay["bslot"] - lay["bslot_word"] * nb + sl * lay["b_slot"]       # bytes in the word
+                    lb = lay["bslot"] - lay["bslot_word"] * nb + 2 * lay["b_slot"] + sl
+                    m.d.comb += [swd[at * 8:at * 8 + b_lay.size].eq(pix[j].as_value()[px["hop"].offset:]),
+                                 swd[lb * 8].eq(~cfr[j]),
+                                 swbe.eq(Mux(wmask[1], ((1 << lay["b_slot"]) - 1) << at, 0)
+                                         | Mux(wmask[0], 1 << lb, 0))]
+                    bslot_data.append((swd, swbe))
 
         def whole(raw, init, be):
             """A word not written since the load, written whole: ``raw``'s bytes enabled by ``be``,
@@ -520,7 +627,10 @@ class DramStore(wiring.Component):
                         m.d.comb += [off.eq(s), wd.eq(b_region[k * dw:(k + 1) * dw])]
                         if self.changed:                        # BFS group bytes; cfr bytes (EDT)
                             cmask = cfr_bytes(k)
-                            be = Mux(wmask[1], ((1 << nb) - 1) & ~cmask, 0) | Mux(wmask[0], cmask, 0)
+                            gmask = ((1 << nb) - 1) & ~cmask        # the BFS group's bytes
+                            if self.bfs_slots:                      # (not the neighbours' slots)
+                                gmask = Const((((1 << lay["cfr_byte"]) - 1) >> (k * nb)) & ((1 << nb) - 1), nb)
+                            be = Mux(wmask[1], gmask, 0) | Mux(wmask[0], cmask, 0)
                             raw = b_region[k * dw:(k + 1) * dw]
                             # a word not written since the load goes whole (the A words always do)
                             m.d.comb += [wbe.eq(Mux(wr_fresh[s], (1 << nb) - 1, be)),
@@ -531,6 +641,14 @@ class DramStore(wiring.Component):
                         k = s - a - b
                         if k < e:                               # a read's edge word k
                             m.d.comb += off.eq(a + b + k)
+                        if self.bfs_slots and 2 <= k < 4:       # a write's neighbour B slot
+                            sl, bsw = k - 2, lay["bslot_word"]
+                            swd, swbe = bslot_data[sl]
+                            with m.If(is_wr):
+                                m.d.comb += [col.eq(wcol + 1 if sl == 0 else wcol - 1), off.eq(a + bsw),
+                                             wbe.eq(Mux(slot_bfresh[sl], (1 << nb) - 1, swbe)),
+                                             wd.eq(Mux(slot_bfresh[sl],
+                                                       whole(swd, b_load[bsw * dw:(bsw + 1) * dw], swbe), swd))]
                         if k < 2:                               # a write's neighbour slot
                             # step a+b: the right neighbour's left slot (slot 0) <- our last pixel;
                             # step a+b+1: the left neighbour's right slot (slot 1) <- our first pixel
@@ -573,13 +691,19 @@ class DramStore(wiring.Component):
         if self.changed:
             got_a = Signal()            # the read being collected asked for the A words
             d_fresh = desc.r_data[n_rd + 1:2 * n_rd + 1]
-            d_obst, d_left, d_right = desc.r_data[2 * n_rd + 1:][:p], desc.r_data[-2], desc.r_data[-1]
+            d_obst = desc.r_data[2 * n_rd + 1:][:p]
+            d_left, d_right = desc.r_data[2 * n_rd + 1 + p], desc.r_data[2 * n_rd + 2 + p]
             init = Cat(*initial(d_obst, "rd_initial"), edge_initial(d_left, d_right, "rd_edge_initial"))
             with m.If(pop):
                 m.d.sync += got_a.eq(desc.r_data[n_rd])
                 for s in range(n_rd):
                     with m.If(d_fresh[s]):
                         m.d.sync += buf[s].eq(init[s * dw:(s + 1) * dw])
+            if self.bfs_slots:          # the read asked for the E words; the obstacle bits (its cfr)
+                got_e, a_obst, a_edge = Signal(), Signal(p), Signal(2)
+                with m.If(pop):
+                    m.d.sync += [got_e.eq(desc.r_data[2 * n_rd + 3 + p]), a_obst.eq(d_obst),
+                                 a_edge.eq(Cat(d_left, d_right))]
         with m.If(word_go):
             m.d.sync += amask.eq(amask & ~ahot)
             with m.Switch(astep):
@@ -596,19 +720,28 @@ class DramStore(wiring.Component):
         # the window row from the buffers (fields not asked for: whatever the buffer holds)
         a_bits, b_bits, e_bits = Cat(*buf[:a]), Cat(*buf[a:a + b]), Cat(*buf[a + b:])
         ans = out.payload
+        none = (1 << w["di"]) - 1
         for j in range(p):
             g = e_lay(a_bits[j * e_lay.size:(j + 1) * e_lay.size])
             h = b_lay(b_bits[j * b_lay.size:(j + 1) * b_lay.size])
             m.d.comb += [getattr(ans.word[j], f).eq(getattr(g, f)) for f in EDT_FIELDS]
             m.d.comb += [getattr(ans.word[j], f).eq(getattr(h, f)) for f in BFS_FIELDS]
             if self.changed:                # a read without A: di from the cfr bit (none: in the cfr)
-                none = (1 << w["di"]) - 1
-                m.d.comb += ans.word[j].di.eq(Mux(got_a, g.di, Mux(b_bits[lay["cfr_byte"] * 8 + j], none, 0)))
+                in_cfr = b_bits[lay["cfr_byte"] * 8 + j]
+                if self.bfs_slots:          # (the bit says "left": in the cfr, not an obstacle and not left)
+                    in_cfr = ~in_cfr & ~a_obst[j]
+                m.d.comb += ans.word[j].di.eq(Mux(got_a, g.di, Mux(in_cfr, none, 0)))
         for slot, dst in ((0, ans.left), (1, ans.right)):
             ew, byte = lay["slot_at"](slot)
             base = ew * dw + byte * 8
             g = e_lay(e_bits[base + lay["edt_byte"] * 8:][:e_lay.size])
             h = b_lay(e_bits[base + lay["bfs_byte"] * 8:][:b_lay.size])
+            if self.bfs_slots:              # the BFS group and "left" byte from the B slot word
+                at = (lay["bslot"] + slot * lay["b_slot"]) * 8
+                h = b_lay(b_bits[at:at + b_lay.size])
+                in_cfr = ~b_bits[(lay["bslot"] + 2 * lay["b_slot"] + slot) * 8] & ~a_edge[slot]
             m.d.comb += [getattr(dst, f).eq(getattr(g, f)) for f in EDT_FIELDS]
             m.d.comb += [getattr(dst, f).eq(getattr(h, f)) for f in BFS_FIELDS]
+            if self.bfs_slots:              # a read without E: di from the cfr, as above
+                m.d.comb += dst.di.eq(Mux(got_e, g.di, Mux(in_cfr, none, 0)))
         return m

@@ -11,8 +11,8 @@ from .row_router import RowRouter
 from .state_ram import StateSignature
 from .tile_layouts import TILE_CONSTRAINTS, TILE_PARAMS, tile_widths
 
-__all__ = ["DramStores", "DRAM_PORTS_PARAM", "SKIP_CLEAN_PARAM", "DRAM_CONSTRAINTS", "DRAM_WIDTH", "DRAM_FIFO",
-           "LOAD_BITS_MAX"]
+__all__ = ["DramStores", "DRAM_PORTS_PARAM", "SKIP_CLEAN_PARAM", "BFS_SLOTS_PARAM", "DRAM_CONSTRAINTS", "DRAM_WIDTH",
+           "DRAM_FIFO", "LOAD_BITS_MAX"]
 
 DRAM_WIDTH = 128        # a native word of LiteDRAM's 1:2-rate PHY on a 16-bit DDR3 (a burst of 8)
 DRAM_FIFO = 16          # engine reads unanswered at most (the engine's crossing FIFOs' depth), each store's
@@ -27,6 +27,10 @@ SKIP_CLEAN_PARAM = Param("skip_clean", bool, False,
                              "the EDT's writes keep; the load's obstacle bits on chip, a word no write changed "
                              "answered from them): the same cycles, less bandwidth",
                          message="skip_clean {value!r}: must be 0 or 1")
+BFS_SLOTS_PARAM = Param("bfs_slots", bool, False,
+                        doc="store=dram with skip_clean: the edge pixels' BFS fields and cfr in the B words' spare "
+                            "bytes (DramStore's bfs_slots): a BFS read is b native words a row, not b + e",
+                        message="bfs_slots {value!r}: must be 0 or 1")
 
 
 # The stores' on-chip bits with skip_clean (DramStore: the load's obstacle bits, the edge slots' and the A, B
@@ -37,7 +41,7 @@ LOAD_BITS_MAX = 2 << 20
 
 def _load_bits(p):
     depth, width = load_bits(tile_widths(p["t_r"], p["t_c"], p["max_h"], p["max_w"]), p["t_c"], p["max_h"],
-                             p["dram_ports"], DRAM_WIDTH)
+                             p["dram_ports"], DRAM_WIDTH, bool(p.get("bfs_slots")))
     return p["dram_ports"] * depth * width
 
 
@@ -47,6 +51,9 @@ DRAM_CONSTRAINTS = (
                "largest map {max_h}x{max_w} with skip_clean: the DRAM stores' obstacle and written bits are {n} "
                "Kbit, at most " + str(LOAD_BITS_MAX >> 10) + " Kbit on chip (a smaller map, or skip_clean 0)",
                lambda p: {"n": _load_bits(p) >> 10}),
+    Constraint("not bfs_slots or (skip_clean and store == 'dram')",
+               lambda p: not p.get("bfs_slots") or (p["skip_clean"] and p.get("store", "dram") == "dram"),
+               "bfs_slots needs store=dram and skip_clean 1 (the DRAM store's cfr bits and on-chip written bits)"),
 )
 
 
@@ -74,6 +81,10 @@ class DramStores(wiring.Component):
         a word no write changed is answered from them, not read; the load
         issues no native command): :func:`~hdl.edt_bfs.dram_store.load_bits`
         a DRAM block, at most :data:`LOAD_BITS_MAX` over the stores.
+    bfs_slots : bool
+        With ``skip_clean``: the edge slots' BFS groups and cfr in the B
+        words (:class:`~hdl.edt_bfs.dram_store.DramStore`'s ``bfs_slots``):
+        a BFS read is ``b`` native words a row, not ``b + e``.
 
     Ports
     -----
@@ -91,25 +102,27 @@ class DramStores(wiring.Component):
     One clock (``sync``: the controller's), reset with the controller.
     """
 
-    PARAMS = TILE_PARAMS + (DRAM_PORTS_PARAM, SKIP_CLEAN_PARAM)
+    PARAMS = TILE_PARAMS + (DRAM_PORTS_PARAM, SKIP_CLEAN_PARAM, BFS_SLOTS_PARAM)
     CONSTRAINTS = TILE_CONSTRAINTS + DRAM_CONSTRAINTS
 
     @checked_init
-    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, skip_clean=False):
+    def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, skip_clean=False, bfs_slots=False):
         check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, dram_ports=dram_ports,
-              skip_clean=skip_clean)
+              skip_clean=skip_clean, bfs_slots=bfs_slots)
         self.w = w = tile_widths(t_r, t_c, max_h, max_w)
         self.t_c, self.max_h, self.ports, self.changed = t_c, max_h, dram_ports, bool(skip_clean)
+        self.bfs_slots = bool(bfs_slots)
         super().__init__({
             **StateSignature(w, t_c, self.changed).members,
-            "dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH)).array(dram_ports),
+            "dram": Out(NativePortSignature(dram_layout(w, t_c, max_h, DRAM_WIDTH, self.bfs_slots)["addr_width"],
+                                            DRAM_WIDTH)).array(dram_ports),
         })
 
     def elaborate(self, platform):
         m = Module()
         n = self.ports
         stores = [DramStore(self.w, self.t_c, self.max_h, DRAM_WIDTH, max_reads=DRAM_FIFO, changed=self.changed,
-                            ports=n) for _ in range(n)]
+                            ports=n, bfs_slots=self.bfs_slots) for _ in range(n)]
         for i, store in enumerate(stores):
             m.submodules[f"store{i}"] = store
         if n > 1:

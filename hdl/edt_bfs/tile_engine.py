@@ -11,7 +11,8 @@ from navcores.models.edt_bfs_tiled import Timing
 from ..params import Constraint, Param, check, checked_init
 from .frontier import FrontierFlags
 from .dram_store import NativePortSignature, dram_layout
-from .dram_stores import DRAM_CONSTRAINTS, DRAM_FIFO, DRAM_PORTS_PARAM, DRAM_WIDTH, SKIP_CLEAN_PARAM, DramStores
+from .dram_stores import (BFS_SLOTS_PARAM, DRAM_CONSTRAINTS, DRAM_FIFO, DRAM_PORTS_PARAM, DRAM_WIDTH, SKIP_CLEAN_PARAM,
+                          DramStores)
 from .state_cdc import StateCdc
 from .state_ram import StateRam, StateSignature
 from .tile_array import TileArray
@@ -152,6 +153,12 @@ class TileEngine(wiring.Component):
         issues only the native words holding a changed pixel and answers a
         BFS read without the words of di
         (:class:`~hdl.edt_bfs.dram_store.DramStore`).
+    bfs_slots : bool
+        With ``store="dram"`` and ``skip_clean``: the DRAM stores keep the
+        edge pixels' BFS fields and cfr in the B words' spare bytes
+        (:class:`~hdl.edt_bfs.dram_store.DramStore`'s ``bfs_slots``): a BFS
+        read is 2 native words a window row instead of 3.  0: the engine's
+        Verilog is as without it.
 
     Ports
     -----
@@ -247,6 +254,7 @@ class TileEngine(wiring.Component):
                   "store outside: hides its latency; the cycle counts are then no longer the model's)",
               message="prefetch {value!r}: must be an integer in {lo}..{hi} (visits read ahead)"),
         SKIP_CLEAN_PARAM,
+        BFS_SLOTS_PARAM,
         Param("iter_cycles", int, 1, lo=1, hi=2,
               doc="cycles an array iteration takes: 2 registers the cells' MIN winner between its comparators "
                   "and its multiplexers (a shorter clock path, a cycle more an iteration)",
@@ -271,9 +279,11 @@ class TileEngine(wiring.Component):
 
     @checked_init
     def __init__(self, t_r, t_c, max_h, max_w, store="bram", dram_ports=1, prefetch=0, skip_clean=False,
-                 iter_cycles=1):
+                 iter_cycles=1, bfs_slots=False):
         check(self.PARAMS, self.CONSTRAINTS, t_r=t_r, t_c=t_c, max_h=max_h, max_w=max_w, store=store,
-              dram_ports=dram_ports, prefetch=prefetch, skip_clean=skip_clean, iter_cycles=iter_cycles)
+              dram_ports=dram_ports, prefetch=prefetch, skip_clean=skip_clean, iter_cycles=iter_cycles,
+              bfs_slots=bfs_slots)
+        self.bfs_slots = bool(bfs_slots)
         self.t_r, self.t_c, self.max_h, self.max_w, self.store = t_r, t_c, max_h, max_w, store
         self.dram_ports, self.prefetch, self.skip_clean = dram_ports, prefetch, bool(skip_clean)
         self.iter_cycles = iter_cycles
@@ -288,8 +298,9 @@ class TileEngine(wiring.Component):
             "path_found": Out(1), "levels": Out(w["k"]), "tile_visits": Out(32),
             "visit": Out(visit_layout(w)),
             **({"state": In(StateSignature(w, t_c, self.skip_clean))} if store == "external" else {}),
-            **({"dram": Out(NativePortSignature(dram_layout(w, t_c, max_h)["addr_width"], DRAM_WIDTH))
-                .array(dram_ports), "dram_clk": In(1), "dram_rst": In(1)} if store == "dram" else {}),
+            **({"dram": Out(NativePortSignature(dram_layout(w, t_c, max_h, DRAM_WIDTH, self.bfs_slots)["addr_width"],
+                                                DRAM_WIDTH)).array(dram_ports),
+                "dram_clk": In(1), "dram_rst": In(1)} if store == "dram" else {}),
         })
 
     def timing(self):
@@ -325,7 +336,7 @@ class TileEngine(wiring.Component):
             m.submodules.cdc = mem = StateCdc(w, t_c, "port", "sync", "dram", depth=DRAM_FIFO,
                                               changed=self.skip_clean)
             m.submodules.stores = stores = DomainRenamer("dram")(
-                DramStores(t_r, t_c, self.max_h, self.max_w, self.dram_ports, self.skip_clean))
+                DramStores(t_r, t_c, self.max_h, self.max_w, self.dram_ports, self.skip_clean, self.bfs_slots))
             for name in ("rd", "rd_data", "wr"):
                 wiring.connect(m, getattr(mem.store, name), getattr(stores, name))
             for ours, theirs in zip(self.dram, stores.dram):

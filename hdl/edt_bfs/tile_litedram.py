@@ -28,7 +28,7 @@ class TileLiteDram(wiring.Component):
     its ``dram`` ports.
 
     Parameters: the engine's ``t_r``, ``t_c``, ``max_h``, ``max_w``, ``dram_ports``, ``prefetch``,
-    ``skip_clean``, ``iter_cycles``;
+    ``skip_clean``, ``iter_cycles``, ``bfs_slots``;
     ``addr_width``: the core's native address (25 for the 512 MB of one
     MT41K256M16 in 128-bit words: scripts/litedram_core.py's).
 
@@ -47,9 +47,9 @@ class TileLiteDram(wiring.Component):
     """
 
     def __init__(self, t_r, t_c, max_h, max_w, dram_ports=1, prefetch=0, skip_clean=False, iter_cycles=1,
-                 addr_width=25, sim=True):
+                 addr_width=25, sim=True, bfs_slots=False):
         self.engine = TileEngine(t_r, t_c, max_h, max_w, store="dram", dram_ports=dram_ports, prefetch=prefetch,
-                                 skip_clean=skip_clean, iter_cycles=iter_cycles)
+                                 skip_clean=skip_clean, iter_cycles=iter_cycles, bfs_slots=bfs_slots)
         used = len(self.engine.dram[0].cmd.payload.addr)
         if used > addr_width:
             raise ValueError(f"the store's {used} address bits exceed the controller's {addr_width}")

@@ -61,10 +61,11 @@ class TileEngineDriver:
     :class:`.stream.StreamSink` on ``o_stream``; ``store``: with an external
     store (``store="external"``), the :class:`.state_store.StateStore` on
     its ``state`` port, with ``store="dram"`` the :class:`.native_dram.NativeDram`
-    on its ``dram`` ports (``seed``: its random bits and timing), else None.  ``on_visit`` (if set) is
+    on its ``dram`` ports (``seed``: its random bits and timing; ``bfs_slots``: the engine's, for
+    :func:`~hdl.edt_bfs.dram_store.dram_layout`), else None.  ``on_visit`` (if set) is
     called with the count of visits so far at each visit (progress)."""
 
-    def __init__(self, dut, t_r, t_c, max_h, max_w, seed=0):
+    def __init__(self, dut, t_r, t_c, max_h, max_w, seed=0, bfs_slots=False):
         self.dut, self.t_r, self.t_c, self.max_h, self.max_w = dut, t_r, t_c, max_h, max_w
         w = self.widths = tile_widths(t_r, t_c, max_h, max_w)
         self.vis = visit_layout(w)
@@ -79,7 +80,7 @@ class TileEngineDriver:
         # store="dram": the DRAM on its native port (not reset with the engine); not when the top
         # holds its own controller (hdl/edt_bfs/tile_litedram.py, whose inner wires have those names)
         if native_ports(dut) and not hasattr(dut, "wb_ctrl_cyc"):
-            lay = self.dram_layout = dram_layout(w, t_c, max_h, DRAM_WIDTH)
+            lay = self.dram_layout = dram_layout(w, t_c, max_h, DRAM_WIDTH, bfs_slots)
             self.store = NativeDram(dut, DRAM_WIDTH, lay["addr_width"], random.Random(seed), clock=dut.dram_clk,
                                     ports=native_ports(dut))
         self.on_visit = None

@@ -22,7 +22,8 @@ same results in more cycles); with TILE_PREFETCH=d (the engine reads the
 next d visits' windows during this one: hdl/edt_bfs/tile_engine.py) the
 same results and trace, in fewer cycles than the model's at StateRam's
 timing; with TILE_SKIP_CLEAN=1 the visits write fewer words than the
-model's words written (without: as many); with TILE_ITER=2 (the cells'
+model's words written (without: as many), and with TILE_BFS_SLOTS=1 as
+well (the DRAM stores' bfs_slots) a BFS read needs no edge word; with TILE_ITER=2 (the cells'
 registered MIN winner: two cycles an array iteration) the cycles of
 the model's Timing(iteration=2).  Environment: TILE_PARAMS
 (t_r,t_c,max_h,max_w), TILE_JOBS (random jobs), TILE_MID (HxW of the maps
@@ -56,6 +57,7 @@ EXTERNAL = os.environ.get("TILE_STORE") == "external"
 DRAM = os.environ.get("TILE_STORE") == "dram"
 PREFETCH = int(os.environ.get("TILE_PREFETCH", "0"))     # visits read ahead
 SKIP_CLEAN = os.environ.get("TILE_SKIP_CLEAN") == "1"    # rows the visit did not change not written
+BFS_SLOTS = os.environ.get("TILE_BFS_SLOTS") == "1"      # the edge pixels' BFS groups in the B words
 ITER = int(os.environ.get("TILE_ITER", "1"))              # cycles an array iteration takes (iter_cycles)
 # the DRAM test's native ports (rows of a window on different ports: BANK_AT); one in the 1port case
 DRAM_PORTS = int(os.environ.get("TILE_DRAM_PORTS", 4))
@@ -64,7 +66,7 @@ MAPS = Path(__file__).resolve().parents[2] / "maps"
 
 async def _setup(dut):
     seed = seed_from_env()
-    drv = TileEngineDriver(dut, T_R, T_C, MAX_H, MAX_W, seed=seed)
+    drv = TileEngineDriver(dut, T_R, T_C, MAX_H, MAX_W, seed=seed, bfs_slots=BFS_SLOTS)
     await drv.start()
     dut._log.info(f"seed {seed} (replay with SEED={seed})")
     return drv, np.random.default_rng(seed)
@@ -354,10 +356,16 @@ async def dram_store(dut):
     def a_writes():
         return sum(n for addr, n in st.write_at.items() if addr & ((1 << lay["kb"]) - 1) < lay["a"])
 
-    before = a_writes()
+    def e_reads():
+        return sum(n for addr, n in st.read_at.items() if addr & ((1 << lay["kb"]) - 1) >= lay["a"] + lay["b"])
+
+    before, e_before = a_writes(), e_reads()
     await _check(drv, np.zeros(MID, dtype=bool), [(0, 5)], (MID[0] - 1, MID[1] - 1), 0, cycles=False)
     loaded = MID[0] * -(-MID[1] // T_C) * lay["a"]
     assert a_writes() - before == 0 if SKIP_CLEAN else a_writes() - before >= loaded, (a_writes() - before, loaded)
+    # and its BFS reads its neighbours' edge pixels: from the E words the BFS writes wrote, or with
+    # bfs_slots from the B words (the E words never written since the load: no E word read at all)
+    assert e_reads() - e_before == 0 if BFS_SLOTS else e_reads() - e_before > 0, e_reads() - e_before
     jobs += 1
     st.set_timing(latency=6, extra=0.5, stall=0.3)
     drv.set_stalls(rng, 0.2, 0.3)
@@ -388,7 +396,8 @@ async def dram_store(dut):
     # each read reads its edge word; with skip_clean the BFS visits' and the goals' skip the A words
     first, edge = (sum(n for addr, n in st.read_at.items() if addr & ((1 << lay["kb"]) - 1) == k)
                    for k in (0, lay["a"] + lay["b"]))
-    assert first < edge if SKIP_CLEAN else first == edge, (first, edge)
+    if not BFS_SLOTS:       # (with bfs_slots they skip the edge word: the job without obstacles above)
+        assert first < edge if SKIP_CLEAN else first == edge, (first, edge)
     used = [len(p.cmd.beats) for p in st.ports]
     assert len(used) == DRAM_PORTS and min(used) > 100, f"commands per native port: {used}"
     # LiteDRAM's native port does not wait for rdata.ready: an answer held back would be lost
@@ -396,8 +405,8 @@ async def dram_store(dut):
 
 
 def _params(p):
-    return dict(zip(("t_r", "t_c", "max_h", "max_w", "store", "dram_ports", "prefetch", "skip_clean", "iter_cycles"),
-                    p))
+    return dict(zip(("t_r", "t_c", "max_h", "max_w", "store", "dram_ports", "prefetch", "skip_clean", "iter_cycles",
+                     "bfs_slots"), p))
 
 
 # One build per simulator and parameter set.  An 8x8 array on a 64x64 RAM on
@@ -437,9 +446,11 @@ def test_edt_tile_engine(sim, params, jobs, mid, maps, large, only):
 # tiles), its state on the state port (external: sim/rtl/state_store.py), without and with the
 # prefetch and skip_clean, or in a DRAM behind DRAM_PORTS native ports on a clock of their own
 # (dram: sim/rtl/native_dram.py), with both, on a 4x8 and a 2x8 array, and both with the cells' MIN
-# winner registered (iter_cycles 2).
+# winner registered (iter_cycles 2); the 4x8's DRAM with the edge pixels' BFS groups in the B words
+# (bfs_slots), the 2x8's without.
 STORE_CASES = {"external": (4, "external", 0, 0, 1), "external-prefetch1": (4, "external", 1, 0, 1),
-               "external-prefetch2-skip": (4, "external", 2, 1, 1), "dram-prefetch2-skip": (4, "dram", 2, 1, 1),
+               "external-prefetch2-skip": (4, "external", 2, 1, 1),
+               "dram-prefetch2-skip-slots": (4, "dram", 2, 1, 1, 4, 1),
                "2x8-dram-prefetch2-skip": (2, "dram", 2, 1, 1), "external-prefetch2-skip-iter2": (4, "external", 2, 1, 2),
                "2x8-dram-1port": (2, "dram", 0, 0, 1, 1)}
 
@@ -447,10 +458,11 @@ STORE_CASES = {"external": (4, "external", 0, 0, 1), "external-prefetch1": (4, "
 @pytest.mark.parametrize("case", STORE_CASES.values(), ids=STORE_CASES)
 @pytest.mark.parametrize("sim", ["icarus", "verilator"])
 def test_edt_tile_engine_store(sim, case):
-    t_r, store, prefetch, skip_clean, iter_cycles, *ports = case      # ports: the DRAM's (default 4)
-    ports = ports[0] if ports else 4 if store == "dram" else 1
-    params = (t_r, 8, 21, 35, store, ports, prefetch, skip_clean, iter_cycles)
+    t_r, store, prefetch, skip_clean, iter_cycles, *rest = case      # then the DRAM's ports (default 4), bfs_slots
+    ports = rest[0] if rest else 4 if store == "dram" else 1
+    bfs_slots = rest[1] if len(rest) > 1 else 0
+    params = (t_r, 8, 21, 35, store, ports, prefetch, skip_clean, iter_cycles, bfs_slots)
     env = {"TILE_PARAMS": ",".join(map(str, params[:4])), "TILE_MID": "13x21", "TILE_STORE": store,
            "TILE_PREFETCH": prefetch, "TILE_SKIP_CLEAN": skip_clean, "TILE_ITER": iter_cycles,
-           "TILE_DRAM_PORTS": ports, "COCOTB_TEST_FILTER": f"{store}_store"}
+           "TILE_DRAM_PORTS": ports, "TILE_BFS_SLOTS": bfs_slots, "COCOTB_TEST_FILTER": f"{store}_store"}
     assert run("edt_tile_engine", _params(params), sim, "test_edt_tile_engine", env=env) == 1

@@ -154,6 +154,11 @@ BAD = [
     # the DRAM stores' on-chip bits with skip_clean (the load's obstacle bits): 2048x2048 is 8.5 Mbit
     (["edt_dram_stores", "t_r=8", "t_c=8", "max_h=2048", "max_w=2048", "dram_ports=4", "skip_clean=1"],
      "largest map 2048x2048 with skip_clean: the DRAM stores' obstacle and written bits are 8704 Kbit, at most 2048"),
+    # the edge pixels' BFS groups in the B words need the DRAM stores' cfr and on-chip written bits
+    (["edt_dram_stores", "t_r=3", "t_c=8", "max_h=64", "max_w=64", "bfs_slots=1"],
+     "bfs_slots needs store=dram and skip_clean 1"),
+    (["edt_tile_engine", "t_r=3", "t_c=8", "max_h=64", "max_w=64", "store=external", "skip_clean=1", "bfs_slots=1"],
+     "bfs_slots needs store=dram and skip_clean 1"),
     (["nosuch_top"], "unknown top 'nosuch_top'"),
 ]
 
