@@ -155,11 +155,12 @@ SETS = (
         emit=True, beyond="the tile engine with its per-pixel state in an external store (maze512-1-0: 13.9 Mbit)"),
     # ... and the engine with that state in a DRAM behind four of a controller's native ports (LiteDRAM's),
     # reading the next two visits' windows during this one (prefetch: hides the DRAM's latency) and writing
-    # back only the rows a visit changed (skip_clean: the DRAM's bandwidth).  3x8: with LiteDRAM's controller
+    # back only the rows a visit changed (skip_clean: the DRAM's bandwidth), a BFS row in 2 native words, not 3
+    # (bfs_slots: maze512-1-0 through LiteDRAM 1,087,798 -> 1,005,378 engine cycles at 37.2 MHz).  3x8: with LiteDRAM's controller
     # and PHY in one top on the ECPIX-5's LFE5UM5G-85F (scripts/fit_dram_top.py) the 4x8 (83 %) does not
     # route; the 3x8 (69-72 %) does.
     Set("edt_tile_dram", "edt_tile_engine", {"t_r": 3, "t_c": 8, "max_h": 512, "max_w": 512, "store": "dram",
-                                              "dram_ports": 4, "prefetch": 2, "skip_clean": 1},
+                                              "dram_ports": 4, "prefetch": 2, "skip_clean": 1, "bfs_slots": 1},
         emit=True, beyond="the tile engine with its per-pixel state in a DRAM (a 16-bit DDR3 behind LiteDRAM)"),
 )
 

@@ -45,7 +45,7 @@ from navcores.sim.rtl.runner import run  # noqa: E402
 
 WORK = B.ROOT / "build" / "bench_dram"
 # The engine: the catalog's edt_tile_dram (a 3x8 array over maps up to 512x512, four native ports, prefetch,
-# skip_clean)
+# skip_clean, bfs_slots)
 PARAMS = dict(catalog.get("edt_tile_dram").params)
 ARRAY = (PARAMS["t_r"], PARAMS["t_c"])
 RAM = (PARAMS["max_h"], PARAMS["max_w"])
