@@ -157,8 +157,9 @@ class TileEngine(wiring.Component):
         With ``store="dram"`` and ``skip_clean``: the DRAM stores keep the
         edge pixels' BFS fields and cfr in the B words' spare bytes
         (:class:`~hdl.edt_bfs.dram_store.DramStore`'s ``bfs_slots``): a BFS
-        read is 2 native words a window row instead of 3.  0: the engine's
-        Verilog is as without it.
+        read is ``b`` native words a window row instead of ``b + e`` (2
+        instead of 3 at 3x8 over 512x512).  0: the engine's Verilog is as
+        without it.
 
     Ports
     -----
