@@ -124,7 +124,8 @@ def dram_layout(w, p, max_h, data_width=128, bfs_slots=False):
     DRAM row); a write of one group is its ``a`` (or ``b``) words plus one
     byte-masked write into each neighbour's edge word.  Returns a dict of
     those numbers, ``cfr_byte``, ``slot`` (the slot's size in bytes), ``bslot``, ``b_slot``,
-    ``bslot_word`` (None without ``bfs_slots``), ``edt_byte`` /
+    ``bslot_word`` (None without ``bfs_slots``), ``bslot_at(s)`` -> (slot
+    ``s``'s BFS group, its "left" byte: bytes of the B region), ``edt_byte`` /
     ``bfs_byte`` (each group's first byte in a slot), ``slot_at(s)`` ->
     (edge word, first byte) and ``addr_width``.
     """
@@ -155,7 +156,8 @@ def dram_layout(w, p, max_h, data_width=128, bfs_slots=False):
             "cfr_byte": cfr_byte, "slot": slot, "edt_byte": 0, "bfs_byte": _bytes(e_bits), "data_width": data_width,
             "slot_at": (lambda s: (s, 0) if e == 2 else (0, s * slot)),
             "bfs_slots": bfs_slots, "bslot": bslot, "b_slot": b_slot,
-            "bslot_word": bslot // nb if bfs_slots else None}
+            "bslot_word": bslot // nb if bfs_slots else None,
+            "bslot_at": (lambda s: (bslot + s * b_slot, bslot + 2 * b_slot + s))}
 
 
 def _slot_write(wd, wbe, src, byte, lay, px, groups):
@@ -559,7 +561,7 @@ class DramStore(wiring.Component):
             # the load's B words with bfs_slots, the same for every map: each pixel's and each slot's
             # BFS group at hop none, parent 0, no pixel left the cfr
             g = ((1 << w["hop"]) - 1) << b_lay["hop"].offset
-            at = [j * b_lay.size for j in range(p)] + [(lay["bslot"] + sl * lay["b_slot"]) * 8 for sl in range(2)]
+            at = [j * b_lay.size for j in range(p)] + [lay["bslot_at"](sl)[0] * 8 for sl in range(2)]
             b_load = Const(sum(g << i for i in at), b * dw)
 
         def initial(obst, name):
@@ -603,8 +605,7 @@ class DramStore(wiring.Component):
                 bslot_data = []
                 for sl, j in ((0, p - 1), (1, 0)):
                     swd, swbe = Signal(dw, name=f"bslot{sl}_wd"), Signal(nb, name=f"bslot{sl}_be")
-                    at = lay["bslot"] - lay["bslot_word"] * nb + sl * lay["b_slot"]       # bytes in the word
-                    lb = lay["bslot"] - lay["bslot_word"] * nb + 2 * lay["b_slot"] + sl
+                    at, lb = (byte - lay["bslot_word"] * nb for byte in lay["bslot_at"](sl))      # in the word
                     m.d.comb += [swd[at * 8:at * 8 + b_lay.size].eq(pix[j].as_value()[px["hop"].offset:]),
                                  swd[lb * 8].eq(~cfr[j]),
                                  swbe.eq(Mux(wmask[1], ((1 << lay["b_slot"]) - 1) << at, 0)
@@ -737,9 +738,9 @@ class DramStore(wiring.Component):
             g = e_lay(e_bits[base + lay["edt_byte"] * 8:][:e_lay.size])
             h = b_lay(e_bits[base + lay["bfs_byte"] * 8:][:b_lay.size])
             if self.bfs_slots:              # the BFS group and "left" byte from the B slot word
-                at = (lay["bslot"] + slot * lay["b_slot"]) * 8
-                h = b_lay(b_bits[at:at + b_lay.size])
-                in_cfr = ~b_bits[(lay["bslot"] + 2 * lay["b_slot"] + slot) * 8] & ~a_edge[slot]
+                at, lb = lay["bslot_at"](slot)
+                h = b_lay(b_bits[at * 8:at * 8 + b_lay.size])
+                in_cfr = ~b_bits[lb * 8] & ~a_edge[slot]
             m.d.comb += [getattr(dst, f).eq(getattr(g, f)) for f in EDT_FIELDS]
             m.d.comb += [getattr(dst, f).eq(getattr(h, f)) for f in BFS_FIELDS]
             if self.bfs_slots:              # a read without E: di from the cfr, as above
