@@ -246,7 +246,8 @@ class DramStore(wiring.Component):
     the DRAM must hold ``2**addr_width`` native words).
 
     Operation (with ``changed``: the on-chip bits of the command on offer
-    are looked up a cycle before it is taken, and its words not written
+    are looked up a cycle before it is taken, so it is taken in its second
+    cycle on offer at the earliest, and its words not written
     since the load are not read, or written whole): one engine command at
     a time becomes its native commands,
     lowest offset first (a read: the groups it asks for, then the edge
@@ -346,10 +347,13 @@ class DramStore(wiring.Component):
         # The next command is taken when the last step of this one loads in this cycle, judged from
         # registers alone (the command register empty, room for its beat or answer), not from the
         # port's ready: that path (the controller's arbitration -> this take -> the on-chip bits'
-        # writes and the engine side's ready) set the controller's clock in the whole top.
+        # writes and the engine side's ready) set the controller's clock in the whole top.  Whether
+        # one step is left is a register too (``one_left``, from the mask it loads), not a carry
+        # chain on ``busy_mask``: the engine side's ready leaves the store for the router and the
+        # buffer before it, placed apart from the stores.
+        one_left = Signal(init=1)
         last_step = Signal()            # one step to go, and it loads in this cycle
-        m.d.comb += last_step.eq(((busy_mask & (busy_mask - 1)) == 0) & ~c_valid
-                                 & Mux(is_wr, beats.w_rdy, in_flight < self.max_reads))
+        m.d.comb += last_step.eq(one_left & ~c_valid & Mux(is_wr, beats.w_rdy, in_flight < self.max_reads))
         free = ~active | last_step
         rcmd, wcmd = self.rd.payload, self.wr.payload
         if self.changed:
@@ -398,9 +402,12 @@ class DramStore(wiring.Component):
                 col = (c_col + dc)[:wb]
                 return Cat(col[0], col[2:], c_row) if wb > 1 else key(dc)
 
-            looked_key, looked_ok = Signal(wb + len(c_row) + 1), Signal()
-            m.d.sync += [looked_key.eq(Cat(key(0), on_wr)), looked_ok.eq(1)]
-            looked = looked_ok & (looked_key == Cat(key(0), on_wr))
+            # The lookup of the cycle before was the write's when the write was on offer then and not
+            # taken (a payload on offer stays until taken), the read's when the read was and no
+            # write: registers, so the ready does not wait for a comparison of the command.
+            looked_wr, looked_rd = Signal(), Signal()
+            m.d.sync += [looked_wr.eq(self.wr.valid & ~self.wr.ready),
+                         looked_rd.eq(self.rd.valid & ~self.wr.valid & ~self.rd.ready)]
             r_ok = c_col != w["words"] - 1          # the block on offer has a right / left neighbour
             l_ok = c_col != 0
             m.d.comb += [o_rp.addr.eq(key(0)), w_rp.addr.eq(key(0)), o_wp.addr.eq(key(0)), w_wp.addr.eq(key(0)),
@@ -436,10 +443,11 @@ class DramStore(wiring.Component):
                 bs_rd = Cat(*[rp.data for rp, _ in bs_ports])
                 bs_own, bs_right, bs_left = (bs_rd.bit_select(bs_bank(dc), 1) for dc in (0, 1, -1))
         else:
-            looked = Const(1)
-        take_wr = self.wr.valid & free & (looked | (wcmd.edt & wcmd.bfs if self.changed else 0))
-        take_rd = self.rd.valid & free & ~self.wr.valid & desc.w_rdy & looked
-        m.d.comb += [self.wr.ready.eq(free & looked), self.rd.ready.eq(free & ~self.wr.valid & desc.w_rdy & looked)]
+            looked_wr = looked_rd = Const(1)
+        take_wr = self.wr.valid & free & (looked_wr | (wcmd.edt & wcmd.bfs if self.changed else 0))
+        take_rd = self.rd.valid & free & ~self.wr.valid & desc.w_rdy & looked_rd
+        m.d.comb += [self.wr.ready.eq(free & looked_wr),
+                     self.rd.ready.eq(free & ~self.wr.valid & desc.w_rdy & looked_rd)]
         # with the cfr bits in the B words, di alone for a BFS group read is not a reason to read A
         need_a = (rcmd.nnt | (rcmd.di & ~rcmd.bfs)) if self.changed else (rcmd.di | rcmd.nnt)
         # with bfs_slots the edge pixels' BFS groups and cfr come with the B words: E only for A's fields
@@ -527,14 +535,16 @@ class DramStore(wiring.Component):
                 with m.If(take_wr):
                     m.d.sync += [slot_bfresh[0].eq(~bs_right), slot_bfresh[1].eq(~bs_left)]
         m.d.comb += [desc.w_data.eq(desc_data), desc.w_en.eq(take_rd)]
-        m.d.sync += busy_mask.eq(rest)
+        busy_next = Signal(n)
+        m.d.comb += busy_next.eq(Mux(take_wr, wr_steps, Mux(take_rd, rd_go, rest)))
+        m.d.sync += [busy_mask.eq(busy_next), one_left.eq((busy_next & (busy_next - 1)) == 0)]
         with m.If(take_wr):
-            m.d.sync += [busy_mask.eq(wr_steps), is_wr.eq(1), row.eq(wcmd.row), wcol.eq(wcmd.wcol),
+            m.d.sync += [is_wr.eq(1), row.eq(wcmd.row), wcol.eq(wcmd.wcol),
                          wmask.eq(Cat(wcmd.edt, wcmd.bfs)), word.eq(wcmd.word.as_value())]
             if self.changed:
                 m.d.sync += cfr.eq(wcmd.cfr)
         with m.Elif(take_rd):
-            m.d.sync += [busy_mask.eq(rd_go), is_wr.eq(0), row.eq(rcmd.row), wcol.eq(rcmd.wcol)]
+            m.d.sync += [is_wr.eq(0), row.eq(rcmd.row), wcol.eq(rcmd.wcol)]
 
         # the step's native word: block (row, wcol or a neighbour), offset
         kb, wb = lay["kb"], lay["wb"]
