@@ -288,7 +288,9 @@ class EdtBfsTiledResult(EdtBfsResult):
 
     ``cycles`` is the tile engine's job (module docstring); ``stats`` holds
     the counts: levels, visits and array iterations per phase, words read
-    and written, the floor, marks, the cycle breakdown; pixels read (the
+    and written, the floor, marks, the cycle breakdown (``cycles`` by phase;
+    ``cycle_terms`` by the cycle model's terms: load, scan, level, a visit's
+    sched, read, iterate and store, goals, path, readout); pixels read (the
     visits' windows inside the map) and written (their tiles, per phase)
     and ``store_bits_min``, the bits a state store moves at least (the
     phase's :data:`PHASE_READS` of a window pixel read, its
@@ -480,6 +482,10 @@ class TileEngine:
                        "pixels_written_bfs": 0}
         self.cycles = {"load": g.h * -(-g.w // g.p), "scan": g.tiles, "edt": 0, "goals": 0,
                        "bfs": 0, "path": 0, "readout": 0}
+        # the visits' cycles by step (the cycle model's visit(t) term by term), and the levels': the job's
+        # terms (result.stats["cycle_terms"]) against which a slower store's cost shows, state by state
+        # (sim/rtl/engine_states.py; scripts/bench_dram.py --states)
+        self.steps = {"level": 0, "sched": 0, "read": 0, "iterate": 0, "store": 0}
         self.trace = []          # every visit in order: (phase, level (0 in the BFS), tile, iterations, marks)
         self.progress = progress
 
@@ -497,8 +503,12 @@ class TileEngine:
         self.counts[f"pixels_read_{phase}"] += int(g.read_px[t])
         self.counts[f"pixels_written_{phase}"] += int(g.write_px[t])
         self.counts["marks"] += marks
-        self.cycles[phase] += (tm.sched + tm.latency + int(g.read_beats[t]) + tm.iteration * iterations
-                               + (tm.stop if phase == "bfs" else 0) + max(int(g.write_beats[t]), marks))
+        steps = {"sched": tm.sched, "read": tm.latency + int(g.read_beats[t]),
+                 "iterate": tm.iteration * iterations + (tm.stop if phase == "bfs" else 0),
+                 "store": max(int(g.write_beats[t]), marks)}
+        for k, v in steps.items():
+            self.steps[k] += v
+        self.cycles[phase] += sum(steps.values())
 
     # -- EDT -----------------------------------------------------------------------------------
     def first_worklist(self):
@@ -573,6 +583,7 @@ class TileEngine:
             k += 1
             self.counts["levels"] += 1
             self.cycles["edt"] += self.timing.level
+            self.steps["level"] += self.timing.level
             self.level_pos = np.full(g.tiles, -1, dtype=np.int64)
             self.level_pos[work] = np.arange(len(work))
             step = len(work) if batch is None else batch
@@ -691,6 +702,8 @@ def plan_path_tiled(obstacle, goals, start, dfar, array=(8, 8), word_pixels=None
                  store_bits_min=_store_bits_min(c, h, w),
                  words_floor=2 * visits * -(-g.tr * g.tc // g.p),
                  max_visits_per_tile=int(eng.visits.max()), cycles=dict(eng.cycles),
+                 cycle_terms={"load": eng.cycles["load"], "scan": eng.cycles["scan"], **eng.steps,
+                              **{k: eng.cycles[k] for k in ("goals", "path", "readout")}},
                  state_bits=state_bits(h, w)["total"])
     return EdtBfsTiledResult(
         distance=np.where(done, di, -1), nearest=nearest, vector=np.stack([dx, dy], axis=-1),

@@ -14,7 +14,10 @@ else the same engine with store=external placed alone) with the controller
 at litedram_core.SYS_CLK_HZ (the two clocks in that ratio in the
 simulation), against scipy on the same machine in the same run.
 ``--md FILE`` writes the rows as BENCHMARKS.md's section (scripts/bench.py
-``--only dram`` does that within make bench).  Needs ``pip install -e
+``--only dram`` does that within make bench).  ``--states`` also prints
+where the engine's cycles go: its cycles in its FSM states by the model's
+cycle terms, against the model's at StateRam's timing (a build with every signal visible: slower,
+:class:`sim.rtl.engine_states.EngineStates`).  Needs ``pip install -e
 .[dram]``; exit 2 without it.
 """
 
@@ -55,6 +58,7 @@ NAME = f"{ARRAY[0]}x{ARRAY[1]} / {RAM[0]}x{RAM[1]}"
 SIDE = {k: PARAMS[k] for k in ("dram_ports", "bfs_slots") if k in PARAMS}
 ENGINE = {k: v for k, v in PARAMS.items() if k not in ("t_r", "t_c", "max_h", "max_w", "store", *SIDE)}
 TIMING = model_timing(PARAMS.get("iter_cycles", 1))     # the model's cycle constants for that engine
+VISIT_TERMS = ("sched", "read", "iterate", "store")     # the cycle model's visit(t), term by term
 # The clocks' ratio in the simulation when the engine has no current clock (clock() gives None): what the
 # 3x8 engine reached in the whole top on the ECPIX-5's part before the skid buffers (2026-12-06, BENCHMARKS.md;
 # fit_dram_top.ENGINE_MHZ is its target there); no job time is given then.
@@ -72,12 +76,25 @@ def sys_period_ns(mhz):
     return 2 * round(ps / 2) / 1000
 
 
-def rtl_job(obstacle, goal, start, core, csrs, work, mhz):
+def states_text(name, terms, model):
+    """The engine's cycles by the model's cycle terms through LiteDRAM (``terms``: EngineStates.terms())
+    against the model's at StateRam's timing, as lines."""
+    ref, visits = model.stats["cycle_terms"], model.tile_visits
+    lines = [f"{name}: the engine's cycles by the model's terms through LiteDRAM (at StateRam's timing: the "
+             f"model's), and a visit's"]
+    for term, got in terms.items():
+        per = f"; {got / visits:.1f} ({ref[term] / visits:.1f}) a visit" if term in VISIT_TERMS else ""
+        lines.append(f"  {term:8s} {got:>11,} ({ref[term]:,}){per}")
+    lines.append(f"  total    {sum(terms.values()):>11,} ({model.cycles:,})")
+    return lines
+
+
+def rtl_job(obstacle, goal, start, core, csrs, work, mhz, states=False):
     params = {k: v for k, v in PARAMS.items() if k != "store"}
     job, result = work / "job.json", work / "result.json"
     job.write_text(json.dumps({"obstacle": obstacle.tolist(), "goals": [list(goal)], "start": list(start),
                                "dfar": B.DFAR, "sys_period_ns": sys_period_ns(mhz), "csrs": csrs,
-                               "path_only_too": True, **params}))
+                               "path_only_too": True, "states": states, **params}))
     run("edt_tile_litedram", params, "verilator", "navcores.sim.rtl.edt_tile_job",
         env={"EDT_JOB": job, "EDT_RESULT": result}, log_file=work / "sim.log",
         factory=lambda **p: TileLiteDram(**p),
@@ -86,12 +103,14 @@ def rtl_job(obstacle, goal, start, core, csrs, work, mhz):
     return json.loads(result.read_text())
 
 
-def measure(name, core, csrs, work, mhz):
+def measure(name, core, csrs, work, mhz, states=False):
     obstacle, goal, start = B.job(name)
     model = plan_path_tiled(obstacle, [goal], start, B.DFAR, array=ARRAY, timing=TIMING)
     sw = software.edt_bfs(obstacle, [goal], B.DFAR, bfs=("csgraph",), repeats=3)
     t0 = time.perf_counter()
-    rtl = rtl_job(obstacle, goal, start, core, csrs, work, mhz or RATIO_MHZ)
+    rtl = rtl_job(obstacle, goal, start, core, csrs, work, mhz or RATIO_MHZ, states)
+    if states:
+        print("\n".join(states_text(name, rtl["path_only"]["states"], model)), flush=True)
     wall = time.perf_counter() - t0
     same = {k: (np.array_equal(np.asarray(rtl[k]), np.asarray(getattr(model, k))) if k not in ("path", "trace")
                 else [tuple(p) for p in rtl[k]] == list(getattr(model, k))) for k in KEYS}
@@ -173,7 +192,7 @@ def stores_fit():
                         extra={**SIDE, "skip_clean": PARAMS["skip_clean"]})
 
 
-def section(maps=MAPS):
+def section(maps=MAPS, states=False):
     """The BENCHMARKS.md section (what ran, then a row per map: :func:`measure`) and the rows."""
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     try:
@@ -188,7 +207,7 @@ def section(maps=MAPS):
     for name in maps:
         work = WORK / name
         work.mkdir(parents=True, exist_ok=True)
-        rows.append(measure(name, core, csrs, work, mhz))
+        rows.append(measure(name, core, csrs, work, mhz, states))
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg())
     text = (f"Measured by `python scripts/bench_dram.py` on {stamp}, load average {load} on {os.cpu_count()} "
             f"cores. The {ARRAY[0]}x{ARRAY[1]} tile engine over maps up to {RAM[0]}x{RAM[1]} with store=dram on "
@@ -229,6 +248,8 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("maps", nargs="*", default=list(MAPS), help="maps/NAME.map (default: %(default)s)")
     ap.add_argument("--md", type=Path, help=f"replace the section '{SECTION}' of this markdown file")
+    ap.add_argument("--states", action="store_true",
+                    help="also print the engine's cycles by FSM state against the model's (a slower build)")
     args = ap.parse_args(argv)
     if args.md is not None and not args.md.is_file():
         print(f"bench_dram: {args.md}: no such file", file=sys.stderr)
@@ -243,7 +264,9 @@ def main(argv=None):
     except litedram_core.NotInstalled as e:
         print(f"bench_dram: {e}", file=sys.stderr)
         return 2
-    text, rows = section(args.maps)
+    if args.states:
+        os.environ["NAVCORES_VERILATOR_PUBLIC"] = "1"     # the engine's state register visible (runner.py)
+    text, rows = section(args.maps, args.states)
     print(text)
     if args.md is not None:
         kept.replace_section(args.md, SECTION, text)

@@ -14,7 +14,9 @@ PERIOD_NS) and CSRs (``csrs``), and the controller starts first.  With
 whole job up to the path, as the benches time it): ``path_only`` in the
 result holds its cycles, path and trace, and behind LiteDRAM ``native``:
 the native reads and writes the controller took in that job and its
-clock's cycles (:class:`.litedram.NativeCount`).
+clock's cycles (:class:`.litedram.NativeCount`); with ``states`` also
+``states``: the engine's cycles in its FSM states in that job, by the model's cycle terms
+(:class:`.engine_states.EngineStates`: a build with every signal visible).
 """
 
 import json
@@ -25,6 +27,7 @@ import cocotb
 import numpy as np
 
 from .edt_tile_driver import TileEngineDriver
+from .engine_states import EngineStates
 from .litedram import NativeCount, start_litedram
 
 
@@ -53,13 +56,19 @@ async def edt_tile_job(dut):
     if job.get("path_only_too"):            # the same job again without the map read-out: its cycles and path
         img = np.array(job["obstacle"], dtype=bool)
         native = NativeCount(dut) if litedram else None     # counting only this job (it costs time)
+        states = EngineStates(dut) if job.get("states") else None
         if native is not None:
             native.on = True
             native.start()
+        if states is not None:
+            states.start()
         raw = await drv.job(img, [tuple(g) for g in job["goals"]], start, job["dfar"], readout=False)
         got = drv.decode(raw, img.shape, readout=False)
         out["path_only"] = {"cycles": got["cycles"], "path": [list(p) for p in got["path"]],
                             "trace": [list(t) for t in got["trace"]]}
+        if states is not None:
+            states.stop()
+            out["path_only"]["states"] = states.terms()
         if native is not None:
             native.on = False
             out["path_only"]["native"] = {"reads": native.reads, "writes": native.writes,

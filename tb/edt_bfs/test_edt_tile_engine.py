@@ -25,7 +25,11 @@ timing; with TILE_SKIP_CLEAN=1 the visits write fewer words than the
 model's words written (without: as many), and with TILE_BFS_SLOTS=1 as
 well (the DRAM stores' bfs_slots) a BFS read needs no edge word; with TILE_ITER=2 (the cells'
 registered MIN winner: two cycles an array iteration) the cycles of
-the model's Timing(iteration=2).  Environment: TILE_PARAMS
+the model's Timing(iteration=2).  On Icarus (which sees the engine's
+internals) the engine's cycles in its FSM states equal the model's cycle
+terms (sim/rtl/engine_states.py) in a job at StateRam's timing, and through
+the DRAM sum to the job's cycles with the scan, levels and iterations
+unchanged.  Environment: TILE_PARAMS
 (t_r,t_c,max_h,max_w), TILE_JOBS (random jobs), TILE_MID (HxW of the maps
 of the edge cases, stalls, resets and changed environments), TILE_MAPS
 (the bundled maps to run, comma-separated), TILE_LARGE (1: random maps
@@ -45,6 +49,7 @@ from navcores.hdl.edt_bfs.tile_engine import model_timing
 from navcores.models.edt_bfs_tiled import Timing, plan_path_tiled
 from navcores.models.maps import load_grid
 from navcores.sim.rtl.edt_tile_driver import TileEngineDriver, compare
+from navcores.sim.rtl.engine_states import EngineStates
 from navcores.sim.rtl.litedram import NativeCount
 from navcores.sim.rtl.runner import run, seed_from_env
 
@@ -88,6 +93,16 @@ async def _check(drv, img, goals, start, dfar, readout=True, cycles=True, **kw):
     return n, model, raw
 
 
+def _states(dut):
+    """The engine's cycles by state (sim/rtl/engine_states.py, what bench_dram --states prints), started;
+    None on Verilator, whose builds here keep the engine's internals hidden (sim/rtl/runner.py)."""
+    if "icarus" not in cocotb.SIM_NAME.lower():
+        return None
+    states = EngineStates(dut)
+    states.start()
+    return states
+
+
 def _case(rng, shape, family=None):
     family = family or list(FAMILIES)[int(rng.integers(len(FAMILIES)))]
     img = FAMILIES[family](rng, *shape)
@@ -126,7 +141,11 @@ async def bundled_and_random(dut):
         shape = shapes[n] if n < len(shapes) else tuple(int(v) for v in rng.integers(1, [MID[0] + 1, MID[1] + 1]))
         img, start, goals = _case(rng, shape)
         drv.set_stalls(rng, 0.3, 0.3) if n % 2 else drv.set_stalls()    # every other job stalled
+        states = _states(dut) if n == 0 else None
         c, model, raw = await _check(drv, img, goals, start, int(rng.integers(0, 2)))
+        if states is not None:      # at StateRam's timing each of the model's cycle terms is its states' cycles
+            states.stop()
+            assert states.terms() == model.stats["cycle_terms"], (states.terms(), model.stats["cycle_terms"])
         compared, visits, paths = compared + c, visits + model.tile_visits, paths + model.path_found
         partial += shape[0] % T_R != 0 and shape[1] % T_C != 0
         stalled += raw["starved"] > 0 and raw["stalls"] > 0
@@ -344,9 +363,16 @@ async def dram_store(dut):
     jobs = 0
     for shape in (MID, (_partial(2, MAX_H, T_R), _partial(2, MAX_W, T_C))):
         img, start, goals = _case(rng, shape)
+        states = _states(dut) if not jobs else None
         _, model, raw = await _check(drv, img, goals, start, 0, cycles=False)
         if not PREFETCH:            # (read ahead, the fast DRAM's latency may hide: fewer cycles)
             assert raw["cycles"] > model.cycles, (raw["cycles"], model.cycles)
+        if states is not None:      # the DRAM costs in the load (its writes) and the reads, not in the iterations
+            states.stop()
+            got, ref = states.terms(), model.stats["cycle_terms"]
+            assert sum(got.values()) == raw["cycles"] and got["load"] >= ref["load"], (got, ref, raw["cycles"])
+            assert all(got[k] == ref[k] for k in ("scan", "level", "iterate")), (got, ref)
+            assert PREFETCH or got["read"] > ref["read"], (got, ref)
         jobs += 1
     # A job without obstacles writes no EDT state: with skip_clean no A word at all (the store keeps the
     # load's obstacle bits on chip and answers the words no write changed from them, over the words the

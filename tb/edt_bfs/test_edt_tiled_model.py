@@ -298,6 +298,7 @@ def test_cycle_model_brute_force():
         h, w = img.shape
         nc = -(-w // tc)
         cyc = {"edt": 0, "bfs": 0}
+        steps = {"level": tm.level * res.stats["levels"], "sched": 0, "read": 0, "iterate": 0, "store": 0}
         read = written = 0
         px = {"read_edt": 0, "read_bfs": 0, "edt": 0, "bfs": 0}    # map pixels of the windows read, the tiles written
         for phase, _, t, iterations, marks in res.trace:
@@ -307,15 +308,20 @@ def test_cycle_model_brute_force():
             rw, rb = _brute_beats(range(r0 - 1, r0 + tr + 1), range(c0 - 1, c0 + tc + 1), h, w, p, banks)
             ww, wb = _brute_beats(range(r0, r0 + tr), range(c0, c0 + tc), h, w, p, banks)
             read, written = read + rw, written + ww
-            cyc[phase] += (tm.sched + tm.latency + rb + tm.iteration * iterations + (tm.stop if phase == "bfs" else 0)
-                           + max(wb, marks))
+            visit = {"sched": tm.sched, "read": tm.latency + rb,
+                     "iterate": tm.iteration * iterations + (tm.stop if phase == "bfs" else 0), "store": max(wb, marks)}
+            cyc[phase] += sum(visit.values())
+            steps.update({k: steps[k] + v for k, v in visit.items()})
         cyc["edt"] += tm.level * res.stats["levels"]
         goals = tm.goal * len(cells[1:3])
         total = (h * -(-w // p) + res.stats["tiles"] + cyc["edt"] + goals + cyc["bfs"]
                  + (1 + tm.latency * max(1, len(res.path)) if start else 0) + (tm.latency + h * w if n % 2 else 0))
         assert (res.stats["words_read"], res.stats["words_written"]) == (read, written)
         assert res.stats["cycles"]["edt"] == cyc["edt"] and res.stats["cycles"]["bfs"] == cyc["bfs"]
-        assert res.cycles == total
+        assert res.cycles == total == sum(res.stats["cycle_terms"].values())
+        assert res.stats["cycle_terms"] == {"load": h * -(-w // p), "scan": res.stats["tiles"], **steps,
+                                            "goals": goals, "path": res.stats["cycles"]["path"],
+                                            "readout": res.stats["cycles"]["readout"]}
         assert res.stats["words_floor"] == 2 * len(res.trace) * -(-tr * tc // p)
         assert (res.stats["pixels_read_edt"], res.stats["pixels_read_bfs"], res.stats["pixels_written_edt"],
                 res.stats["pixels_written_bfs"]) == (px["read_edt"], px["read_bfs"], px["edt"], px["bfs"])
@@ -342,6 +348,9 @@ def test_cycles_by_hand():
                                    # path: the issue, then latency 2 per pixel (each needs its parent)
                                    "path": 1 + 2 * 2, "readout": 2 + 6}
     assert res.cycles == 2 + 1 + 20 + 3 + 12 + 5 + 8
+    # the three visits' steps: sched 2 each, read 2 + 2 each, iterate 1 + 1 + 3 + stop 1, store 2 each
+    assert res.stats["cycle_terms"] == {"load": 2, "scan": 1, "level": 2, "sched": 6, "read": 12, "iterate": 6,
+                                        "store": 6, "goals": 3, "path": 5, "readout": 8}
     assert res.path == [(0, 1), (1, 2)] and res.parent[0, 1] == 8 and res.parent[1, 0] == 1
 
 
