@@ -148,6 +148,12 @@ def top_fit():
                         extra={**SIDE, **ENGINE})
 
 
+def seeds(fit):
+    """A fit's placement seeds as text: 'seed 4', or 'median of 3 seeds: 1, 2, 3'."""
+    n = [str(r["seed"]) for r in fit["seeds"]]
+    return f"seed {n[0]}" if len(n) == 1 else f"median of {len(n)} seeds: {', '.join(n)}"
+
+
 def clock(sys_mhz):
     """(the engine's MHz or None, the text saying where it comes from): the whole top's engine clock when
     it is placed and each of its controller's clocks reaches its target (``sys_mhz`` its system clock's),
@@ -159,8 +165,8 @@ def clock(sys_mhz):
         engine, others = fit_dram_top.clocks(top)
         where = (f"the whole top (the engine, its StateCdc and DramStores, LiteDRAM's controller and PHY, the "
                  f"DDR3's pads at the board's pins) placed on the {fit_dram_top.PART} (the ECPIX-5's, speed "
-                 f"{top['speed_grade']}; scripts/fit_dram_top.py, median of {len(top['seeds'])} seed"
-                 f"{'s' * (len(top['seeds']) > 1)}): {top['lut4']:,} LUT4, {top['ff']:,} FF, {top['bram']} "
+                 f"{top['speed_grade']}; `{top['generator']}`, {seeds(top)}): {top['lut4']:,} LUT4, "
+                 f"{top['ff']:,} FF, {top['bram']} "
                  f"DP16KD")
         short = fit_dram_top.missed(others)
         if short:
