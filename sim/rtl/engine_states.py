@@ -20,6 +20,8 @@ __all__ = ["EngineStates", "TERMS"]
 TERMS = {"load": ("LOAD",), "scan": ("SCAN",), "level": ("LEVEL",), "sched": ("SCHED0", "SCHED1"),
          "read": ("READ",), "iterate": ("ITER",), "store": ("STORE",), "goals": ("GOAL0", "GOAL1"),
          "path": ("PATH",), "readout": ("READOUT",)}
+# every state but IDLE spends one term's cycles: a state added to the engine must be placed here
+assert sorted(n for names in TERMS.values() for n in names) == sorted(set(STATES) - {"IDLE"}), STATES
 
 
 class EngineStates:
